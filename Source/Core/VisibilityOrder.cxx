@@ -1,0 +1,251 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "mtpt/VisibilityOrder.h"
+
+#include "detail/Parallel.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <random>
+#include <utility>
+#include <vector>
+
+namespace mtpt
+{
+
+const char* ToString(OrderMethod method)
+{
+  switch (method)
+  {
+    case OrderMethod::PartitionSort:
+      return "partition";
+    case OrderMethod::RadixSort:
+      return "radix";
+  }
+  return "unknown";
+}
+
+namespace
+{
+
+/// Below this size a plain std::sort beats any parallel set-up; the result is the same
+/// unique ascending order.
+constexpr std::size_t SmallInput = 4096;
+
+/**
+ * Fan et al. 2021, Algorithm 1 ("partial sort" + "global sort"). The partition phase is
+ * sequential as published; it is the Amdahl bottleneck this class exists to measure.
+ */
+class PartitionSortOrder final : public VisibilityOrder
+{
+public:
+  explicit PartitionSortOrder(std::size_t maxSubArraySize)
+    : MaxSubArraySize(std::max<std::size_t>(16, maxSubArraySize))
+  {
+  }
+
+  OrderMethod Method() const override { return OrderMethod::PartitionSort; }
+
+  void Sort(SortKey* keys, std::size_t count, int threads) override
+  {
+    if (count < SmallInput)
+    {
+      std::sort(keys, keys + count);
+      return;
+    }
+    // Partial sort: split until every sub-array is shorter than MAX. The pivots are random
+    // (fixed seed, so runs are repeatable) to keep the expected depth logarithmic on the
+    // nearly sorted key arrays that consecutive frames produce.
+    this->SubArrays.clear();
+    std::vector<std::pair<std::size_t, std::size_t>> pending{ { 0, count } };
+    std::mt19937_64 random(0x6d747074u);
+    while (!pending.empty())
+    {
+      const auto [lo, hi] = pending.back();
+      pending.pop_back();
+      if (hi - lo < this->MaxSubArraySize)
+      {
+        this->SubArrays.emplace_back(lo, hi);
+        continue;
+      }
+      const std::size_t split = HoarePartition(keys, lo, hi, lo + random() % (hi - lo));
+      pending.emplace_back(lo, split);
+      pending.emplace_back(split, hi);
+    }
+    // Global sort: the sub-arrays cover disjoint key ranges, so sorting each in place
+    // completes the order. Dynamic scheduling absorbs their unequal sizes.
+    const auto n = static_cast<std::int64_t>(this->SubArrays.size());
+    const int nthreads = detail::ResolveThreads(threads);
+#pragma omp parallel for num_threads(nthreads) schedule(dynamic, 1)
+    for (std::int64_t s = 0; s < n; ++s)
+    {
+      std::sort(keys + this->SubArrays[s].first, keys + this->SubArrays[s].second);
+    }
+  }
+
+private:
+  /// Hoare's partition of [lo, hi) around the value at `pivotIndex`, scanning from both
+  /// ends. Returns split with lo < split < hi, [lo, split) <= pivot <= [split, hi).
+  /// All keys are distinct (they hold their cell id), so both parts are never empty.
+  static std::size_t HoarePartition(SortKey* a,
+    std::size_t lo,
+    std::size_t hi,
+    std::size_t pivotIndex)
+  {
+    std::swap(a[lo], a[pivotIndex]);
+    const SortKey pivot = a[lo];
+    std::size_t i = lo - 1; // wraps for lo == 0; the first ++i brings it back
+    std::size_t j = hi;
+    for (;;)
+    {
+      do
+      {
+        ++i;
+      } while (a[i] < pivot);
+      do
+      {
+        --j;
+      } while (a[j] > pivot);
+      if (i >= j)
+      {
+        return j + 1;
+      }
+      std::swap(a[i], a[j]);
+    }
+  }
+
+  std::size_t MaxSubArraySize;
+  std::vector<std::pair<std::size_t, std::size_t>> SubArrays;
+};
+
+/**
+ * Parallel LSD radix sort, 8-bit digits. Each pass: every thread counts the digits of its
+ * contiguous block, an exclusive prefix over (digit, thread) gives every thread its own
+ * output ranges, and every thread scatters its block stably. A pass whose digit is the same
+ * for all keys is skipped (typically the sign/exponent byte of the depth).
+ */
+class RadixSortOrder final : public VisibilityOrder
+{
+public:
+  OrderMethod Method() const override { return OrderMethod::RadixSort; }
+
+  void Sort(SortKey* keys, std::size_t count, int threads) override
+  {
+    if (count < SmallInput)
+    {
+      std::sort(keys, keys + count);
+      return;
+    }
+    const int nthreads = detail::ResolveThreads(threads);
+    if (this->Scratch.size() < count)
+    {
+      this->Scratch.resize(count);
+    }
+    // ComputeDepthKeys writes keys in ascending cell-id order; a stable sort of the depth
+    // bits then completes the order. Any other input also needs its id bits sorted first.
+    const bool idsAscending = IdsAscending(keys, count, nthreads);
+    SortKey* source = keys;
+    SortKey* target = this->Scratch.data();
+    const int firstShift = idsAscending ? 32 : 0;
+    for (int shift = firstShift; shift < 64; shift += 8)
+    {
+      if (this->Pass(source, target, count, shift, nthreads))
+      {
+        std::swap(source, target);
+      }
+    }
+    if (source != keys)
+    {
+      const auto n = static_cast<std::int64_t>(count);
+#pragma omp parallel for num_threads(nthreads) schedule(static)
+      for (std::int64_t i = 0; i < n; ++i)
+      {
+        keys[i] = source[i];
+      }
+    }
+  }
+
+private:
+  static bool IdsAscending(const SortKey* keys, std::size_t count, int nthreads)
+  {
+    const auto n = static_cast<std::int64_t>(count);
+    int ascending = 1;
+#pragma omp parallel for num_threads(nthreads) schedule(static) reduction(&& : ascending)
+    for (std::int64_t i = 1; i < n; ++i)
+    {
+      ascending = ascending && CellOfKey(keys[i - 1]) < CellOfKey(keys[i]);
+    }
+    return ascending != 0;
+  }
+
+  /// One stable counting pass on the digit at `shift`. Returns false if it was skipped
+  /// (all keys share the digit), in which case `target` is untouched.
+  bool Pass(const SortKey* source, SortKey* target, std::size_t count, int shift, int nthreads)
+  {
+    constexpr std::size_t Buckets = 256;
+    this->Counts.assign(static_cast<std::size_t>(nthreads) * Buckets, 0);
+    bool skip = false;
+#pragma omp parallel num_threads(nthreads)
+    {
+      const int t = omp_get_thread_num();
+      const int team = omp_get_num_threads();
+      const std::size_t begin = count * t / team;
+      const std::size_t end = count * (t + 1) / team;
+      std::size_t* mine = this->Counts.data() + static_cast<std::size_t>(t) * Buckets;
+      for (std::size_t i = begin; i < end; ++i)
+      {
+        ++mine[(source[i] >> shift) & 0xff];
+      }
+#pragma omp barrier
+#pragma omp single
+      {
+        // Exclusive prefix in (digit, thread) order: digit-major keeps the pass stable.
+        std::size_t running = 0;
+        for (std::size_t d = 0; d < Buckets; ++d)
+        {
+          std::size_t digitTotal = 0;
+          for (int u = 0; u < team; ++u)
+          {
+            std::size_t& c = this->Counts[static_cast<std::size_t>(u) * Buckets + d];
+            digitTotal += c;
+            const std::size_t n = c;
+            c = running;
+            running += n;
+          }
+          skip = skip || digitTotal == count;
+        }
+      } // implicit barrier
+      if (!skip)
+      {
+        for (std::size_t i = begin; i < end; ++i)
+        {
+          const SortKey k = source[i];
+          target[mine[(k >> shift) & 0xff]++] = k;
+        }
+      }
+    }
+    return !skip;
+  }
+
+  std::vector<SortKey> Scratch;
+  std::vector<std::size_t> Counts;
+};
+
+} // namespace
+
+std::unique_ptr<VisibilityOrder> MakeVisibilityOrder(OrderMethod method,
+  std::size_t maxSubArraySize)
+{
+  switch (method)
+  {
+    case OrderMethod::PartitionSort:
+      return std::make_unique<PartitionSortOrder>(maxSubArraySize);
+    case OrderMethod::RadixSort:
+      return std::make_unique<RadixSortOrder>();
+  }
+  return nullptr;
+}
+
+} // namespace mtpt

@@ -1,0 +1,144 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file Decompose.h
+ * @brief Stage 4 of a frame: classify each tetrahedron's projection and decompose it into
+ * exactly 4 triangles, written at a fixed stride (paper's Algorithm 2, DESIGN.md step 4-5).
+ *
+ * Conventions (see also MeshView.h):
+ * - Slot k (the k-th tetrahedron in visibility order) owns vertices [5k, 5k+5) and
+ *   indices [12k, 12k+12): 4 triangles, no locks, identical for any thread count.
+ *   Local vertices 0..3 are the cell's points in its own order, local vertex 4 the thick
+ *   vertex of a quadrilateral projection. A triangle projection puts the thick vertex in
+ *   the slot of the inner point, pads its 4th triangle as degenerate (all three indices on
+ *   the thick vertex) and leaves vertex 4 as an unused copy of the thick vertex.
+ * - A tetrahedron that cannot be drawn (not a tetrahedron, an id out of range, a point at
+ *   or behind the eye plane, non-finite coordinates or scalars, zero projected area)
+ *   writes a fully degenerate slot: 5 zero vertices and 12 indices equal to 5k. Nothing
+ *   stale remains.
+ * - Triangle winding is not meaningful (there is no culling); the 3 or 4 triangles of one
+ *   tetrahedron never overlap, so their order inside a slot does not matter.
+ * - The vertex record is 6 floats: NDC position, the scalar at the front and at the back of
+ *   the ray segment through the tetrahedron at that vertex, and the segment's length in
+ *   eye space. On the projection's silhouette front = back and the length is 0; only the
+ *   thick vertex has a non-zero length. Shading classifies the scalars at draw time, so the
+ *   same record serves VTK-compatible shading (colour and attenuation of the vertex
+ *   scalars) and pre-integrated shading (front scalar, back scalar, length).
+ */
+#ifndef mtpt_Decompose_h
+#define mtpt_Decompose_h
+
+#include "mtpt/DepthKeys.h"
+#include "mtpt/MeshView.h"
+#include "mtpt/Transform.h"
+
+#include <cstddef>
+#include <cstdint>
+
+namespace mtpt
+{
+
+/// One vertex of the decomposition (24 bytes).
+struct TetVertex
+{
+  float x, y, z;     ///< NDC; z is the front of the segment
+  float scalarFront; ///< scalar where the ray enters the tetrahedron
+  float scalarBack;  ///< scalar where the ray leaves it
+  float thickness;   ///< eye-space length of the ray segment inside the tetrahedron
+};
+
+constexpr std::size_t VerticesPerTetrahedron = 5;
+constexpr std::size_t IndicesPerTetrahedron = 12;
+
+/**
+ * Shirley-Tuchman classes of a projected tetrahedron. Classes 3 and 4 are the limits of
+ * class 1 and are drawn as class 1 with a degenerate triangle or two.
+ */
+enum class ProjectionClass : std::uint8_t
+{
+  NotDrawable = 0,
+  Triangle = 1,           ///< class 1: one point projects strictly inside the other three
+  Quadrilateral = 2,      ///< class 2: two opposite edges cross
+  VertexOnEdge = 3,       ///< class 3: one point projects onto an edge of the other three
+  CoincidentVertices = 4, ///< class 4: two points project onto the same position
+};
+
+/**
+ * The classification of one projected tetrahedron.
+ * Quadrilateral: edges (vertex[0], vertex[1]) and (vertex[2], vertex[3]) cross at
+ *   position alpha along the first and beta along the second (both in [0, 1]).
+ * Triangle, VertexOnEdge, CoincidentVertices: vertex[3] is the thick (inner) point and
+ *   vertex[0..2] the outer triangle; weights[0..2] are the screen-space barycentric
+ *   coordinates of the inner point in that triangle (non-negative, sum 1).
+ */
+struct Projection
+{
+  ProjectionClass kind = ProjectionClass::NotDrawable;
+  int vertex[4] = { 0, 1, 2, 3 };
+  double alpha = 0, beta = 0;
+  double weights[3] = { 0, 0, 0 };
+};
+
+/**
+ * Relative tolerance of the classification: a signed sub-triangle area whose magnitude
+ * is at most this fraction of the projection's total area counts as zero. It turns
+ * near-limit projections into the class 3 and 4 limits instead of producing huge or
+ * signed interpolation weights; it never divides by a near-zero denominator.
+ */
+constexpr double ClassificationTolerance = 1e-10;
+
+/**
+ * Classifies a tetrahedron from its 4 projected (x, y) positions. Never divides by zero:
+ * every weight is a ratio of areas whose denominator is at least the numerator.
+ * Thread safety: pure function.
+ */
+Projection ClassifyProjection(const double x[4], const double y[4]);
+
+/**
+ * Decomposes one tetrahedron into slot-local records.
+ * @param ndc        the projected points (TransformToNDC)
+ * @param model      the points in model coordinates (for exact eye-space lengths)
+ * @param scalars    the scalar at each point (the cell's scalar four times for cell data)
+ * @param modelView  model-view matrix; its upper 3x3 maps model differences to eye space
+ * @param vertices   5 records written
+ * @param indices    12 slot-local indices (0..4) written
+ * @return the classification (NotDrawable: the slot is degenerate, all zeros)
+ * Thread safety: pure function of its arguments.
+ */
+Projection DecomposeTetrahedron(const NdcPoint ndc[4],
+  const double model[4][3],
+  const float scalars[4],
+  const Matrix4& modelView,
+  TetVertex vertices[5],
+  std::uint32_t indices[12]);
+
+/// Inputs of the decomposition stage that stay fixed during a frame.
+struct DecomposeInput
+{
+  const NdcPoint* ndc = nullptr; ///< points.count entries (TransformToNDC)
+  PointsView points;
+  CellsView cells;
+  ScalarsView scalars;
+  Matrix4 modelView = IdentityMatrix();
+};
+
+/**
+ * Decomposes the cells order[0..count) into slots 0..count-1 of `vertices`
+ * (5 * count records) and `indices` (12 * count entries, global: slot k uses 5k + local).
+ * `classes`, when not null, receives each slot's class (count entries).
+ * Requires 5 * count < 2^32. For batches, pass order + first and fresh buffers.
+ *
+ * Thread safety: reentrant; `threads` OpenMP threads (<= 0: all available).
+ * Determinism: every slot is a pure function of its cell: bit-identical for any thread
+ * count.
+ */
+void DecomposeTetrahedra(const DecomposeInput& input,
+  const SortKey* order,
+  std::size_t count,
+  TetVertex* vertices,
+  std::uint32_t* indices,
+  ProjectionClass* classes,
+  int threads);
+
+} // namespace mtpt
+
+#endif

@@ -1,0 +1,98 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file MeshView.h
+ * @brief Non-owning views of a tetrahedral mesh as VTK holds it, and the 4x4 matrix type.
+ *
+ * Conventions used by every mtpt header:
+ * - Matrices are row-major, 4x4, double precision, and act on column vectors:
+ *   p' = M * p, element (row r, column c) is m[4*r + c]. This is vtkMatrix4x4's layout
+ *   (vtkMatrix4x4::GetData() can be copied in unchanged).
+ * - "Model" coordinates are the coordinates stored in the mesh. "Eye" coordinates are
+ *   model coordinates mapped by the model-view matrix (VTK: view transform times the
+ *   volume's matrix); the camera looks down -z in eye space, as in OpenGL.
+ * - Normalized device coordinates (NDC) follow OpenGL: x and y in [-1, 1] across the
+ *   viewport, z in [-1, 1] from the near to the far plane (smaller z is nearer).
+ * - Connectivity follows vtkCellArray (VTK 9): cell c owns the point ids
+ *   connectivity[offsets[c]] .. connectivity[offsets[c+1]-1]; offsets has cellCount+1
+ *   entries. Offsets and connectivity share one integer type (int32 or int64), as in
+ *   vtkCellArray's two storages.
+ *
+ * Views never copy or own data; the caller keeps the arrays alive while a view is in use.
+ */
+#ifndef mtpt_MeshView_h
+#define mtpt_MeshView_h
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+namespace mtpt
+{
+
+/// Row-major 4x4 matrix acting on column vectors (see the conventions above).
+using Matrix4 = std::array<double, 16>;
+
+/// The identity matrix.
+Matrix4 IdentityMatrix();
+
+/// a * b (row-major, column vectors: apply b first, then a).
+Matrix4 Multiply(const Matrix4& a, const Matrix4& b);
+
+/// Point coordinates: `count` points of 3 components, interleaved xyz.
+struct PointsView
+{
+  enum class Type
+  {
+    Float32,
+    Float64
+  };
+  const void* data = nullptr;
+  Type type = Type::Float32;
+  std::size_t count = 0;
+
+  static PointsView FromFloat(const float* xyz, std::size_t n) { return { xyz, Type::Float32, n }; }
+  static PointsView FromDouble(const double* xyz, std::size_t n)
+  {
+    return { xyz, Type::Float64, n };
+  }
+};
+
+/// Cells in vtkCellArray's offsets + connectivity layout (see the conventions above).
+struct CellsView
+{
+  enum class Type
+  {
+    Int32,
+    Int64
+  };
+  const void* connectivity = nullptr;
+  const void* offsets = nullptr; ///< cellCount + 1 entries
+  Type type = Type::Int64;
+  std::size_t cellCount = 0;
+
+  static CellsView FromInt32(const std::int32_t* conn, const std::int32_t* offsets, std::size_t n)
+  {
+    return { conn, offsets, Type::Int32, n };
+  }
+  static CellsView FromInt64(const std::int64_t* conn, const std::int64_t* offsets, std::size_t n)
+  {
+    return { conn, offsets, Type::Int64, n };
+  }
+};
+
+/// Scalars for shading: one float per point or one per cell. A null `values` pointer
+/// means "no scalars": every scalar reads as 0.
+struct ScalarsView
+{
+  enum class Association
+  {
+    Points,
+    Cells
+  };
+  const float* values = nullptr;
+  Association association = Association::Points;
+};
+
+} // namespace mtpt
+
+#endif

@@ -1,0 +1,63 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file VisibilityOrder.h
+ * @brief Stage 3 of a frame: sort the depth keys into back-to-front visibility order.
+ *
+ * Every implementation sorts SortKey values (DepthKeys.h) ascending. Because a key holds
+ * its cell id, all keys are distinct and the sorted sequence is unique: every
+ * implementation, every thread count and every run return the same permutation.
+ */
+#ifndef mtpt_VisibilityOrder_h
+#define mtpt_VisibilityOrder_h
+
+#include "mtpt/DepthKeys.h"
+
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+namespace mtpt
+{
+
+enum class OrderMethod
+{
+  /// The paper's Algorithm 1 as published (Fan et al. 2021): a sequential random-pivot
+  /// Hoare partition splits the keys into sub-arrays of disjoint key ranges until each is
+  /// shorter than MaxSubArraySize; then the sub-arrays are sorted in parallel.
+  PartitionSort,
+  /// Parallel least-significant-digit radix sort on the 32 depth bits (3 passes of 11
+  /// bits, constant digits skipped). No sequential phase; stable, so the ascending cell
+  /// ids of the input order survive as the tie rule.
+  RadixSort,
+};
+
+/// A readable name ("partition", "radix") for tables and settings.
+const char* ToString(OrderMethod method);
+
+/**
+ * Sorts keys into visibility order. Objects keep scratch memory between calls so a
+ * frame allocates nothing once the mesh size is stable.
+ *
+ * Thread safety: one object must not be used by two threads at once; distinct objects
+ * are independent. Determinism: the output is the unique ascending order of the keys.
+ */
+class VisibilityOrder
+{
+public:
+  virtual ~VisibilityOrder() = default;
+  virtual OrderMethod Method() const = 0;
+  /// Sorts keys[0, count) ascending on `threads` OpenMP threads (<= 0: all available).
+  virtual void Sort(SortKey* keys, std::size_t count, int threads) = 0;
+};
+
+/// Default sub-array threshold MAX of the partition sort.
+constexpr std::size_t DefaultMaxSubArraySize = 1u << 15;
+
+/// Creates an implementation. `maxSubArraySize` is MAX for PartitionSort (clamped to at
+/// least 16) and ignored by the others.
+std::unique_ptr<VisibilityOrder> MakeVisibilityOrder(OrderMethod method,
+  std::size_t maxSubArraySize = DefaultMaxSubArraySize);
+
+} // namespace mtpt
+
+#endif

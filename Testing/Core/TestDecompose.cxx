@@ -1,0 +1,402 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Decomposition: exact thickness and scalars at the thick vertex, exact coverage of the
+// projection, fixed-stride buffers identical for any thread count and order method, and
+// finite, in-range buffers for degenerate input.
+#include "TestHelpers.h"
+
+#include "mtpt/Decompose.h"
+#include "mtpt/FramePipeline.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace
+{
+
+using namespace mtpt::test;
+using mtpt::ProjectionClass;
+using mtpt::TetVertex;
+
+struct View
+{
+  mtpt::Matrix4 modelView, projection;
+  bool perspective;
+};
+
+View OrthographicView()
+{
+  return { mtpt::Multiply(LookAt({ 1.0, 1.5, 4.0 }, { 0, 0, 0 }, { 0, 1, 0 }), Scale(1, 2, 0.5)),
+    Ortho(-2, 2, -2, 2, 0.5, 10),
+    false };
+}
+
+View PerspectiveView()
+{
+  return { mtpt::Multiply(LookAt({ 0.5, 1.0, 3.5 }, { 0, 0, 0 }, { 0, 1, 0 }), Scale(1, 2, 0.5)),
+    Perspective(60, 1.2, 0.5, 10),
+    true };
+}
+
+double TriangleArea(const TetVertex& a, const TetVertex& b, const TetVertex& c)
+{
+  return 0.5 *
+    std::fabs(
+      (double(b.x) - a.x) * (double(c.y) - a.y) - (double(b.y) - a.y) * (double(c.x) - a.x));
+}
+
+/// Area of the convex hull of 4 points (gift wrapping is overkill: try the 3 quad orders
+/// and the 4 triangles and keep the largest simple polygon area).
+double HullArea(const double x[4], const double y[4])
+{
+  auto tri = [&](int a, int b, int c)
+  { return 0.5 * std::fabs((x[b] - x[a]) * (y[c] - y[a]) - (y[b] - y[a]) * (x[c] - x[a])); };
+  auto quad = [&](int a, int b, int c, int d)
+  {
+    const double s = (x[a] * y[b] - x[b] * y[a]) + (x[b] * y[c] - x[c] * y[b]) +
+      (x[c] * y[d] - x[d] * y[c]) + (x[d] * y[a] - x[a] * y[d]);
+    return 0.5 * std::fabs(s);
+  };
+  // The hull is the largest of the candidate polygons (a self-intersecting order has a
+  // smaller signed area than the convex one).
+  return std::max({ tri(1, 2, 3),
+    tri(0, 2, 3),
+    tri(0, 1, 3),
+    tri(0, 1, 2),
+    quad(0, 1, 2, 3),
+    quad(0, 2, 1, 3),
+    quad(0, 1, 3, 2) });
+}
+
+class ThickVertex : public ::testing::TestWithParam<bool>
+{
+};
+
+TEST_P(ThickVertex, ThicknessAndScalarsAreTheExactRaySegment)
+{
+  const View view = GetParam() ? PerspectiveView() : OrthographicView();
+  const mtpt::Matrix4 mvp = mtpt::Multiply(view.projection, view.modelView);
+  const mtpt::Matrix4 unproject = Inverse(mvp);
+  std::mt19937_64 random(99);
+  std::uniform_real_distribution<double> coordinate(-1.0, 1.0);
+  const Vec3 gradient{ 0.7, -1.3, 2.1 };
+  int checked = 0, quadrilaterals = 0;
+  double worstRelative = 0;
+  for (int t = 0; t < 20000; ++t)
+  {
+    Vec3 p[4];
+    for (auto& q : p)
+    {
+      q = { coordinate(random), coordinate(random), coordinate(random) };
+    }
+    // Well-shaped tetrahedra only: the test is about exactness, the degenerate ones have
+    // their own tests. Quality 6*sqrt(2)*V / max edge^3 is 1 for a regular tetrahedron.
+    const double volume =
+      std::fabs(Dot(Sub(p[1], p[0]), Cross(Sub(p[2], p[0]), Sub(p[3], p[0])))) / 6;
+    double maxEdge = 0;
+    for (int i = 0; i < 4; ++i)
+    {
+      for (int j = i + 1; j < 4; ++j)
+      {
+        maxEdge = std::max(maxEdge, std::sqrt(Dot(Sub(p[i], p[j]), Sub(p[i], p[j]))));
+      }
+    }
+    if (6 * std::sqrt(2.0) * volume < 0.05 * maxEdge * maxEdge * maxEdge)
+    {
+      continue;
+    }
+    float coords[12];
+    double model[4][3];
+    float scalars[4];
+    for (int i = 0; i < 4; ++i)
+    {
+      for (int k = 0; k < 3; ++k)
+      {
+        coords[3 * i + k] = static_cast<float>(p[i][k]);
+        model[i][k] = coords[3 * i + k];
+        p[i][k] = coords[3 * i + k]; // the test uses exactly the float points
+      }
+      scalars[i] = static_cast<float>(Dot(gradient, p[i]) + 0.5);
+    }
+    mtpt::NdcPoint ndc[4];
+    mtpt::TransformToNDC(mtpt::PointsView::FromFloat(coords, 4), mvp, ndc, 1);
+    TetVertex vertices[5];
+    std::uint32_t indices[12];
+    const mtpt::Projection projection =
+      mtpt::DecomposeTetrahedron(ndc, model, scalars, view.modelView, vertices, indices);
+    ASSERT_NE(projection.kind, ProjectionClass::NotDrawable);
+    quadrilaterals += projection.kind == ProjectionClass::Quadrilateral;
+    const TetVertex& thick = projection.kind == ProjectionClass::Quadrilateral
+      ? vertices[4]
+      : vertices[projection.vertex[3]];
+
+    // Ground truth: the ray through the thick vertex, unprojected in double. Its screen
+    // position is the crossing of the projected edges or the inner vertex; the record
+    // holds it rounded to float.
+    double thickX = 0, thickY = 0;
+    if (projection.kind == ProjectionClass::Quadrilateral)
+    {
+      const int a = projection.vertex[0], b = projection.vertex[1];
+      thickX = ndc[a].x + projection.alpha * (ndc[b].x - ndc[a].x);
+      thickY = ndc[a].y + projection.alpha * (ndc[b].y - ndc[a].y);
+    }
+    else
+    {
+      thickX = ndc[projection.vertex[3]].x;
+      thickY = ndc[projection.vertex[3]].y;
+    }
+    ASSERT_NEAR(thick.x, thickX, 1e-6);
+    ASSERT_NEAR(thick.y, thickY, 1e-6);
+    const Vec3 nearPoint = Apply(unproject, { thickX, thickY, -1.0 });
+    const Vec3 farPoint = Apply(unproject, { thickX, thickY, 1.0 });
+    const Vec3 direction = Sub(farPoint, nearPoint);
+    double tEnter = 0, tExit = 0;
+    ASSERT_GT(ChordLength(p, nearPoint, direction, &tEnter, &tExit), 0.0);
+    const Vec3 enter{ nearPoint[0] + tEnter * direction[0],
+      nearPoint[1] + tEnter * direction[1],
+      nearPoint[2] + tEnter * direction[2] };
+    const Vec3 exit{ nearPoint[0] + tExit * direction[0],
+      nearPoint[1] + tExit * direction[1],
+      nearPoint[2] + tExit * direction[2] };
+    const Vec3 eyeEnter = Apply(view.modelView, enter);
+    const Vec3 eyeExit = Apply(view.modelView, exit);
+    const Vec3 eyeSegment = Sub(eyeExit, eyeEnter);
+    const double exact = std::sqrt(Dot(eyeSegment, eyeSegment));
+    const double relative = std::fabs(thick.thickness - exact) / exact;
+    worstRelative = std::max(worstRelative, relative);
+    ASSERT_LT(relative, 1e-5) << "tetrahedron " << t << " class "
+                              << static_cast<int>(projection.kind);
+    // Entry is the front (nearer) point; scalars are the linear field there.
+    ASSERT_NEAR(thick.scalarFront, Dot(gradient, enter) + 0.5, 1e-4);
+    ASSERT_NEAR(thick.scalarBack, Dot(gradient, exit) + 0.5, 1e-4);
+    ASSERT_NEAR(thick.z, Apply(mvp, enter)[2], 1e-5);
+    // Every other record is a silhouette vertex: zero thickness, front == back.
+    for (int i = 0; i < 5; ++i)
+    {
+      if (&vertices[i] != &thick && !(i == 4 && projection.kind != ProjectionClass::Quadrilateral))
+      {
+        EXPECT_EQ(vertices[i].thickness, 0.0f);
+        EXPECT_EQ(vertices[i].scalarFront, vertices[i].scalarBack);
+      }
+    }
+    ++checked;
+  }
+  EXPECT_GT(checked, 5000);
+  EXPECT_GT(quadrilaterals, checked / 3);
+  RecordProperty("worst_relative_thickness_error", std::to_string(worstRelative));
+}
+
+INSTANTIATE_TEST_SUITE_P(Projections,
+  ThickVertex,
+  ::testing::Values(false, true),
+  [](const auto& info) { return info.param ? "Perspective" : "Orthographic"; });
+
+TEST(Decompose, TrianglesCoverTheProjectionExactlyOnce)
+{
+  std::mt19937_64 random(7);
+  std::uniform_real_distribution<double> coordinate(-1.0, 1.0);
+  const View view = OrthographicView();
+  const mtpt::Matrix4 mvp = mtpt::Multiply(view.projection, view.modelView);
+  for (int t = 0; t < 50000; ++t)
+  {
+    float coords[12];
+    double model[4][3];
+    const float scalars[4] = { 0, 1, 2, 3 };
+    for (int i = 0; i < 12; ++i)
+    {
+      coords[i] = static_cast<float>(coordinate(random));
+      model[i / 3][i % 3] = coords[i];
+    }
+    mtpt::NdcPoint ndc[4];
+    mtpt::TransformToNDC(mtpt::PointsView::FromFloat(coords, 4), mvp, ndc, 1);
+    TetVertex v[5];
+    std::uint32_t idx[12];
+    const auto projection = mtpt::DecomposeTetrahedron(ndc, model, scalars, view.modelView, v, idx);
+    if (projection.kind == ProjectionClass::NotDrawable)
+    {
+      continue;
+    }
+    double covered = 0;
+    for (int tri = 0; tri < 4; ++tri)
+    {
+      ASSERT_LT(idx[3 * tri], 5u);
+      covered += TriangleArea(v[idx[3 * tri]], v[idx[3 * tri + 1]], v[idx[3 * tri + 2]]);
+    }
+    const double x[4] = { ndc[0].x, ndc[1].x, ndc[2].x, ndc[3].x };
+    const double y[4] = { ndc[0].y, ndc[1].y, ndc[2].y, ndc[3].y };
+    const double hull = HullArea(x, y);
+    ASSERT_NEAR(covered, hull, 1e-5 * std::max(hull, 1e-3)) << "tetrahedron " << t;
+  }
+}
+
+TEST(Decompose, BuffersAreBitIdenticalForEveryThreadCountAndOrderMethod)
+{
+  const TetMesh mesh = JitteredGrid(14, 11); // 16464 tetrahedra
+  for (const View& view : { OrthographicView(), PerspectiveView() })
+  {
+    mtpt::FrameInput input;
+    input.points = mesh.Points();
+    input.cells = mesh.Cells();
+    input.scalars = { mesh.scalars.data(), mtpt::ScalarsView::Association::Points };
+    input.modelView = view.modelView;
+    input.projection = view.projection;
+    input.perspective = view.perspective;
+    mtpt::FramePipeline reference;
+    reference.SetOrderMethod(mtpt::OrderMethod::PartitionSort, 1000);
+    ASSERT_TRUE(reference.Run(input, 1));
+    ASSERT_EQ(reference.TetrahedronCount(), mesh.CellCount());
+    for (auto method : { mtpt::OrderMethod::PartitionSort, mtpt::OrderMethod::RadixSort })
+    {
+      for (int threads : { 1, 2, 3, 8 })
+      {
+        SCOPED_TRACE(::testing::Message() << mtpt::ToString(method) << " threads=" << threads);
+        mtpt::FramePipeline pipeline;
+        pipeline.SetOrderMethod(method);
+        ASSERT_TRUE(pipeline.Run(input, threads));
+        ASSERT_EQ(pipeline.Keys(), reference.Keys());
+        ASSERT_EQ(0,
+          std::memcmp(pipeline.Vertices().data(),
+            reference.Vertices().data(),
+            reference.Vertices().size() * sizeof(TetVertex)));
+        ASSERT_EQ(pipeline.Indices(), reference.Indices());
+      }
+    }
+    // Back to front: each slot's key depth never increases along the order.
+    const auto& keys = reference.Keys();
+    EXPECT_TRUE(std::is_sorted(keys.begin(), keys.end()));
+  }
+}
+
+TEST(Decompose, DegenerateInputGivesFiniteBuffersAndValidIndices)
+{
+  TetMesh mesh;
+  auto addPoint = [&mesh](double x, double y, double z)
+  {
+    mesh.points.insert(mesh.points.end(), { float(x), float(y), float(z) });
+    mesh.scalars.push_back(float(x + y + z));
+    return static_cast<std::int64_t>(mesh.points.size() / 3 - 1);
+  };
+  std::vector<ProjectionClass> expected;
+  auto tet = [&](std::int64_t a, std::int64_t b, std::int64_t c, std::int64_t d, ProjectionClass k)
+  {
+    mesh.AddTetrahedron(a, b, c, d);
+    expected.push_back(k);
+  };
+  const auto nan = std::numeric_limits<double>::quiet_NaN();
+  const auto inf = std::numeric_limits<double>::infinity();
+  const auto o = addPoint(0, 0, 0), x = addPoint(1, 0, 0), y = addPoint(0, 1, 0),
+             z = addPoint(0, 0, 1), xy = addPoint(0.3, 0.3, 0);
+  const auto onAxis = addPoint(0, 0, -1); // behind o on the central ray: projects onto o
+  const auto sliver = addPoint(0.5, 0.5, 1e-9);
+  const auto bad = addPoint(nan, 0, 0), infinite = addPoint(inf, 1, 0);
+  const auto behindEye = addPoint(0.1, 0.1, 10);
+  const auto huge = addPoint(1e30, -1e30, 1e30);
+  const auto nanScalar = addPoint(0.2, 0.8, 0.1);
+  mesh.scalars[nanScalar] = std::nanf("");
+  const auto q = ProjectionClass::Quadrilateral; // placeholder for "any drawable class"
+  tet(o, x, y, z, q);                            // regular
+  tet(o, x, y, xy, ProjectionClass::Triangle);   // zero volume, flat
+  tet(o, o, o, o, ProjectionClass::NotDrawable); // one point
+  tet(o, onAxis, z, addPoint(0, 0, 2), ProjectionClass::NotDrawable); // collinear on the axis
+  tet(o, x, y, bad, ProjectionClass::NotDrawable);                    // NaN point
+  tet(o, x, y, infinite, ProjectionClass::NotDrawable);               // infinite point
+  tet(o, x, y, 1000, ProjectionClass::NotDrawable);                   // id out of range
+  tet(o, x, y, -3, ProjectionClass::NotDrawable);                     // negative id
+  tet(o, x, y, behindEye, ProjectionClass::NotDrawable);              // behind the eye
+  tet(x, y, xy, sliver, q);                                           // sliver
+  tet(o, x, y, nanScalar, ProjectionClass::NotDrawable);              // NaN scalar
+  tet(o, x, y, huge, ProjectionClass::NotDrawable);                   // overflows NDC
+  tet(x, y, o, onAxis, ProjectionClass::CoincidentVertices);          // o and onAxis coincide
+  mesh.connectivity.insert(mesh.connectivity.end(), { o, x, y });     // a triangle: not a tet
+  mesh.offsets.push_back(static_cast<std::int64_t>(mesh.connectivity.size()));
+  expected.push_back(ProjectionClass::NotDrawable);
+
+  const std::size_t n = mesh.CellCount();
+  std::vector<mtpt::SortKey> order(n);
+  for (std::size_t c = 0; c < n; ++c)
+  {
+    order[c] = mtpt::MakeSortKey(0.0f, static_cast<std::uint32_t>(c));
+  }
+  const mtpt::Matrix4 mv = LookAt({ 0, 0, 5 }, { 0, 0, 0 }, { 0, 1, 0 });
+  const mtpt::Matrix4 proj = Perspective(60, 1, 0.1, 100);
+  std::vector<mtpt::NdcPoint> ndc(mesh.points.size() / 3);
+  mtpt::TransformToNDC(mesh.Points(), mtpt::Multiply(proj, mv), ndc.data(), 2);
+  mtpt::DecomposeInput input;
+  input.ndc = ndc.data();
+  input.points = mesh.Points();
+  input.cells = mesh.Cells();
+  input.scalars = { mesh.scalars.data(), mtpt::ScalarsView::Association::Points };
+  input.modelView = mv;
+  // Stale garbage in the buffers must be overwritten everywhere.
+  std::vector<TetVertex> vertices(5 * n, TetVertex{ NAN, NAN, NAN, NAN, NAN, NAN });
+  std::vector<std::uint32_t> indices(12 * n, 0xffffffffu);
+  std::vector<ProjectionClass> classes(n, ProjectionClass::Triangle);
+  mtpt::DecomposeTetrahedra(
+    input, order.data(), n, vertices.data(), indices.data(), classes.data(), 2);
+
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    SCOPED_TRACE(::testing::Message() << "cell " << k);
+    if (expected[k] == q)
+    {
+      EXPECT_NE(classes[k], ProjectionClass::NotDrawable);
+    }
+    else
+    {
+      EXPECT_EQ(classes[k], expected[k]);
+    }
+    for (std::size_t v = 5 * k; v < 5 * k + 5; ++v)
+    {
+      const TetVertex& r = vertices[v];
+      for (float f : { r.x, r.y, r.z, r.scalarFront, r.scalarBack, r.thickness })
+      {
+        ASSERT_TRUE(std::isfinite(f));
+      }
+      EXPECT_GE(r.thickness, 0.0f);
+      if (classes[k] == ProjectionClass::NotDrawable)
+      {
+        EXPECT_EQ(r.x, 0.0f);
+        EXPECT_EQ(r.thickness, 0.0f);
+      }
+    }
+    for (std::size_t i = 12 * k; i < 12 * k + 12; ++i)
+    {
+      ASSERT_GE(indices[i], 5 * k);
+      ASSERT_LT(indices[i], 5 * k + 5);
+      if (classes[k] == ProjectionClass::NotDrawable)
+      {
+        EXPECT_EQ(indices[i], 5 * k);
+      }
+    }
+  }
+  // The flat tetrahedron has a thick vertex of zero length; the coincident pair o/onAxis
+  // has a thick vertex whose length is their eye-space distance, 1.
+  const auto thicknessOf = [&](std::size_t k)
+  {
+    float t = 0;
+    for (std::size_t v = 5 * k; v < 5 * k + 5; ++v)
+    {
+      t = std::max(t, vertices[v].thickness);
+    }
+    return t;
+  };
+  EXPECT_LT(thicknessOf(1), 1e-12f);
+  EXPECT_NEAR(thicknessOf(12), 1.0f, 1e-6);
+}
+
+TEST(FramePipeline, RejectsMeshesBeyondThirtyTwoBitIndices)
+{
+  EXPECT_EQ(mtpt::FramePipeline::MaxTetrahedra(), 0xffffffffu / 5);
+  mtpt::FrameInput input;
+  input.cells.cellCount = mtpt::FramePipeline::MaxTetrahedra() + 1; // never dereferenced
+  mtpt::FramePipeline pipeline;
+  EXPECT_FALSE(pipeline.Run(input, 1));
+  EXPECT_EQ(pipeline.TetrahedronCount(), 0u);
+}
+
+} // namespace

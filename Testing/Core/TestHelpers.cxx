@@ -1,0 +1,146 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "TestHelpers.h"
+
+#include <algorithm>
+#include <limits>
+
+namespace mtpt
+{
+namespace test
+{
+
+Matrix4 Inverse(const Matrix4& m)
+{
+  // Laplace expansion by 2x2 sub-determinants.
+  const double s0 = m[0] * m[5] - m[4] * m[1], s1 = m[0] * m[6] - m[4] * m[2];
+  const double s2 = m[0] * m[7] - m[4] * m[3], s3 = m[1] * m[6] - m[5] * m[2];
+  const double s4 = m[1] * m[7] - m[5] * m[3], s5 = m[2] * m[7] - m[6] * m[3];
+  const double c5 = m[10] * m[15] - m[14] * m[11], c4 = m[9] * m[15] - m[13] * m[11];
+  const double c3 = m[9] * m[14] - m[13] * m[10], c2 = m[8] * m[15] - m[12] * m[11];
+  const double c1 = m[8] * m[14] - m[12] * m[10], c0 = m[8] * m[13] - m[12] * m[9];
+  const double det = s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0;
+  const double k = 1.0 / det;
+  return { (m[5] * c5 - m[6] * c4 + m[7] * c3) * k,
+    (-m[1] * c5 + m[2] * c4 - m[3] * c3) * k,
+    (m[13] * s5 - m[14] * s4 + m[15] * s3) * k,
+    (-m[9] * s5 + m[10] * s4 - m[11] * s3) * k,
+    (-m[4] * c5 + m[6] * c2 - m[7] * c1) * k,
+    (m[0] * c5 - m[2] * c2 + m[3] * c1) * k,
+    (-m[12] * s5 + m[14] * s2 - m[15] * s1) * k,
+    (m[8] * s5 - m[10] * s2 + m[11] * s1) * k,
+    (m[4] * c4 - m[5] * c2 + m[7] * c0) * k,
+    (-m[0] * c4 + m[1] * c2 - m[3] * c0) * k,
+    (m[12] * s4 - m[13] * s2 + m[15] * s0) * k,
+    (-m[8] * s4 + m[9] * s2 - m[11] * s0) * k,
+    (-m[4] * c3 + m[5] * c1 - m[6] * c0) * k,
+    (m[0] * c3 - m[1] * c1 + m[2] * c0) * k,
+    (-m[12] * s3 + m[13] * s1 - m[14] * s0) * k,
+    (m[8] * s3 - m[9] * s1 + m[10] * s0) * k };
+}
+
+TetMesh JitteredGrid(int n, unsigned seed)
+{
+  TetMesh mesh;
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<double> jitter(-0.3, 0.3);
+  const double h = 2.0 / n;
+  auto id = [n](int i, int j, int k)
+  { return static_cast<std::int64_t>((k * (n + 1) + j) * (n + 1) + i); };
+  for (int k = 0; k <= n; ++k)
+  {
+    for (int j = 0; j <= n; ++j)
+    {
+      for (int i = 0; i <= n; ++i)
+      {
+        const bool interior = i > 0 && j > 0 && k > 0 && i < n && j < n && k < n;
+        const double x = -1 + h * (i + (interior ? jitter(random) : 0));
+        const double y = -1 + h * (j + (interior ? jitter(random) : 0));
+        const double z = -1 + h * (k + (interior ? jitter(random) : 0));
+        mesh.points.insert(mesh.points.end(),
+          { static_cast<float>(x), static_cast<float>(y), static_cast<float>(z) });
+        mesh.scalars.push_back(static_cast<float>(std::sin(2 * x) + std::cos(3 * y) + z * z));
+      }
+    }
+  }
+  // Kuhn split: the 6 paths from corner 000 to 111, always conforming across cubes.
+  static const int paths[6][3] = {
+    { 0, 1, 2 }, { 0, 2, 1 }, { 1, 0, 2 }, { 1, 2, 0 }, { 2, 0, 1 }, { 2, 1, 0 }
+  };
+  for (int k = 0; k < n; ++k)
+  {
+    for (int j = 0; j < n; ++j)
+    {
+      for (int i = 0; i < n; ++i)
+      {
+        for (const auto& path : paths)
+        {
+          int c[3] = { i, j, k };
+          std::int64_t v[4];
+          v[0] = id(c[0], c[1], c[2]);
+          for (int s = 0; s < 3; ++s)
+          {
+            ++c[path[s]];
+            v[s + 1] = id(c[0], c[1], c[2]);
+          }
+          mesh.AddTetrahedron(v[0], v[1], v[2], v[3]);
+        }
+      }
+    }
+  }
+  return mesh;
+}
+
+double ChordLength(const Vec3 p[4],
+  const Vec3& origin,
+  const Vec3& direction,
+  double* tEnter,
+  double* tExit)
+{
+  double t0 = -std::numeric_limits<double>::infinity();
+  double t1 = std::numeric_limits<double>::infinity();
+  static const int faces[4][4] = { { 1, 2, 3, 0 }, { 0, 2, 3, 1 }, { 0, 1, 3, 2 }, { 0, 1, 2, 3 } };
+  for (const auto& f : faces)
+  {
+    Vec3 normal = Cross(Sub(p[f[1]], p[f[0]]), Sub(p[f[2]], p[f[0]]));
+    // Orient the normal away from the opposite vertex: inside is Dot(normal, x - p) <= 0.
+    if (Dot(normal, Sub(p[f[3]], p[f[0]])) > 0)
+    {
+      normal = { -normal[0], -normal[1], -normal[2] };
+    }
+    const double start = Dot(normal, Sub(origin, p[f[0]]));
+    const double rate = Dot(normal, direction);
+    if (rate == 0)
+    {
+      if (start > 0)
+      {
+        return 0;
+      }
+      continue;
+    }
+    const double t = -start / rate;
+    if (rate > 0)
+    {
+      t1 = std::min(t1, t);
+    }
+    else
+    {
+      t0 = std::max(t0, t);
+    }
+  }
+  if (!(t1 > t0))
+  {
+    return 0;
+  }
+  if (tEnter)
+  {
+    *tEnter = t0;
+  }
+  if (tExit)
+  {
+    *tExit = t1;
+  }
+  return (t1 - t0) * std::sqrt(Dot(direction, direction));
+}
+
+} // namespace test
+} // namespace mtpt

@@ -1,0 +1,151 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Transform to NDC and depth keys: against double-precision references, for every
+// storage type VTK uses, and identical for any thread count.
+#include "TestHelpers.h"
+
+#include "mtpt/DepthKeys.h"
+#include "mtpt/Transform.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <vector>
+
+namespace
+{
+
+using namespace mtpt::test;
+
+TEST(Helpers, InverseIsInverse)
+{
+  const mtpt::Matrix4 m = mtpt::Multiply(Perspective(50, 1.3, 0.5, 20),
+    mtpt::Multiply(LookAt({ 1, 2, 5 }, { 0, 0, 0 }, { 0, 1, 0 }), Scale(1, 2, 0.5)));
+  const mtpt::Matrix4 product = mtpt::Multiply(m, Inverse(m));
+  const mtpt::Matrix4 identity = mtpt::IdentityMatrix();
+  for (int i = 0; i < 16; ++i)
+  {
+    EXPECT_NEAR(product[i], identity[i], 1e-12);
+  }
+}
+
+TEST(Transform, MatchesDoubleReferenceForFloatAndDoublePoints)
+{
+  const TetMesh mesh = JitteredGrid(6, 3);
+  const std::size_t n = mesh.points.size() / 3;
+  const std::vector<double> asDouble(mesh.points.begin(), mesh.points.end());
+  const mtpt::Matrix4 mvp = mtpt::Multiply(
+    Perspective(40, 1.0, 1.0, 10.0), LookAt({ 0.5, 1, 4 }, { 0, 0, 0 }, { 0, 1, 0 }));
+  std::vector<mtpt::NdcPoint> fromFloat(n), fromDouble(n), oneThread(n);
+  mtpt::TransformToNDC(
+    mtpt::PointsView::FromFloat(mesh.points.data(), n), mvp, fromFloat.data(), 3);
+  mtpt::TransformToNDC(mtpt::PointsView::FromDouble(asDouble.data(), n), mvp, fromDouble.data(), 2);
+  mtpt::TransformToNDC(
+    mtpt::PointsView::FromFloat(mesh.points.data(), n), mvp, oneThread.data(), 1);
+  ASSERT_EQ(0, std::memcmp(fromFloat.data(), fromDouble.data(), n * sizeof(mtpt::NdcPoint)));
+  ASSERT_EQ(0, std::memcmp(fromFloat.data(), oneThread.data(), n * sizeof(mtpt::NdcPoint)));
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    double w;
+    const Vec3 expected =
+      Apply(mvp, { asDouble[3 * i], asDouble[3 * i + 1], asDouble[3 * i + 2] }, &w);
+    EXPECT_NEAR(fromFloat[i].x, expected[0], 1e-6);
+    EXPECT_NEAR(fromFloat[i].y, expected[1], 1e-6);
+    EXPECT_NEAR(fromFloat[i].z, expected[2], 1e-6);
+    EXPECT_NEAR(fromFloat[i].w, w, 1e-5 * std::fabs(w));
+  }
+}
+
+TEST(Transform, FarFromTheOriginKeepsPrecision)
+{
+  // A unit cube centred at 1e7 with a camera looking at it: double points and double
+  // arithmetic give NDC as accurate as for the same scene at the origin.
+  const double offset = 1e7;
+  const std::vector<double> local = { 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0.5, 0.25, 0.125 };
+  std::vector<double> shifted = local;
+  for (double& v : shifted)
+  {
+    v += offset;
+  }
+  const mtpt::Matrix4 proj = Ortho(-1, 1, -1, 1, 0.1, 10);
+  const mtpt::Matrix4 atOrigin =
+    mtpt::Multiply(proj, LookAt({ 0.3, 0.2, 3 }, { 0.3, 0.2, 0 }, { 0, 1, 0 }));
+  const mtpt::Matrix4 atOffset = mtpt::Multiply(proj,
+    LookAt({ 0.3 + offset, 0.2 + offset, 3 + offset },
+      { 0.3 + offset, 0.2 + offset, offset },
+      { 0, 1, 0 }));
+  std::vector<mtpt::NdcPoint> a(5), b(5);
+  mtpt::TransformToNDC(mtpt::PointsView::FromDouble(local.data(), 5), atOrigin, a.data(), 1);
+  mtpt::TransformToNDC(mtpt::PointsView::FromDouble(shifted.data(), 5), atOffset, b.data(), 1);
+  for (int i = 0; i < 5; ++i)
+  {
+    EXPECT_NEAR(a[i].x, b[i].x, 1e-6);
+    EXPECT_NEAR(a[i].y, b[i].y, 1e-6);
+    EXPECT_NEAR(a[i].z, b[i].z, 1e-6);
+  }
+}
+
+TEST(DepthKeys, OrthographicAndPerspectiveDepthsForEveryStorage)
+{
+  const TetMesh mesh = JitteredGrid(4, 5);
+  const std::size_t cells = mesh.CellCount();
+  const std::size_t n = mesh.points.size() / 3;
+  const std::vector<double> pointsDouble(mesh.points.begin(), mesh.points.end());
+  const std::vector<std::int32_t> conn32(mesh.connectivity.begin(), mesh.connectivity.end());
+  const std::vector<std::int32_t> offs32(mesh.offsets.begin(), mesh.offsets.end());
+  const mtpt::Matrix4 mv =
+    mtpt::Multiply(LookAt({ 1, 2, 6 }, { 0, 0, 0 }, { 0, 1, 0 }), Scale(1, 1.5, 0.75));
+  for (bool perspective : { false, true })
+  {
+    std::vector<mtpt::SortKey> reference(cells), other(cells);
+    mtpt::ComputeDepthKeys(mesh.Points(), mesh.Cells(), mv, perspective, reference.data(), 1);
+    for (std::size_t c = 0; c < cells; ++c)
+    {
+      Vec3 centroid{ 0, 0, 0 };
+      for (int i = 0; i < 4; ++i)
+      {
+        const std::int64_t id = mesh.connectivity[4 * c + i];
+        for (int k = 0; k < 3; ++k)
+        {
+          centroid[k] += 0.25 * mesh.points[3 * id + k];
+        }
+      }
+      const Vec3 eye = Apply(mv, centroid);
+      const double depth = perspective ? Dot(eye, eye) : -eye[2];
+      ASSERT_EQ(reference[c], mtpt::MakeSortKey(static_cast<float>(depth), c)) << c;
+    }
+    const auto keysFor = [&](const mtpt::PointsView& p, const mtpt::CellsView& cv, int threads)
+    {
+      mtpt::ComputeDepthKeys(p, cv, mv, perspective, other.data(), threads);
+      return other;
+    };
+    EXPECT_EQ(
+      reference, keysFor(mtpt::PointsView::FromDouble(pointsDouble.data(), n), mesh.Cells(), 2));
+    EXPECT_EQ(reference,
+      keysFor(mesh.Points(), mtpt::CellsView::FromInt32(conn32.data(), offs32.data(), cells), 3));
+    EXPECT_EQ(reference, keysFor(mesh.Points(), mesh.Cells(), 8));
+  }
+}
+
+TEST(DepthKeys, InvalidCellsGoFirstWithInfiniteDepth)
+{
+  TetMesh mesh;
+  mesh.points = { 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1 };
+  mesh.AddTetrahedron(0, 1, 2, 3);
+  mesh.AddTetrahedron(0, 1, 2, 7);                                      // id out of range
+  mesh.AddTetrahedron(0, 1, -1, 3);                                     // negative id
+  mesh.connectivity.insert(mesh.connectivity.end(), { 0, 1, 2, 3, 4 }); // 5 points
+  mesh.offsets.push_back(static_cast<std::int64_t>(mesh.connectivity.size()));
+  std::vector<mtpt::SortKey> keys(mesh.CellCount());
+  mtpt::ComputeDepthKeys(
+    mesh.Points(), mesh.Cells(), mtpt::IdentityMatrix(), false, keys.data(), 2);
+  const float inf = std::numeric_limits<float>::infinity();
+  EXPECT_NE(keys[0], mtpt::MakeSortKey(inf, 0));
+  for (std::uint32_t c = 1; c < 4; ++c)
+  {
+    EXPECT_EQ(keys[c], mtpt::MakeSortKey(inf, c));
+  }
+}
+
+} // namespace
