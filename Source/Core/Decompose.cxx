@@ -4,7 +4,14 @@
 #include "detail/MeshAccess.h"
 #include "detail/Parallel.h"
 
+#include <omp.h>
+
+#if defined(__x86_64__) || defined(_M_X64)
+#include <immintrin.h>
+#endif
+
 #include <cmath>
+#include <type_traits>
 #include <cstring>
 
 namespace mtpt
@@ -28,10 +35,13 @@ Projection ClassifyProjection(const double x[4], const double y[4])
   }
   // sumAbs is twice the doubled hull area. Zero, non-finite, or negligible against the
   // extent (the projection is a segment or a point): nothing to draw.
+  // (Plain comparisons: std::fmax is a library call unless NaN semantics are relaxed.)
   double extent = 0;
   for (int i = 1; i < 4; ++i)
   {
-    extent = std::fmax(extent, std::fmax(std::fabs(x[i] - x[0]), std::fabs(y[i] - y[0])));
+    const double ex = std::fabs(x[i] - x[0]), ey = std::fabs(y[i] - y[0]);
+    extent = ex > extent ? ex : extent;
+    extent = ey > extent ? ey : extent;
   }
   if (!(sumAbs > 1e-12 * extent * extent) || !std::isfinite(sumAbs))
   {
@@ -121,24 +131,16 @@ Projection ClassifyProjection(const double x[4], const double y[4])
     }
   }
   result.vertex[3] = thick;
+  const double inverseSum = 1.0 / weightSum; // >= the largest non-zero magnitude > zeroBand
   for (double& w : result.weights)
   {
-    w /= weightSum; // weightSum >= the largest non-zero magnitude > zeroBand
+    w *= inverseSum;
   }
   return result;
 }
 
 namespace
 {
-
-/// Length in eye space of a model-space difference: the model-view's linear part applied.
-inline double EyeLength(const Matrix4& mv, const double d[3])
-{
-  const double ex = mv[0] * d[0] + mv[1] * d[1] + mv[2] * d[2];
-  const double ey = mv[4] * d[0] + mv[5] * d[1] + mv[6] * d[2];
-  const double ez = mv[8] * d[0] + mv[9] * d[1] + mv[10] * d[2];
-  return std::sqrt(ex * ex + ey * ey + ez * ez);
-}
 
 /// Parameter along a 3D segment a->b of the point that projects at screen-space parameter
 /// s: 1/w is affine in screen space (perspective-correct interpolation). For orthographic
@@ -148,9 +150,8 @@ inline double PerspectiveCorrect(double s, double wa, double wb)
   return s * wa / ((1.0 - s) * wb + s * wa); // wa, wb > 0: the denominator is positive
 }
 
-inline void WriteDegenerateSlot(TetVertex vertices[5],
-  std::uint32_t indices[12],
-  std::uint32_t base)
+inline void WriteDegenerateSlot(
+  TetVertex vertices[5], std::uint32_t indices[12], std::uint32_t base)
 {
   std::memset(vertices, 0, 5 * sizeof(TetVertex));
   for (int i = 0; i < 12; ++i)
@@ -159,35 +160,38 @@ inline void WriteDegenerateSlot(TetVertex vertices[5],
   }
 }
 
-/// Every point in front of the eye plane with finite NDC, and every scalar finite.
-inline bool Drawable(const NdcPoint ndc[4], const float scalars[4])
+/// Beyond this magnitude a coordinate is treated as unusable: it keeps every value written
+/// to the float records finite (float overflows near 3.4e38).
+constexpr double CoordinateLimit = 1e30;
+
+/// Every corner in front of the eye plane with bounded, finite coordinates, and every
+/// scalar finite. Comparisons with NaN are false, so NaN fails every test.
+inline bool Drawable(const ProjectedPoint* const c[4], const float scalars[4])
 {
   bool ok = true;
   for (int i = 0; i < 4; ++i)
   {
-    ok &= ndc[i].w > 0.0 && std::isfinite(ndc[i].w) && std::isfinite(ndc[i].x) &&
-      std::isfinite(ndc[i].y) && std::isfinite(ndc[i].z) && std::isfinite(scalars[i]);
+    const ProjectedPoint& q = *c[i];
+    ok &= q.w > 0.0 && q.w < CoordinateLimit && std::fabs(q.x) < CoordinateLimit &&
+      std::fabs(q.y) < CoordinateLimit && std::fabs(q.z) < CoordinateLimit &&
+      std::fabs(q.eyeX) < CoordinateLimit && std::fabs(q.eyeY) < CoordinateLimit &&
+      std::fabs(q.eyeZ) < CoordinateLimit && std::isfinite(scalars[i]);
   }
   return ok;
 }
 
 /// The decomposition of one tetrahedron into a slot whose indices start at `base`.
-inline Projection Decompose(const NdcPoint ndc[4],
-  const double model[4][3],
-  const float scalars[4],
-  const Matrix4& mv,
-  TetVertex out[5],
-  std::uint32_t indices[12],
-  std::uint32_t base)
+inline Projection Decompose(const ProjectedPoint* const c[4], const float scalars[4],
+  TetVertex out[5], std::uint32_t indices[12], std::uint32_t base)
 {
   Projection p;
-  if (!Drawable(ndc, scalars))
+  if (!Drawable(c, scalars))
   {
     WriteDegenerateSlot(out, indices, base);
     return p;
   }
-  const double x[4] = { ndc[0].x, ndc[1].x, ndc[2].x, ndc[3].x };
-  const double y[4] = { ndc[0].y, ndc[1].y, ndc[2].y, ndc[3].y };
+  const double x[4] = { c[0]->x, c[1]->x, c[2]->x, c[3]->x };
+  const double y[4] = { c[0]->y, c[1]->y, c[2]->y, c[3]->y };
   p = ClassifyProjection(x, y);
   if (p.kind == ProjectionClass::NotDrawable)
   {
@@ -196,42 +200,38 @@ inline Projection Decompose(const NdcPoint ndc[4],
   }
   for (int i = 0; i < 4; ++i)
   {
-    out[i] = TetVertex{ static_cast<float>(ndc[i].x),
-      static_cast<float>(ndc[i].y),
-      static_cast<float>(ndc[i].z),
-      scalars[i],
-      scalars[i],
-      0.0f };
+    out[i] = TetVertex{ static_cast<float>(x[i]), static_cast<float>(y[i]),
+      static_cast<float>(c[i]->z), scalars[i], scalars[i], 0.0f };
   }
 
   // The thick vertex: the ray through it enters the tetrahedron at one point and leaves
-  // at another; both are found in model space with perspective-correct parameters, so
-  // their distance is the exact eye-space ray segment length (no lookup table).
-  double first[3], second[3], firstZ, secondZ, firstScalar, secondScalar;
-  double thickX, thickY;
+  // at another. Both are found in eye space with perspective-correct parameters, so their
+  // distance is the exact eye-space ray segment length (no lookup table).
+  double first[3], second[3], firstZ, secondZ, firstScalar, secondScalar, thickX, thickY;
   int thickSlot;
   if (p.kind == ProjectionClass::Quadrilateral)
   {
-    const int a = p.vertex[0], b = p.vertex[1], c = p.vertex[2], d = p.vertex[3];
-    // alpha along P_a P_b and beta along P_c P_d (VTK's OpenGL PT uses alpha for both).
-    const double tab = PerspectiveCorrect(p.alpha, ndc[a].w, ndc[b].w);
-    const double tcd = PerspectiveCorrect(p.beta, ndc[c].w, ndc[d].w);
-    for (int k = 0; k < 3; ++k)
-    {
-      first[k] = model[a][k] + tab * (model[b][k] - model[a][k]);
-      second[k] = model[c][k] + tcd * (model[d][k] - model[c][k]);
-    }
+    const int a = p.vertex[0], b = p.vertex[1], d0 = p.vertex[2], d1 = p.vertex[3];
+    // alpha along P_a P_b and beta along P_d0 P_d1 (VTK's OpenGL PT uses alpha for both).
+    const double tab = PerspectiveCorrect(p.alpha, c[a]->w, c[b]->w);
+    const double tcd = PerspectiveCorrect(p.beta, c[d0]->w, c[d1]->w);
+    first[0] = c[a]->eyeX + tab * (c[b]->eyeX - c[a]->eyeX);
+    first[1] = c[a]->eyeY + tab * (c[b]->eyeY - c[a]->eyeY);
+    first[2] = c[a]->eyeZ + tab * (c[b]->eyeZ - c[a]->eyeZ);
+    second[0] = c[d0]->eyeX + tcd * (c[d1]->eyeX - c[d0]->eyeX);
+    second[1] = c[d0]->eyeY + tcd * (c[d1]->eyeY - c[d0]->eyeY);
+    second[2] = c[d0]->eyeZ + tcd * (c[d1]->eyeZ - c[d0]->eyeZ);
     firstScalar = scalars[a] + tab * (static_cast<double>(scalars[b]) - scalars[a]);
-    secondScalar = scalars[c] + tcd * (static_cast<double>(scalars[d]) - scalars[c]);
+    secondScalar = scalars[d0] + tcd * (static_cast<double>(scalars[d1]) - scalars[d0]);
     // NDC z is affine in screen space: interpolate it with the screen parameters.
-    firstZ = ndc[a].z + p.alpha * (ndc[b].z - ndc[a].z);
-    secondZ = ndc[c].z + p.beta * (ndc[d].z - ndc[c].z);
+    firstZ = c[a]->z + p.alpha * (c[b]->z - c[a]->z);
+    secondZ = c[d0]->z + p.beta * (c[d1]->z - c[d0]->z);
     thickX = x[a] + p.alpha * (x[b] - x[a]);
     thickY = y[a] + p.alpha * (y[b] - y[a]);
     thickSlot = 4;
-    const std::uint32_t fan[12] = {
-      0u + a, 0u + c, 4u, 0u + c, 0u + b, 4u, 0u + b, 0u + d, 4u, 0u + d, 0u + a, 4u
-    };
+    // The quadrilateral's boundary runs a, d0, b, d1; fan it around the crossing.
+    const std::uint32_t fan[12] = { 0u + a, 0u + d0, 4u, 0u + d0, 0u + b, 4u, 0u + b, 0u + d1, 4u,
+      0u + d1, 0u + a, 4u };
     for (int i = 0; i < 12; ++i)
     {
       indices[i] = base + fan[i];
@@ -241,48 +241,38 @@ inline Projection Decompose(const NdcPoint ndc[4],
   {
     const int j0 = p.vertex[0], j1 = p.vertex[1], j2 = p.vertex[2], t = p.vertex[3];
     // The ray through the inner vertex meets the opposite face at screen barycentrics
-    // weights[]; divided by w they become the model-space barycentrics.
-    const double m0 = p.weights[0] / ndc[j0].w, m1 = p.weights[1] / ndc[j1].w,
-                 m2 = p.weights[2] / ndc[j2].w;
+    // weights[]; divided by w and renormalized they are the eye-space barycentrics.
+    const double m0 = p.weights[0] / c[j0]->w, m1 = p.weights[1] / c[j1]->w,
+                 m2 = p.weights[2] / c[j2]->w;
     const double inv = 1.0 / (m0 + m1 + m2); // weights sum to 1, w > 0: positive
     const double u0 = m0 * inv, u1 = m1 * inv, u2 = m2 * inv;
-    for (int k = 0; k < 3; ++k)
-    {
-      first[k] = model[t][k];
-      second[k] = u0 * model[j0][k] + u1 * model[j1][k] + u2 * model[j2][k];
-    }
+    first[0] = c[t]->eyeX;
+    first[1] = c[t]->eyeY;
+    first[2] = c[t]->eyeZ;
+    second[0] = u0 * c[j0]->eyeX + u1 * c[j1]->eyeX + u2 * c[j2]->eyeX;
+    second[1] = u0 * c[j0]->eyeY + u1 * c[j1]->eyeY + u2 * c[j2]->eyeY;
+    second[2] = u0 * c[j0]->eyeZ + u1 * c[j1]->eyeZ + u2 * c[j2]->eyeZ;
     firstScalar = scalars[t];
     secondScalar = u0 * scalars[j0] + u1 * scalars[j1] + u2 * scalars[j2];
-    firstZ = ndc[t].z;
-    secondZ = p.weights[0] * ndc[j0].z + p.weights[1] * ndc[j1].z + p.weights[2] * ndc[j2].z;
-    thickX = ndc[t].x;
-    thickY = ndc[t].y;
+    firstZ = c[t]->z;
+    secondZ = p.weights[0] * c[j0]->z + p.weights[1] * c[j1]->z + p.weights[2] * c[j2]->z;
+    thickX = x[t];
+    thickY = y[t];
     thickSlot = t;
-    const std::uint32_t fan[12] = { 0u + j0,
-      0u + j1,
-      0u + t,
-      0u + j1,
-      0u + j2,
-      0u + t,
-      0u + j2,
-      0u + j0,
-      0u + t,
-      0u + t,
-      0u + t,
-      0u + t };
+    const std::uint32_t fan[12] = { 0u + j0, 0u + j1, 0u + t, 0u + j1, 0u + j2, 0u + t, 0u + j2,
+      0u + j0, 0u + t, 0u + t, 0u + t, 0u + t };
     for (int i = 0; i < 12; ++i)
     {
       indices[i] = base + fan[i];
     }
   }
-  const double difference[3] = { first[0] - second[0], first[1] - second[1], first[2] - second[2] };
+  const double dx = first[0] - second[0], dy = first[1] - second[1], dz = first[2] - second[2];
   const bool firstInFront = firstZ <= secondZ;
-  out[thickSlot] = TetVertex{ static_cast<float>(thickX),
-    static_cast<float>(thickY),
+  out[thickSlot] = TetVertex{ static_cast<float>(thickX), static_cast<float>(thickY),
     static_cast<float>(firstInFront ? firstZ : secondZ),
     static_cast<float>(firstInFront ? firstScalar : secondScalar),
     static_cast<float>(firstInFront ? secondScalar : firstScalar),
-    static_cast<float>(EyeLength(mv, difference)) };
+    static_cast<float>(std::sqrt(dx * dx + dy * dy + dz * dz)) };
   if (thickSlot != 4)
   {
     out[4] = out[thickSlot];
@@ -290,78 +280,189 @@ inline Projection Decompose(const NdcPoint ndc[4],
   return p;
 }
 
-template<typename Access>
-void DecomposeAll(const Access& mesh,
-  const DecomposeInput& input,
-  const SortKey* order,
-  std::size_t count,
-  TetVertex* vertices,
-  std::uint32_t* indices,
-  ProjectionClass* classes,
+/**
+ * Copies a finished slot (assembled on the stack) to its place in the buffers with
+ * non-temporal 8-byte stores where available. Plain stores to lines not in cache first read
+ * them for ownership; with ~40 scalar stores a slot the store buffer fills and the core
+ * stalls (measured: 4x slower decomposition when slots are written in scattered order). The
+ * buffers are read next by the upload, not by this thread, so bypassing the cache is free.
+ * Requires 8-byte aligned buffers (any new/malloc allocation); otherwise memcpy is used.
+ */
+inline void StoreSlot(const TetVertex source[5], const std::uint32_t sourceIndices[12],
+  TetVertex* vertices, std::uint32_t* indices, bool streaming)
+{
+#if defined(__x86_64__) || defined(_M_X64)
+  if (streaming)
+  {
+    static_assert(sizeof(TetVertex) * 5 == 15 * 8, "slot vertices are 15 words");
+    long long words[15 + 6];
+    std::memcpy(words, source, 15 * 8);
+    std::memcpy(words + 15, sourceIndices, 6 * 8);
+    auto* vertexWords = reinterpret_cast<long long*>(vertices);
+    auto* indexWords = reinterpret_cast<long long*>(indices);
+    for (int i = 0; i < 15; ++i)
+    {
+      _mm_stream_si64(vertexWords + i, words[i]);
+    }
+    for (int i = 0; i < 6; ++i)
+    {
+      _mm_stream_si64(indexWords + i, words[15 + i]);
+    }
+    return;
+  }
+#endif
+  (void)streaming;
+  std::memcpy(vertices, source, 5 * sizeof(TetVertex));
+  std::memcpy(indices, sourceIndices, 12 * sizeof(std::uint32_t));
+}
+
+/// Makes a thread's non-temporal stores visible before it leaves a parallel region.
+inline void FinishStores()
+{
+#if defined(__x86_64__) || defined(_M_X64)
+  _mm_sfence();
+#endif
+}
+
+/// Whether both buffers allow 8-byte non-temporal stores.
+inline bool CanStream(const TetVertex* vertices, const std::uint32_t* indices)
+{
+  return ((reinterpret_cast<std::uintptr_t>(vertices) | reinterpret_cast<std::uintptr_t>(indices)) &
+           7u) == 0;
+}
+
+/// Slot k, holding `cell`.
+template <typename Access>
+inline void DecomposeSlot(const Access& cells, const DecomposeInput& input,
+  const float* cellScalars, std::uint32_t cell, std::int64_t k, TetVertex* vertices,
+  std::uint32_t* indices, ProjectionClass* classes, bool streaming)
+{
+  const auto base = static_cast<std::uint32_t>(5 * k);
+  TetVertex slotVertices[5];
+  std::uint32_t slotIndices[12];
+  std::int64_t ids[4];
+  ProjectionClass kind = ProjectionClass::NotDrawable;
+  if (cells.TetrahedronPoints(cell, ids))
+  {
+    const ProjectedPoint* corners[4] = { input.points + ids[0], input.points + ids[1],
+      input.points + ids[2], input.points + ids[3] };
+    float scalars[4];
+    for (int i = 0; i < 4; ++i)
+    {
+      scalars[i] = cellScalars ? cellScalars[cell] : corners[i]->scalar;
+    }
+    kind = Decompose(corners, scalars, slotVertices, slotIndices, base).kind;
+  }
+  else
+  {
+    WriteDegenerateSlot(slotVertices, slotIndices, base);
+  }
+  StoreSlot(slotVertices, slotIndices, vertices + 5 * k, indices + 12 * k, streaming);
+  if (classes)
+  {
+    classes[k] = kind;
+  }
+}
+
+template <typename Access>
+void DecomposeAll(const Access& cells, const DecomposeInput& input, const SortKey* order,
+  std::size_t count, TetVertex* vertices, std::uint32_t* indices, ProjectionClass* classes,
   int threads)
 {
   const auto n = static_cast<std::int64_t>(count);
-  const float* scalarValues = input.scalars.values;
-  const bool cellScalars = input.scalars.association == ScalarsView::Association::Cells;
-#pragma omp parallel for num_threads(threads) schedule(static)
-  for (std::int64_t k = 0; k < n; ++k)
+  const float* cellScalars =
+    input.scalars.association == ScalarsView::Association::Cells ? input.scalars.values : nullptr;
+  using IndexT = std::remove_const_t<std::remove_pointer_t<decltype(cells.offsets)>>;
+  const detail::GatherPrefetcher<IndexT, ProjectedPoint> prefetcher{ cells, input.points };
+  const auto cellOf = [order](std::int64_t k) { return CellOfKey(order[k]); };
+  const bool streaming = CanStream(vertices, indices);
+#pragma omp parallel num_threads(threads)
   {
-    const std::uint32_t cell = CellOfKey(order[k]);
-    const auto base = static_cast<std::uint32_t>(5 * k);
-    TetVertex* slotVertices = vertices + 5 * k;
-    std::uint32_t* slotIndices = indices + 12 * k;
-    std::int64_t ids[4];
-    ProjectionClass kind = ProjectionClass::NotDrawable;
-    if (mesh.TetrahedronPoints(cell, ids))
+    // Contiguous ranges per thread (as schedule(static)), so the prefetcher looks ahead
+    // inside the range this thread will actually visit.
+    const std::int64_t team = omp_get_num_threads(), t = omp_get_thread_num();
+    const std::int64_t first = n * t / team, end = n * (t + 1) / team;
+    for (std::int64_t k = first; k < end; ++k)
     {
-      NdcPoint ndc[4];
-      double model[4][3];
-      float scalars[4];
-      for (int i = 0; i < 4; ++i)
+      prefetcher.Ahead(k, end, cellOf);
+      DecomposeSlot(cells, input, cellScalars, cellOf(k), k, vertices, indices, classes, streaming);
+    }
+    FinishStores();
+  }
+}
+
+template <typename Access>
+void DecomposeAllByRank(const Access& cells, const DecomposeInput& input, const std::uint32_t* rank,
+  TetVertex* vertices, std::uint32_t* indices, ProjectionClass* classes, int threads)
+{
+  const auto n = static_cast<std::int64_t>(input.cells.cellCount);
+  const float* cellScalars =
+    input.scalars.association == ScalarsView::Association::Cells ? input.scalars.values : nullptr;
+  const bool streaming = CanStream(vertices, indices);
+#pragma omp parallel num_threads(threads)
+  {
+#pragma omp for schedule(static) nowait
+    for (std::int64_t c = 0; c < n; ++c)
+    {
+      const std::uint32_t k = rank[c];
+      if (k != NotInOrder)
       {
-        ndc[i] = input.ndc[ids[i]];
-        mesh.Point(ids[i], model[i]);
-        const std::int64_t scalarId = cellScalars ? static_cast<std::int64_t>(cell) : ids[i];
-        scalars[i] = scalarValues ? scalarValues[scalarId] : 0.0f;
+        DecomposeSlot(cells, input, cellScalars, static_cast<std::uint32_t>(c), k, vertices,
+          indices, classes, streaming);
       }
-      kind = Decompose(ndc, model, scalars, input.modelView, slotVertices, slotIndices, base).kind;
     }
-    if (kind == ProjectionClass::NotDrawable)
-    {
-      WriteDegenerateSlot(slotVertices, slotIndices, base);
-    }
-    if (classes)
-    {
-      classes[k] = kind;
-    }
+    FinishStores();
   }
 }
 
 } // namespace
 
-Projection DecomposeTetrahedron(const NdcPoint ndc[4],
-  const double model[4][3],
-  const float scalars[4],
-  const Matrix4& modelView,
-  TetVertex vertices[5],
-  std::uint32_t indices[12])
+Projection DecomposeTetrahedron(const ProjectedPoint* const corners[4], const float scalars[4],
+  TetVertex vertices[5], std::uint32_t indices[12])
 {
-  return Decompose(ndc, model, scalars, modelView, vertices, indices, 0);
+  return Decompose(corners, scalars, vertices, indices, 0);
 }
 
-void DecomposeTetrahedra(const DecomposeInput& input,
-  const SortKey* order,
-  std::size_t count,
-  TetVertex* vertices,
-  std::uint32_t* indices,
-  ProjectionClass* classes,
-  int threads)
+void DecomposeTetrahedra(const DecomposeInput& input, const SortKey* order, std::size_t count,
+  TetVertex* vertices, std::uint32_t* indices, ProjectionClass* classes, int threads)
 {
   const int nthreads = detail::ResolveThreads(threads);
-  detail::DispatchMesh(input.points,
-    input.cells,
-    [&](const auto& mesh)
-    { DecomposeAll(mesh, input, order, count, vertices, indices, classes, nthreads); });
+  detail::DispatchCells(input.cells, input.pointCount,
+    [&](const auto& cells)
+    { DecomposeAll(cells, input, order, count, vertices, indices, classes, nthreads); });
+}
+
+void InvertOrder(
+  const SortKey* order, std::size_t count, std::size_t cellCount, std::uint32_t* rank, int threads)
+{
+  const int nthreads = detail::ResolveThreads(threads);
+  const auto cells = static_cast<std::int64_t>(cellCount);
+  const auto n = static_cast<std::int64_t>(count);
+#pragma omp parallel num_threads(nthreads)
+  {
+    if (n < cells) // only a partial order leaves ranks to mark
+    {
+#pragma omp for schedule(static)
+      for (std::int64_t c = 0; c < cells; ++c)
+      {
+        rank[c] = NotInOrder;
+      }
+    }
+#pragma omp for schedule(static)
+    for (std::int64_t k = 0; k < n; ++k)
+    {
+      rank[CellOfKey(order[k])] = static_cast<std::uint32_t>(k);
+    }
+  }
+}
+
+void DecomposeTetrahedraByRank(const DecomposeInput& input, const std::uint32_t* rank,
+  TetVertex* vertices, std::uint32_t* indices, ProjectionClass* classes, int threads)
+{
+  const int nthreads = detail::ResolveThreads(threads);
+  detail::DispatchCells(input.cells, input.pointCount,
+    [&](const auto& cells)
+    { DecomposeAllByRank(cells, input, rank, vertices, indices, classes, nthreads); });
 }
 
 } // namespace mtpt

@@ -30,13 +30,9 @@ std::uint32_t EncodeDepth(float depth)
 namespace
 {
 
-template<typename Access>
-void KeysFor(const Access& mesh,
-  std::size_t cellCount,
-  const Matrix4& mv,
-  bool perspective,
-  SortKey* keys,
-  int threads)
+template <typename Access>
+void KeysFor(const Access& cells, const ProjectedPoint* points, std::size_t cellCount,
+  bool perspective, SortKey* keys, int threads)
 {
   const auto count = static_cast<std::int64_t>(cellCount);
 #pragma omp parallel for num_threads(threads) schedule(static)
@@ -44,29 +40,22 @@ void KeysFor(const Access& mesh,
   {
     std::int64_t ids[4];
     float depth = std::numeric_limits<float>::infinity();
-    if (mesh.TetrahedronPoints(static_cast<std::size_t>(c), ids))
+    if (cells.TetrahedronPoints(static_cast<std::size_t>(c), ids))
     {
-      double centroid[3] = { 0, 0, 0 };
+      double x = 0, y = 0, z = 0;
       for (int i = 0; i < 4; ++i)
       {
-        double p[3];
-        mesh.Point(ids[i], p);
-        centroid[0] += p[0];
-        centroid[1] += p[1];
-        centroid[2] += p[2];
+        const ProjectedPoint& p = points[ids[i]];
+        x += p.eyeX;
+        y += p.eyeY;
+        z += p.eyeZ;
       }
-      const double x = 0.25 * centroid[0], y = 0.25 * centroid[1], z = 0.25 * centroid[2];
-      const double ez = mv[8] * x + mv[9] * y + mv[10] * z + mv[11];
-      if (perspective)
-      {
-        const double ex = mv[0] * x + mv[1] * y + mv[2] * z + mv[3];
-        const double ey = mv[4] * x + mv[5] * y + mv[6] * z + mv[7];
-        depth = static_cast<float>(ex * ex + ey * ey + ez * ez);
-      }
-      else
-      {
-        depth = static_cast<float>(-ez); // the camera looks down -z: depth grows with -z
-      }
+      x *= 0.25;
+      y *= 0.25;
+      z *= 0.25;
+      // Perspective: squared distance from the eye (at the eye-space origin). Orthographic:
+      // distance along the view axis; the camera looks down -z.
+      depth = static_cast<float>(perspective ? x * x + y * y + z * z : -z);
     }
     keys[c] = MakeSortKey(depth, static_cast<std::uint32_t>(c));
   }
@@ -74,18 +63,13 @@ void KeysFor(const Access& mesh,
 
 } // namespace
 
-void ComputeDepthKeys(const PointsView& points,
-  const CellsView& cells,
-  const Matrix4& modelView,
-  bool perspective,
-  SortKey* keys,
-  int threads)
+void ComputeDepthKeys(const ProjectedPoint* points, std::size_t pointCount, const CellsView& cells,
+  bool perspective, SortKey* keys, int threads)
 {
   const int nthreads = detail::ResolveThreads(threads);
-  detail::DispatchMesh(points,
-    cells,
-    [&](const auto& mesh)
-    { KeysFor(mesh, cells.cellCount, modelView, perspective, keys, nthreads); });
+  detail::DispatchCells(cells, pointCount,
+    [&](const auto& access)
+    { KeysFor(access, points, cells.cellCount, perspective, keys, nthreads); });
 }
 
 } // namespace mtpt

@@ -41,26 +41,23 @@ bool FramePipeline::Run(const FrameInput& input, int threads)
     return false;
   }
   // Grow only: resize() value-initializes new elements once, later frames reuse them.
-  if (this->NdcPoints.size() < input.points.count)
+  if (this->ProjectedPoints.size() < input.points.count)
   {
-    this->NdcPoints.resize(input.points.count);
+    this->ProjectedPoints.resize(input.points.count);
   }
   this->SortedKeys.resize(n);
+  this->Rank.resize(n);
   this->VertexBuffer.resize(VerticesPerTetrahedron * n);
   this->IndexBuffer.resize(IndicesPerTetrahedron * n);
 
   auto start = Clock::now();
-  TransformToNDC(
-    input.points, Multiply(input.projection, input.modelView), this->NdcPoints.data(), threads);
+  ProjectPoints(input.points, input.scalars, input.modelView, input.projection,
+    this->ProjectedPoints.data(), threads);
   this->LastTimes.transform = detail::SecondsSince(start);
 
   start = Clock::now();
-  ComputeDepthKeys(input.points,
-    input.cells,
-    input.modelView,
-    input.perspective,
-    this->SortedKeys.data(),
-    threads);
+  ComputeDepthKeys(this->ProjectedPoints.data(), input.points.count, input.cells, input.perspective,
+    this->SortedKeys.data(), threads);
   this->LastTimes.keys = detail::SecondsSince(start);
 
   start = Clock::now();
@@ -69,18 +66,15 @@ bool FramePipeline::Run(const FrameInput& input, int threads)
 
   start = Clock::now();
   DecomposeInput decompose;
-  decompose.ndc = this->NdcPoints.data();
-  decompose.points = input.points;
+  decompose.points = this->ProjectedPoints.data();
+  decompose.pointCount = input.points.count;
   decompose.cells = input.cells;
   decompose.scalars = input.scalars;
-  decompose.modelView = input.modelView;
-  DecomposeTetrahedra(decompose,
-    this->SortedKeys.data(),
-    n,
-    this->VertexBuffer.data(),
-    this->IndexBuffer.data(),
-    nullptr,
-    threads);
+  // Visiting cells in storage order and scattering the slots is several times faster than
+  // gathering cells in visibility order on meshes larger than the cache (Decompose.h).
+  InvertOrder(this->SortedKeys.data(), n, n, this->Rank.data(), threads);
+  DecomposeTetrahedraByRank(decompose, this->Rank.data(), this->VertexBuffer.data(),
+    this->IndexBuffer.data(), nullptr, threads);
   this->LastTimes.decompose = detail::SecondsSince(start);
   this->Count = n;
   return true;

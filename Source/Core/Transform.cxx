@@ -10,12 +10,9 @@ namespace mtpt
 namespace
 {
 
-template<typename PointT>
-void TransformPoints(const PointT* xyz,
-  std::int64_t count,
-  const Matrix4& m,
-  NdcPoint* out,
-  int threads)
+template <typename PointT>
+void ProjectAll(const PointT* xyz, const float* pointScalars, std::int64_t count, const Matrix4& mv,
+  const Matrix4& p, ProjectedPoint* out, int threads)
 {
 #pragma omp parallel for num_threads(threads) schedule(static)
   for (std::int64_t i = 0; i < count; ++i)
@@ -23,35 +20,49 @@ void TransformPoints(const PointT* xyz,
     const double x = static_cast<double>(xyz[3 * i + 0]);
     const double y = static_cast<double>(xyz[3 * i + 1]);
     const double z = static_cast<double>(xyz[3 * i + 2]);
-    const double cx = m[0] * x + m[1] * y + m[2] * z + m[3];
-    const double cy = m[4] * x + m[5] * y + m[6] * z + m[7];
-    const double cz = m[8] * x + m[9] * y + m[10] * z + m[11];
-    const double cw = m[12] * x + m[13] * y + m[14] * z + m[15];
+    // Eye coordinates first, then the projection of those: the same two steps as GL.
+    const double ex = mv[0] * x + mv[1] * y + mv[2] * z + mv[3];
+    const double ey = mv[4] * x + mv[5] * y + mv[6] * z + mv[7];
+    const double ez = mv[8] * x + mv[9] * y + mv[10] * z + mv[11];
+    const double ew = mv[12] * x + mv[13] * y + mv[14] * z + mv[15];
+    const double cx = p[0] * ex + p[1] * ey + p[2] * ez + p[3] * ew;
+    const double cy = p[4] * ex + p[5] * ey + p[6] * ez + p[7] * ew;
+    const double cz = p[8] * ex + p[9] * ey + p[10] * ez + p[11] * ew;
+    const double cw = p[12] * ex + p[13] * ey + p[14] * ez + p[15] * ew;
     // The division is done even for w <= 0: decomposition rejects those points by w, and
     // IEEE division never traps, so there is no branch in this loop.
     const double inv = 1.0 / cw;
-    out[i] = NdcPoint{ cx * inv, cy * inv, cz * inv, cw };
+    const double invEye = 1.0 / ew; // 1 for affine model-view matrices
+    ProjectedPoint& r = out[i];
+    r.x = cx * inv;
+    r.y = cy * inv;
+    r.z = cz * inv;
+    r.w = cw;
+    r.eyeX = ex * invEye;
+    r.eyeY = ey * invEye;
+    r.eyeZ = ez * invEye;
+    r.scalar = pointScalars ? pointScalars[i] : 0.0f;
   }
 }
 
 } // namespace
 
-void TransformToNDC(const PointsView& points,
-  const Matrix4& modelViewProjection,
-  NdcPoint* out,
-  int threads)
+void ProjectPoints(const PointsView& points, const ScalarsView& scalars, const Matrix4& modelView,
+  const Matrix4& projection, ProjectedPoint* out, int threads)
 {
   const int nthreads = detail::ResolveThreads(threads);
   const auto count = static_cast<std::int64_t>(points.count);
+  const float* pointScalars =
+    scalars.association == ScalarsView::Association::Points ? scalars.values : nullptr;
   if (points.type == PointsView::Type::Float32)
   {
-    TransformPoints(
-      static_cast<const float*>(points.data), count, modelViewProjection, out, nthreads);
+    ProjectAll(static_cast<const float*>(points.data), pointScalars, count, modelView, projection,
+      out, nthreads);
   }
   else
   {
-    TransformPoints(
-      static_cast<const double*>(points.data), count, modelViewProjection, out, nthreads);
+    ProjectAll(static_cast<const double*>(points.data), pointScalars, count, modelView, projection,
+      out, nthreads);
   }
 }
 

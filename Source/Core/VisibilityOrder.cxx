@@ -89,10 +89,8 @@ private:
   /// Hoare's partition of [lo, hi) around the value at `pivotIndex`, scanning from both
   /// ends. Returns split with lo < split < hi, [lo, split) <= pivot <= [split, hi).
   /// All keys are distinct (they hold their cell id), so both parts are never empty.
-  static std::size_t HoarePartition(SortKey* a,
-    std::size_t lo,
-    std::size_t hi,
-    std::size_t pivotIndex)
+  static std::size_t HoarePartition(
+    SortKey* a, std::size_t lo, std::size_t hi, std::size_t pivotIndex)
   {
     std::swap(a[lo], a[pivotIndex]);
     const SortKey pivot = a[lo];
@@ -235,8 +233,8 @@ private:
 
 } // namespace
 
-std::unique_ptr<VisibilityOrder> MakeVisibilityOrder(OrderMethod method,
-  std::size_t maxSubArraySize)
+std::unique_ptr<VisibilityOrder> MakeVisibilityOrder(
+  OrderMethod method, std::size_t maxSubArraySize)
 {
   switch (method)
   {

@@ -32,15 +32,13 @@ struct View
 View OrthographicView()
 {
   return { mtpt::Multiply(LookAt({ 1.0, 1.5, 4.0 }, { 0, 0, 0 }, { 0, 1, 0 }), Scale(1, 2, 0.5)),
-    Ortho(-2, 2, -2, 2, 0.5, 10),
-    false };
+    Ortho(-2, 2, -2, 2, 0.5, 10), false };
 }
 
 View PerspectiveView()
 {
   return { mtpt::Multiply(LookAt({ 0.5, 1.0, 3.5 }, { 0, 0, 0 }, { 0, 1, 0 }), Scale(1, 2, 0.5)),
-    Perspective(60, 1.2, 0.5, 10),
-    true };
+    Perspective(60, 1.2, 0.5, 10), true };
 }
 
 double TriangleArea(const TetVertex& a, const TetVertex& b, const TetVertex& c)
@@ -64,13 +62,8 @@ double HullArea(const double x[4], const double y[4])
   };
   // The hull is the largest of the candidate polygons (a self-intersecting order has a
   // smaller signed area than the convex one).
-  return std::max({ tri(1, 2, 3),
-    tri(0, 2, 3),
-    tri(0, 1, 3),
-    tri(0, 1, 2),
-    quad(0, 1, 2, 3),
-    quad(0, 2, 1, 3),
-    quad(0, 1, 3, 2) });
+  return std::max({ tri(1, 2, 3), tri(0, 2, 3), tri(0, 1, 3), tri(0, 1, 2), quad(0, 1, 2, 3),
+    quad(0, 2, 1, 3), quad(0, 1, 3, 2) });
 }
 
 class ThickVertex : public ::testing::TestWithParam<bool>
@@ -111,24 +104,24 @@ TEST_P(ThickVertex, ThicknessAndScalarsAreTheExactRaySegment)
       continue;
     }
     float coords[12];
-    double model[4][3];
     float scalars[4];
     for (int i = 0; i < 4; ++i)
     {
       for (int k = 0; k < 3; ++k)
       {
         coords[3 * i + k] = static_cast<float>(p[i][k]);
-        model[i][k] = coords[3 * i + k];
         p[i][k] = coords[3 * i + k]; // the test uses exactly the float points
       }
       scalars[i] = static_cast<float>(Dot(gradient, p[i]) + 0.5);
     }
-    mtpt::NdcPoint ndc[4];
-    mtpt::TransformToNDC(mtpt::PointsView::FromFloat(coords, 4), mvp, ndc, 1);
+    mtpt::ProjectedPoint ndc[4];
+    mtpt::ProjectPoints(mtpt::PointsView::FromFloat(coords, 4),
+      { scalars, mtpt::ScalarsView::Association::Points }, view.modelView, view.projection, ndc, 1);
+    const mtpt::ProjectedPoint* corners[4] = { &ndc[0], &ndc[1], &ndc[2], &ndc[3] };
     TetVertex vertices[5];
     std::uint32_t indices[12];
     const mtpt::Projection projection =
-      mtpt::DecomposeTetrahedron(ndc, model, scalars, view.modelView, vertices, indices);
+      mtpt::DecomposeTetrahedron(corners, scalars, vertices, indices);
     ASSERT_NE(projection.kind, ProjectionClass::NotDrawable);
     quadrilaterals += projection.kind == ProjectionClass::Quadrilateral;
     const TetVertex& thick = projection.kind == ProjectionClass::Quadrilateral
@@ -157,11 +150,9 @@ TEST_P(ThickVertex, ThicknessAndScalarsAreTheExactRaySegment)
     const Vec3 direction = Sub(farPoint, nearPoint);
     double tEnter = 0, tExit = 0;
     ASSERT_GT(ChordLength(p, nearPoint, direction, &tEnter, &tExit), 0.0);
-    const Vec3 enter{ nearPoint[0] + tEnter * direction[0],
-      nearPoint[1] + tEnter * direction[1],
+    const Vec3 enter{ nearPoint[0] + tEnter * direction[0], nearPoint[1] + tEnter * direction[1],
       nearPoint[2] + tEnter * direction[2] };
-    const Vec3 exit{ nearPoint[0] + tExit * direction[0],
-      nearPoint[1] + tExit * direction[1],
+    const Vec3 exit{ nearPoint[0] + tExit * direction[0], nearPoint[1] + tExit * direction[1],
       nearPoint[2] + tExit * direction[2] };
     const Vec3 eyeEnter = Apply(view.modelView, enter);
     const Vec3 eyeExit = Apply(view.modelView, exit);
@@ -191,9 +182,7 @@ TEST_P(ThickVertex, ThicknessAndScalarsAreTheExactRaySegment)
   RecordProperty("worst_relative_thickness_error", std::to_string(worstRelative));
 }
 
-INSTANTIATE_TEST_SUITE_P(Projections,
-  ThickVertex,
-  ::testing::Values(false, true),
+INSTANTIATE_TEST_SUITE_P(Projections, ThickVertex, ::testing::Values(false, true),
   [](const auto& info) { return info.param ? "Perspective" : "Orthographic"; });
 
 TEST(Decompose, TrianglesCoverTheProjectionExactlyOnce)
@@ -201,22 +190,21 @@ TEST(Decompose, TrianglesCoverTheProjectionExactlyOnce)
   std::mt19937_64 random(7);
   std::uniform_real_distribution<double> coordinate(-1.0, 1.0);
   const View view = OrthographicView();
-  const mtpt::Matrix4 mvp = mtpt::Multiply(view.projection, view.modelView);
   for (int t = 0; t < 50000; ++t)
   {
     float coords[12];
-    double model[4][3];
     const float scalars[4] = { 0, 1, 2, 3 };
-    for (int i = 0; i < 12; ++i)
+    for (float& value : coords)
     {
-      coords[i] = static_cast<float>(coordinate(random));
-      model[i / 3][i % 3] = coords[i];
+      value = static_cast<float>(coordinate(random));
     }
-    mtpt::NdcPoint ndc[4];
-    mtpt::TransformToNDC(mtpt::PointsView::FromFloat(coords, 4), mvp, ndc, 1);
+    mtpt::ProjectedPoint ndc[4];
+    mtpt::ProjectPoints(
+      mtpt::PointsView::FromFloat(coords, 4), {}, view.modelView, view.projection, ndc, 1);
+    const mtpt::ProjectedPoint* corners[4] = { &ndc[0], &ndc[1], &ndc[2], &ndc[3] };
     TetVertex v[5];
     std::uint32_t idx[12];
-    const auto projection = mtpt::DecomposeTetrahedron(ndc, model, scalars, view.modelView, v, idx);
+    const auto projection = mtpt::DecomposeTetrahedron(corners, scalars, v, idx);
     if (projection.kind == ProjectionClass::NotDrawable)
     {
       continue;
@@ -260,8 +248,7 @@ TEST(Decompose, BuffersAreBitIdenticalForEveryThreadCountAndOrderMethod)
         ASSERT_TRUE(pipeline.Run(input, threads));
         ASSERT_EQ(pipeline.Keys(), reference.Keys());
         ASSERT_EQ(0,
-          std::memcmp(pipeline.Vertices().data(),
-            reference.Vertices().data(),
+          std::memcmp(pipeline.Vertices().data(), reference.Vertices().data(),
             reference.Vertices().size() * sizeof(TetVertex)));
         ASSERT_EQ(pipeline.Indices(), reference.Indices());
       }
@@ -269,6 +256,68 @@ TEST(Decompose, BuffersAreBitIdenticalForEveryThreadCountAndOrderMethod)
     // Back to front: each slot's key depth never increases along the order.
     const auto& keys = reference.Keys();
     EXPECT_TRUE(std::is_sorted(keys.begin(), keys.end()));
+  }
+}
+
+TEST(Decompose, GatherAndRankEntryPointsAgreeOnFullAndPartialOrders)
+{
+  const TetMesh mesh = JitteredGrid(8, 4); // 3072 tetrahedra
+  const View view = PerspectiveView();
+  const std::size_t n = mesh.CellCount(), points = mesh.points.size() / 3;
+  std::vector<mtpt::ProjectedPoint> projected(points);
+  mtpt::ProjectPoints(mesh.Points(), {}, view.modelView, view.projection, projected.data(), 2);
+  std::vector<mtpt::SortKey> order(n);
+  mtpt::ComputeDepthKeys(projected.data(), points, mesh.Cells(), true, order.data(), 2);
+  mtpt::MakeVisibilityOrder(mtpt::OrderMethod::RadixSort)->Sort(order.data(), n, 2);
+  mtpt::DecomposeInput input;
+  input.points = projected.data();
+  input.pointCount = points;
+  input.cells = mesh.Cells();
+  // Cell scalars this time, so that path is covered too.
+  std::vector<float> cellScalars(n);
+  for (std::size_t c = 0; c < n; ++c)
+  {
+    cellScalars[c] = 0.001f * static_cast<float>(c);
+  }
+  input.scalars = { cellScalars.data(), mtpt::ScalarsView::Association::Cells };
+  // A full order, and a partial one (every third cell dropped, as culling will).
+  std::vector<mtpt::SortKey> partial;
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    if (mtpt::CellOfKey(order[k]) % 3 != 0)
+    {
+      partial.push_back(order[k]);
+    }
+  }
+  for (const auto* keys : { &order, &partial })
+  {
+    const std::size_t count = keys->size();
+    std::vector<TetVertex> gatherVertices(5 * count), rankVertices(5 * count);
+    std::vector<std::uint32_t> gatherIndices(12 * count), rankIndices(12 * count, 7u);
+    std::vector<ProjectionClass> gatherClasses(count), rankClasses(count);
+    mtpt::DecomposeTetrahedra(input, keys->data(), count, gatherVertices.data(),
+      gatherIndices.data(), gatherClasses.data(), 3);
+    std::vector<std::uint32_t> rank(n);
+    mtpt::InvertOrder(keys->data(), count, n, rank.data(), 2);
+    for (std::size_t k = 0; k < count; ++k)
+    {
+      ASSERT_EQ(rank[mtpt::CellOfKey((*keys)[k])], k);
+    }
+    mtpt::DecomposeTetrahedraByRank(
+      input, rank.data(), rankVertices.data(), rankIndices.data(), rankClasses.data(), 3);
+    ASSERT_EQ(
+      0, std::memcmp(gatherVertices.data(), rankVertices.data(), count * 5 * sizeof(TetVertex)));
+    ASSERT_EQ(gatherIndices, rankIndices);
+    ASSERT_EQ(gatherClasses, rankClasses);
+    // Cell scalars: every record of slot k carries the scalar of its cell.
+    for (std::size_t k = 0; k < count; ++k)
+    {
+      if (gatherClasses[k] != ProjectionClass::NotDrawable)
+      {
+        ASSERT_EQ(gatherVertices[5 * k].scalarFront, cellScalars[mtpt::CellOfKey((*keys)[k])]);
+        ASSERT_EQ(gatherVertices[5 * k + 4].scalarBack, cellScalars[mtpt::CellOfKey((*keys)[k])]);
+      }
+    }
   }
 }
 
@@ -324,14 +373,15 @@ TEST(Decompose, DegenerateInputGivesFiniteBuffersAndValidIndices)
   }
   const mtpt::Matrix4 mv = LookAt({ 0, 0, 5 }, { 0, 0, 0 }, { 0, 1, 0 });
   const mtpt::Matrix4 proj = Perspective(60, 1, 0.1, 100);
-  std::vector<mtpt::NdcPoint> ndc(mesh.points.size() / 3);
-  mtpt::TransformToNDC(mesh.Points(), mtpt::Multiply(proj, mv), ndc.data(), 2);
+  const mtpt::ScalarsView pointScalars{ mesh.scalars.data(),
+    mtpt::ScalarsView::Association::Points };
+  std::vector<mtpt::ProjectedPoint> projected(mesh.points.size() / 3);
+  mtpt::ProjectPoints(mesh.Points(), pointScalars, mv, proj, projected.data(), 2);
   mtpt::DecomposeInput input;
-  input.ndc = ndc.data();
-  input.points = mesh.Points();
+  input.points = projected.data();
+  input.pointCount = projected.size();
   input.cells = mesh.Cells();
-  input.scalars = { mesh.scalars.data(), mtpt::ScalarsView::Association::Points };
-  input.modelView = mv;
+  input.scalars = pointScalars;
   // Stale garbage in the buffers must be overwritten everywhere.
   std::vector<TetVertex> vertices(5 * n, TetVertex{ NAN, NAN, NAN, NAN, NAN, NAN });
   std::vector<std::uint32_t> indices(12 * n, 0xffffffffu);

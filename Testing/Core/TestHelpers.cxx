@@ -20,22 +20,14 @@ Matrix4 Inverse(const Matrix4& m)
   const double c1 = m[8] * m[14] - m[12] * m[10], c0 = m[8] * m[13] - m[12] * m[9];
   const double det = s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0;
   const double k = 1.0 / det;
-  return { (m[5] * c5 - m[6] * c4 + m[7] * c3) * k,
-    (-m[1] * c5 + m[2] * c4 - m[3] * c3) * k,
-    (m[13] * s5 - m[14] * s4 + m[15] * s3) * k,
-    (-m[9] * s5 + m[10] * s4 - m[11] * s3) * k,
-    (-m[4] * c5 + m[6] * c2 - m[7] * c1) * k,
-    (m[0] * c5 - m[2] * c2 + m[3] * c1) * k,
-    (-m[12] * s5 + m[14] * s2 - m[15] * s1) * k,
-    (m[8] * s5 - m[10] * s2 + m[11] * s1) * k,
-    (m[4] * c4 - m[5] * c2 + m[7] * c0) * k,
-    (-m[0] * c4 + m[1] * c2 - m[3] * c0) * k,
-    (m[12] * s4 - m[13] * s2 + m[15] * s0) * k,
-    (-m[8] * s4 + m[9] * s2 - m[11] * s0) * k,
-    (-m[4] * c3 + m[5] * c1 - m[6] * c0) * k,
-    (m[0] * c3 - m[1] * c1 + m[2] * c0) * k,
-    (-m[12] * s3 + m[13] * s1 - m[14] * s0) * k,
-    (m[8] * s3 - m[9] * s1 + m[10] * s0) * k };
+  return { (m[5] * c5 - m[6] * c4 + m[7] * c3) * k, (-m[1] * c5 + m[2] * c4 - m[3] * c3) * k,
+    (m[13] * s5 - m[14] * s4 + m[15] * s3) * k, (-m[9] * s5 + m[10] * s4 - m[11] * s3) * k,
+    (-m[4] * c5 + m[6] * c2 - m[7] * c1) * k, (m[0] * c5 - m[2] * c2 + m[3] * c1) * k,
+    (-m[12] * s5 + m[14] * s2 - m[15] * s1) * k, (m[8] * s5 - m[10] * s2 + m[11] * s1) * k,
+    (m[4] * c4 - m[5] * c2 + m[7] * c0) * k, (-m[0] * c4 + m[1] * c2 - m[3] * c0) * k,
+    (m[12] * s4 - m[13] * s2 + m[15] * s0) * k, (-m[8] * s4 + m[9] * s2 - m[11] * s0) * k,
+    (-m[4] * c3 + m[5] * c1 - m[6] * c0) * k, (m[0] * c3 - m[1] * c1 + m[2] * c0) * k,
+    (-m[12] * s3 + m[13] * s1 - m[14] * s0) * k, (m[8] * s3 - m[9] * s1 + m[10] * s0) * k };
 }
 
 TetMesh JitteredGrid(int n, unsigned seed)
@@ -63,9 +55,8 @@ TetMesh JitteredGrid(int n, unsigned seed)
     }
   }
   // Kuhn split: the 6 paths from corner 000 to 111, always conforming across cubes.
-  static const int paths[6][3] = {
-    { 0, 1, 2 }, { 0, 2, 1 }, { 1, 0, 2 }, { 1, 2, 0 }, { 2, 0, 1 }, { 2, 1, 0 }
-  };
+  static const int paths[6][3] = { { 0, 1, 2 }, { 0, 2, 1 }, { 1, 0, 2 }, { 1, 2, 0 }, { 2, 0, 1 },
+    { 2, 1, 0 } };
   for (int k = 0; k < n; ++k)
   {
     for (int j = 0; j < n; ++j)
@@ -90,11 +81,8 @@ TetMesh JitteredGrid(int n, unsigned seed)
   return mesh;
 }
 
-double ChordLength(const Vec3 p[4],
-  const Vec3& origin,
-  const Vec3& direction,
-  double* tEnter,
-  double* tExit)
+double ChordLength(
+  const Vec3 p[4], const Vec3& origin, const Vec3& direction, double* tEnter, double* tExit)
 {
   double t0 = -std::numeric_limits<double>::infinity();
   double t1 = std::numeric_limits<double>::infinity();

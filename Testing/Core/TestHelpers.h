@@ -43,52 +43,23 @@ inline Matrix4 LookAt(const Vec3& eye, const Vec3& target, const Vec3& up)
   const Vec3 f = Normalized(Sub(target, eye));
   const Vec3 s = Normalized(Cross(f, up));
   const Vec3 u = Cross(s, f);
-  return { s[0],
-    s[1],
-    s[2],
-    -Dot(s, eye),
-    u[0],
-    u[1],
-    u[2],
-    -Dot(u, eye),
-    -f[0],
-    -f[1],
-    -f[2],
-    Dot(f, eye),
-    0,
-    0,
-    0,
-    1 };
+  return { s[0], s[1], s[2], -Dot(s, eye), u[0], u[1], u[2], -Dot(u, eye), -f[0], -f[1], -f[2],
+    Dot(f, eye), 0, 0, 0, 1 };
 }
 
 /// glOrtho.
 inline Matrix4 Ortho(double l, double r, double b, double t, double n, double f)
 {
-  return { 2 / (r - l),
-    0,
-    0,
-    -(r + l) / (r - l),
-    0,
-    2 / (t - b),
-    0,
-    -(t + b) / (t - b),
-    0,
-    0,
-    -2 / (f - n),
-    -(f + n) / (f - n),
-    0,
-    0,
-    0,
-    1 };
+  return { 2 / (r - l), 0, 0, -(r + l) / (r - l), 0, 2 / (t - b), 0, -(t + b) / (t - b), 0, 0,
+    -2 / (f - n), -(f + n) / (f - n), 0, 0, 0, 1 };
 }
 
 /// gluPerspective (vertical field of view in degrees).
 inline Matrix4 Perspective(double fovyDegrees, double aspect, double n, double f)
 {
   const double c = 1.0 / std::tan(fovyDegrees * M_PI / 360.0);
-  return {
-    c / aspect, 0, 0, 0, 0, c, 0, 0, 0, 0, (f + n) / (n - f), 2 * f * n / (n - f), 0, 0, -1, 0
-  };
+  return { c / aspect, 0, 0, 0, 0, c, 0, 0, 0, 0, (f + n) / (n - f), 2 * f * n / (n - f), 0, 0, -1,
+    0 };
 }
 
 inline Matrix4 Scale(double sx, double sy, double sz)
@@ -140,11 +111,8 @@ TetMesh JitteredGrid(int n, unsigned seed);
 /// Length of the intersection of the line origin + t * direction (all t) with the
 /// tetrahedron p[0..3]; 0 if it misses. Ground truth computed in double by clipping the
 /// line against the four face planes.
-double ChordLength(const Vec3 p[4],
-  const Vec3& origin,
-  const Vec3& direction,
-  double* tEnter,
-  double* tExit);
+double ChordLength(
+  const Vec3 p[4], const Vec3& origin, const Vec3& direction, double* tEnter, double* tExit);
 
 } // namespace test
 } // namespace mtpt

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <vector>
@@ -30,37 +31,57 @@ TEST(Helpers, InverseIsInverse)
   }
 }
 
+bool SameRecord(const mtpt::ProjectedPoint& a, const mtpt::ProjectedPoint& b)
+{
+  return a.x == b.x && a.y == b.y && a.z == b.z && a.w == b.w && a.eyeX == b.eyeX &&
+    a.eyeY == b.eyeY && a.eyeZ == b.eyeZ && a.scalar == b.scalar;
+}
+
 TEST(Transform, MatchesDoubleReferenceForFloatAndDoublePoints)
 {
   const TetMesh mesh = JitteredGrid(6, 3);
   const std::size_t n = mesh.points.size() / 3;
   const std::vector<double> asDouble(mesh.points.begin(), mesh.points.end());
-  const mtpt::Matrix4 mvp = mtpt::Multiply(
-    Perspective(40, 1.0, 1.0, 10.0), LookAt({ 0.5, 1, 4 }, { 0, 0, 0 }, { 0, 1, 0 }));
-  std::vector<mtpt::NdcPoint> fromFloat(n), fromDouble(n), oneThread(n);
-  mtpt::TransformToNDC(
-    mtpt::PointsView::FromFloat(mesh.points.data(), n), mvp, fromFloat.data(), 3);
-  mtpt::TransformToNDC(mtpt::PointsView::FromDouble(asDouble.data(), n), mvp, fromDouble.data(), 2);
-  mtpt::TransformToNDC(
-    mtpt::PointsView::FromFloat(mesh.points.data(), n), mvp, oneThread.data(), 1);
-  ASSERT_EQ(0, std::memcmp(fromFloat.data(), fromDouble.data(), n * sizeof(mtpt::NdcPoint)));
-  ASSERT_EQ(0, std::memcmp(fromFloat.data(), oneThread.data(), n * sizeof(mtpt::NdcPoint)));
+  const mtpt::Matrix4 mv = LookAt({ 0.5, 1, 4 }, { 0, 0, 0 }, { 0, 1, 0 });
+  const mtpt::Matrix4 proj = Perspective(40, 1.0, 1.0, 10.0);
+  const mtpt::Matrix4 mvp = mtpt::Multiply(proj, mv);
+  const mtpt::ScalarsView scalars{ mesh.scalars.data(), mtpt::ScalarsView::Association::Points };
+  std::vector<mtpt::ProjectedPoint> fromFloat(n), fromDouble(n), oneThread(n);
+  mtpt::ProjectPoints(
+    mtpt::PointsView::FromFloat(mesh.points.data(), n), scalars, mv, proj, fromFloat.data(), 3);
+  mtpt::ProjectPoints(
+    mtpt::PointsView::FromDouble(asDouble.data(), n), scalars, mv, proj, fromDouble.data(), 2);
+  mtpt::ProjectPoints(
+    mtpt::PointsView::FromFloat(mesh.points.data(), n), scalars, mv, proj, oneThread.data(), 1);
   for (std::size_t i = 0; i < n; ++i)
   {
+    ASSERT_TRUE(SameRecord(fromFloat[i], fromDouble[i])) << i;
+    ASSERT_TRUE(SameRecord(fromFloat[i], oneThread[i])) << i;
+    const Vec3 p{ asDouble[3 * i], asDouble[3 * i + 1], asDouble[3 * i + 2] };
     double w;
-    const Vec3 expected =
-      Apply(mvp, { asDouble[3 * i], asDouble[3 * i + 1], asDouble[3 * i + 2] }, &w);
-    EXPECT_NEAR(fromFloat[i].x, expected[0], 1e-6);
-    EXPECT_NEAR(fromFloat[i].y, expected[1], 1e-6);
-    EXPECT_NEAR(fromFloat[i].z, expected[2], 1e-6);
-    EXPECT_NEAR(fromFloat[i].w, w, 1e-5 * std::fabs(w));
+    const Vec3 expected = Apply(mvp, p, &w);
+    const Vec3 eye = Apply(mv, p);
+    EXPECT_NEAR(fromFloat[i].x, expected[0], 1e-12);
+    EXPECT_NEAR(fromFloat[i].y, expected[1], 1e-12);
+    EXPECT_NEAR(fromFloat[i].z, expected[2], 1e-12);
+    EXPECT_NEAR(fromFloat[i].w, w, 1e-12);
+    EXPECT_NEAR(fromFloat[i].eyeX, eye[0], 1e-12);
+    EXPECT_NEAR(fromFloat[i].eyeY, eye[1], 1e-12);
+    EXPECT_NEAR(fromFloat[i].eyeZ, eye[2], 1e-12);
+    EXPECT_EQ(fromFloat[i].scalar, mesh.scalars[i]);
   }
+  // Cell scalars are not copied into the point records.
+  std::vector<mtpt::ProjectedPoint> withCellScalars(n);
+  mtpt::ProjectPoints(mtpt::PointsView::FromFloat(mesh.points.data(), n),
+    { mesh.scalars.data(), mtpt::ScalarsView::Association::Cells }, mv, proj,
+    withCellScalars.data(), 2);
+  EXPECT_EQ(withCellScalars[7].scalar, 0.0f);
 }
 
 TEST(Transform, FarFromTheOriginKeepsPrecision)
 {
-  // A unit cube centred at 1e7 with a camera looking at it: double points and double
-  // arithmetic give NDC as accurate as for the same scene at the origin.
+  // A small cell centred at 1e7 with a camera looking at it: double points and double
+  // arithmetic give NDC and eye coordinates as accurate as for the same scene at the origin.
   const double offset = 1e7;
   const std::vector<double> local = { 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0.5, 0.25, 0.125 };
   std::vector<double> shifted = local;
@@ -69,20 +90,20 @@ TEST(Transform, FarFromTheOriginKeepsPrecision)
     v += offset;
   }
   const mtpt::Matrix4 proj = Ortho(-1, 1, -1, 1, 0.1, 10);
-  const mtpt::Matrix4 atOrigin =
-    mtpt::Multiply(proj, LookAt({ 0.3, 0.2, 3 }, { 0.3, 0.2, 0 }, { 0, 1, 0 }));
-  const mtpt::Matrix4 atOffset = mtpt::Multiply(proj,
-    LookAt({ 0.3 + offset, 0.2 + offset, 3 + offset },
-      { 0.3 + offset, 0.2 + offset, offset },
-      { 0, 1, 0 }));
-  std::vector<mtpt::NdcPoint> a(5), b(5);
-  mtpt::TransformToNDC(mtpt::PointsView::FromDouble(local.data(), 5), atOrigin, a.data(), 1);
-  mtpt::TransformToNDC(mtpt::PointsView::FromDouble(shifted.data(), 5), atOffset, b.data(), 1);
+  const mtpt::Matrix4 atOrigin = LookAt({ 0.3, 0.2, 3 }, { 0.3, 0.2, 0 }, { 0, 1, 0 });
+  const mtpt::Matrix4 atOffset = LookAt({ 0.3 + offset, 0.2 + offset, 3 + offset },
+    { 0.3 + offset, 0.2 + offset, offset }, { 0, 1, 0 });
+  std::vector<mtpt::ProjectedPoint> a(5), b(5);
+  mtpt::ProjectPoints(
+    mtpt::PointsView::FromDouble(local.data(), 5), {}, atOrigin, proj, a.data(), 1);
+  mtpt::ProjectPoints(
+    mtpt::PointsView::FromDouble(shifted.data(), 5), {}, atOffset, proj, b.data(), 1);
   for (int i = 0; i < 5; ++i)
   {
-    EXPECT_NEAR(a[i].x, b[i].x, 1e-6);
-    EXPECT_NEAR(a[i].y, b[i].y, 1e-6);
-    EXPECT_NEAR(a[i].z, b[i].z, 1e-6);
+    EXPECT_NEAR(a[i].x, b[i].x, 1e-8);
+    EXPECT_NEAR(a[i].y, b[i].y, 1e-8);
+    EXPECT_NEAR(a[i].z, b[i].z, 1e-8);
+    EXPECT_NEAR(a[i].eyeZ, b[i].eyeZ, 1e-8);
   }
 }
 
@@ -91,15 +112,16 @@ TEST(DepthKeys, OrthographicAndPerspectiveDepthsForEveryStorage)
   const TetMesh mesh = JitteredGrid(4, 5);
   const std::size_t cells = mesh.CellCount();
   const std::size_t n = mesh.points.size() / 3;
-  const std::vector<double> pointsDouble(mesh.points.begin(), mesh.points.end());
   const std::vector<std::int32_t> conn32(mesh.connectivity.begin(), mesh.connectivity.end());
   const std::vector<std::int32_t> offs32(mesh.offsets.begin(), mesh.offsets.end());
   const mtpt::Matrix4 mv =
     mtpt::Multiply(LookAt({ 1, 2, 6 }, { 0, 0, 0 }, { 0, 1, 0 }), Scale(1, 1.5, 0.75));
+  std::vector<mtpt::ProjectedPoint> projected(n);
+  mtpt::ProjectPoints(mesh.Points(), {}, mv, Perspective(45, 1, 1, 20), projected.data(), 2);
   for (bool perspective : { false, true })
   {
     std::vector<mtpt::SortKey> reference(cells), other(cells);
-    mtpt::ComputeDepthKeys(mesh.Points(), mesh.Cells(), mv, perspective, reference.data(), 1);
+    mtpt::ComputeDepthKeys(projected.data(), n, mesh.Cells(), perspective, reference.data(), 1);
     for (std::size_t c = 0; c < cells; ++c)
     {
       Vec3 centroid{ 0, 0, 0 };
@@ -113,18 +135,18 @@ TEST(DepthKeys, OrthographicAndPerspectiveDepthsForEveryStorage)
       }
       const Vec3 eye = Apply(mv, centroid);
       const double depth = perspective ? Dot(eye, eye) : -eye[2];
-      ASSERT_EQ(reference[c], mtpt::MakeSortKey(static_cast<float>(depth), c)) << c;
+      ASSERT_EQ(mtpt::CellOfKey(reference[c]), c);
+      // Equal up to the float rounding of the depth (one unit in the last place).
+      const auto code = static_cast<std::int64_t>(reference[c] >> 32);
+      const auto expected = static_cast<std::int64_t>(mtpt::EncodeDepth(static_cast<float>(depth)));
+      ASSERT_LE(std::abs(code - expected), 1) << c;
     }
-    const auto keysFor = [&](const mtpt::PointsView& p, const mtpt::CellsView& cv, int threads)
-    {
-      mtpt::ComputeDepthKeys(p, cv, mv, perspective, other.data(), threads);
-      return other;
-    };
-    EXPECT_EQ(
-      reference, keysFor(mtpt::PointsView::FromDouble(pointsDouble.data(), n), mesh.Cells(), 2));
-    EXPECT_EQ(reference,
-      keysFor(mesh.Points(), mtpt::CellsView::FromInt32(conn32.data(), offs32.data(), cells), 3));
-    EXPECT_EQ(reference, keysFor(mesh.Points(), mesh.Cells(), 8));
+    mtpt::ComputeDepthKeys(projected.data(), n,
+      mtpt::CellsView::FromInt32(conn32.data(), offs32.data(), cells), perspective, other.data(),
+      3);
+    EXPECT_EQ(reference, other);
+    mtpt::ComputeDepthKeys(projected.data(), n, mesh.Cells(), perspective, other.data(), 8);
+    EXPECT_EQ(reference, other);
   }
 }
 
@@ -138,8 +160,10 @@ TEST(DepthKeys, InvalidCellsGoFirstWithInfiniteDepth)
   mesh.connectivity.insert(mesh.connectivity.end(), { 0, 1, 2, 3, 4 }); // 5 points
   mesh.offsets.push_back(static_cast<std::int64_t>(mesh.connectivity.size()));
   std::vector<mtpt::SortKey> keys(mesh.CellCount());
-  mtpt::ComputeDepthKeys(
-    mesh.Points(), mesh.Cells(), mtpt::IdentityMatrix(), false, keys.data(), 2);
+  std::vector<mtpt::ProjectedPoint> projected(5);
+  mtpt::ProjectPoints(
+    mesh.Points(), {}, mtpt::IdentityMatrix(), mtpt::IdentityMatrix(), projected.data(), 1);
+  mtpt::ComputeDepthKeys(projected.data(), 5, mesh.Cells(), false, keys.data(), 2);
   const float inf = std::numeric_limits<float>::infinity();
   EXPECT_NE(keys[0], mtpt::MakeSortKey(inf, 0));
   for (std::uint32_t c = 1; c < 4; ++c)

@@ -20,15 +20,7 @@ using mtpt::SortKey;
 
 TEST(DepthEncoding, AscendingCodesAreDescendingDepths)
 {
-  const float depths[] = { -1e30f,
-    -5.0f,
-    -1e-30f,
-    0.0f,
-    1e-38f,
-    1e-30f,
-    1.0f,
-    1.5f,
-    3e38f,
+  const float depths[] = { -1e30f, -5.0f, -1e-30f, 0.0f, 1e-38f, 1e-30f, 1.0f, 1.5f, 3e38f,
     std::numeric_limits<float>::infinity() };
   for (std::size_t i = 1; i < std::size(depths); ++i)
   {
@@ -104,8 +96,7 @@ TEST_P(OrderTest, SortedPermutationForEveryThreadCount)
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Methods,
-  OrderTest,
+INSTANTIATE_TEST_SUITE_P(Methods, OrderTest,
   ::testing::Values(OrderCase{ mtpt::OrderMethod::PartitionSort, mtpt::DefaultMaxSubArraySize },
     OrderCase{ mtpt::OrderMethod::PartitionSort, 64 }, // many sub-arrays
     OrderCase{ mtpt::OrderMethod::PartitionSort, 1 },  // clamped to the minimum

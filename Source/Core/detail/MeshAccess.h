@@ -1,23 +1,21 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Internal: typed access to the views of MeshView.h, with one dispatch to the four
-// (point type x index type) instantiations so hot loops read VTK's arrays in place.
+// Internal: typed access to the cells of MeshView.h, with one dispatch to the two index
+// types so hot loops read vtkCellArray's arrays in place.
 #ifndef mtpt_detail_MeshAccess_h
 #define mtpt_detail_MeshAccess_h
 
 #include "mtpt/MeshView.h"
 
 #include <cstdint>
-#include <type_traits>
 
 namespace mtpt
 {
 namespace detail
 {
 
-template<typename PointT, typename IndexT>
-struct MeshAccess
+template <typename IndexT>
+struct CellAccess
 {
-  const PointT* xyz;
   const IndexT* connectivity;
   const IndexT* offsets;
   std::int64_t pointCount;
@@ -25,8 +23,8 @@ struct MeshAccess
   /// The 4 point ids of `cell`; false if it is not a tetrahedron or an id is out of range.
   bool TetrahedronPoints(std::size_t cell, std::int64_t ids[4]) const
   {
-    const std::int64_t begin = static_cast<std::int64_t>(this->offsets[cell]);
-    const std::int64_t end = static_cast<std::int64_t>(this->offsets[cell + 1]);
+    const auto begin = static_cast<std::int64_t>(this->offsets[cell]);
+    const auto end = static_cast<std::int64_t>(this->offsets[cell + 1]);
     if (end - begin != 4)
     {
       return false;
@@ -40,44 +38,68 @@ struct MeshAccess
     }
     return valid;
   }
+};
 
-  void Point(std::int64_t id, double p[3]) const
+/**
+ * Software prefetch along a known visiting order. Cells visited in visibility order are
+ * scattered in memory, so every cell costs three dependent cache misses (offsets, then
+ * connectivity, then the point records) that the hardware prefetcher cannot predict. Each
+ * stage is issued a fixed distance ahead of its use: offsets 3*Distance cells ahead,
+ * connectivity 2*Distance ahead (its offsets are cached by then), point records Distance
+ * ahead (their ids are cached by then).
+ */
+template <typename IndexT, typename Record>
+struct GatherPrefetcher
+{
+  static constexpr std::int64_t Distance = 8;
+
+  const CellAccess<IndexT>& cells;
+  const Record* records;
+
+  template <typename CellOf>
+  void Ahead(std::int64_t k, std::int64_t end, CellOf&& cellOf) const
   {
-    const PointT* q = this->xyz + 3 * id;
-    p[0] = static_cast<double>(q[0]);
-    p[1] = static_cast<double>(q[1]);
-    p[2] = static_cast<double>(q[2]);
+    if (k + 3 * Distance < end)
+    {
+      __builtin_prefetch(this->cells.offsets + cellOf(k + 3 * Distance));
+    }
+    if (k + 2 * Distance < end)
+    {
+      __builtin_prefetch(this->cells.connectivity + this->cells.offsets[cellOf(k + 2 * Distance)]);
+    }
+    if (k + Distance < end)
+    {
+      const std::size_t cell = cellOf(k + Distance);
+      const auto begin = static_cast<std::int64_t>(this->cells.offsets[cell]);
+      if (static_cast<std::int64_t>(this->cells.offsets[cell + 1]) - begin == 4)
+      {
+        for (int i = 0; i < 4; ++i)
+        {
+          const auto id = static_cast<std::uint64_t>(this->cells.connectivity[begin + i]);
+          if (id < static_cast<std::uint64_t>(this->cells.pointCount))
+          {
+            __builtin_prefetch(this->records + id);
+          }
+        }
+      }
+    }
   }
 };
 
-/// Calls functor(MeshAccess<PointT, IndexT>) for the view's actual types.
-template<typename Functor>
-void DispatchMesh(const PointsView& points, const CellsView& cells, Functor&& functor)
+/// Calls functor(CellAccess<IndexT>) for the view's actual index type.
+template <typename Functor>
+void DispatchCells(const CellsView& cells, std::size_t pointCount, Functor&& functor)
 {
-  const auto n = static_cast<std::int64_t>(points.count);
-  auto withPoints = [&](auto* xyz)
+  const auto n = static_cast<std::int64_t>(pointCount);
+  if (cells.type == CellsView::Type::Int32)
   {
-    using PointT = std::remove_const_t<std::remove_pointer_t<decltype(xyz)>>;
-    if (cells.type == CellsView::Type::Int32)
-    {
-      const auto* conn = static_cast<const std::int32_t*>(cells.connectivity);
-      const auto* offs = static_cast<const std::int32_t*>(cells.offsets);
-      functor(MeshAccess<PointT, std::int32_t>{ xyz, conn, offs, n });
-    }
-    else
-    {
-      const auto* conn = static_cast<const std::int64_t*>(cells.connectivity);
-      const auto* offs = static_cast<const std::int64_t*>(cells.offsets);
-      functor(MeshAccess<PointT, std::int64_t>{ xyz, conn, offs, n });
-    }
-  };
-  if (points.type == PointsView::Type::Float32)
-  {
-    withPoints(static_cast<const float*>(points.data));
+    functor(CellAccess<std::int32_t>{ static_cast<const std::int32_t*>(cells.connectivity),
+      static_cast<const std::int32_t*>(cells.offsets), n });
   }
   else
   {
-    withPoints(static_cast<const double*>(points.data));
+    functor(CellAccess<std::int64_t>{ static_cast<const std::int64_t*>(cells.connectivity),
+      static_cast<const std::int64_t*>(cells.offsets), n });
   }
 }
 

@@ -95,30 +95,24 @@ Projection ClassifyProjection(const double x[4], const double y[4]);
 
 /**
  * Decomposes one tetrahedron into slot-local records.
- * @param ndc        the projected points (TransformToNDC)
- * @param model      the points in model coordinates (for exact eye-space lengths)
- * @param scalars    the scalar at each point (the cell's scalar four times for cell data)
- * @param modelView  model-view matrix; its upper 3x3 maps model differences to eye space
+ * @param corners    the tetrahedron's 4 projected points (ProjectPoints)
+ * @param scalars    the scalar at each corner (the cell's scalar four times for cell data)
  * @param vertices   5 records written
  * @param indices    12 slot-local indices (0..4) written
  * @return the classification (NotDrawable: the slot is degenerate, all zeros)
  * Thread safety: pure function of its arguments.
  */
-Projection DecomposeTetrahedron(const NdcPoint ndc[4],
-  const double model[4][3],
-  const float scalars[4],
-  const Matrix4& modelView,
-  TetVertex vertices[5],
-  std::uint32_t indices[12]);
+Projection DecomposeTetrahedron(const ProjectedPoint* const corners[4], const float scalars[4],
+  TetVertex vertices[5], std::uint32_t indices[12]);
 
 /// Inputs of the decomposition stage that stay fixed during a frame.
 struct DecomposeInput
 {
-  const NdcPoint* ndc = nullptr; ///< points.count entries (TransformToNDC)
-  PointsView points;
+  const ProjectedPoint* points = nullptr; ///< pointCount records (ProjectPoints)
+  std::size_t pointCount = 0;
   CellsView cells;
+  /// Only cell scalars are read from here; point scalars travel in the records.
   ScalarsView scalars;
-  Matrix4 modelView = IdentityMatrix();
 };
 
 /**
@@ -131,13 +125,32 @@ struct DecomposeInput
  * Determinism: every slot is a pure function of its cell: bit-identical for any thread
  * count.
  */
-void DecomposeTetrahedra(const DecomposeInput& input,
-  const SortKey* order,
-  std::size_t count,
-  TetVertex* vertices,
-  std::uint32_t* indices,
-  ProjectionClass* classes,
-  int threads);
+void DecomposeTetrahedra(const DecomposeInput& input, const SortKey* order, std::size_t count,
+  TetVertex* vertices, std::uint32_t* indices, ProjectionClass* classes, int threads);
+
+/// Rank of a cell that is not in the order (InvertOrder).
+constexpr std::uint32_t NotInOrder = 0xffffffffu;
+
+/**
+ * The inverse of a visibility order: rank[c] = k where order[k] holds cell c, and
+ * NotInOrder for the cells of [0, cellCount) that the order leaves out.
+ * Thread safety: reentrant; `threads` OpenMP threads. Determinism: a pure function.
+ */
+void InvertOrder(
+  const SortKey* order, std::size_t count, std::size_t cellCount, std::uint32_t* rank, int threads);
+
+/**
+ * The same buffers as DecomposeTetrahedra for the order that `rank` inverts, computed by
+ * visiting the cells in storage order and writing each into slot rank[cell]. Reads are then
+ * sequential and the point records are reused while cached; only the slot writes scatter,
+ * and writes do not stall the way dependent gathers do. On meshes larger than the cache
+ * this is several times faster than gathering in visibility order (see the benchmark).
+ * `count` is the number of slots (cells with a rank).
+ *
+ * Thread safety and determinism: as DecomposeTetrahedra; each slot has exactly one writer.
+ */
+void DecomposeTetrahedraByRank(const DecomposeInput& input, const std::uint32_t* rank,
+  TetVertex* vertices, std::uint32_t* indices, ProjectionClass* classes, int threads);
 
 } // namespace mtpt
 

@@ -3,7 +3,7 @@
  * @file DepthKeys.h
  * @brief Stage 2 of a frame: one sortable depth key per tetrahedron.
  *
- * Depth (DESIGN.md section 2, step 2): orthographic views use the eye-space depth of the
+ * Depth (DESIGN.md section 2, step 2): orthographic views use the eye-space depth -z of the
  * centroid (the paper's dot(view direction, centroid)); perspective views use the squared
  * distance from the eye to the centroid, which orders the cells at the sides of a wide
  * view correctly where the view-direction dot product does not.
@@ -17,6 +17,7 @@
 #define mtpt_DepthKeys_h
 
 #include "mtpt/MeshView.h"
+#include "mtpt/Transform.h"
 
 #include <cstdint>
 
@@ -45,20 +46,17 @@ inline std::uint32_t CellOfKey(SortKey key)
 }
 
 /**
- * Writes keys[c] = MakeSortKey(depth of cell c, c) for every cell. The centroid is taken in
- * model coordinates and mapped by `modelView` in double precision. A cell that is not a
- * tetrahedron (other than 4 points) or that names a point id outside [0, points.count)
- * gets the depth +infinity. Requires cells.cellCount < 2^32.
+ * Writes keys[c] = MakeSortKey(depth of cell c, c) for every cell, from the eye
+ * coordinates of the projected points (ProjectPoints; pointCount records): the centroid is
+ * the mean of the four eye positions, in double precision. A cell that is not a
+ * tetrahedron (other than 4 points) or that names a point id outside [0, pointCount) gets
+ * the depth +infinity. Requires cells.cellCount < 2^32.
  *
  * Thread safety: reentrant; `threads` OpenMP threads (<= 0: all available).
  * Determinism: identical for any thread count.
  */
-void ComputeDepthKeys(const PointsView& points,
-  const CellsView& cells,
-  const Matrix4& modelView,
-  bool perspective,
-  SortKey* keys,
-  int threads);
+void ComputeDepthKeys(const ProjectedPoint* points, std::size_t pointCount, const CellsView& cells,
+  bool perspective, SortKey* keys, int threads);
 
 } // namespace mtpt
 

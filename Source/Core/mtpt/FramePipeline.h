@@ -16,7 +16,8 @@
 namespace mtpt
 {
 
-/// Wall-clock seconds of each CPU stage of the last frame.
+/// Wall-clock seconds of each CPU stage of the last frame. `decompose` includes inverting
+/// the order (DecomposeTetrahedraByRank).
 struct StageTimes
 {
   double transform = 0, keys = 0, order = 0, decompose = 0;
@@ -53,7 +54,7 @@ public:
 
   const StageTimes& Times() const { return LastTimes; }
   std::size_t TetrahedronCount() const { return Count; }
-  const std::vector<NdcPoint>& Ndc() const { return NdcPoints; }
+  const std::vector<ProjectedPoint>& Points() const { return ProjectedPoints; }
   const std::vector<SortKey>& Keys() const { return SortedKeys; }
   const std::vector<TetVertex>& Vertices() const { return VertexBuffer; }
   const std::vector<std::uint32_t>& Indices() const { return IndexBuffer; }
@@ -64,8 +65,9 @@ public:
 private:
   std::unique_ptr<VisibilityOrder> Order;
   std::size_t MaxSubArraySize = DefaultMaxSubArraySize;
-  std::vector<NdcPoint> NdcPoints;
+  std::vector<ProjectedPoint> ProjectedPoints;
   std::vector<SortKey> SortedKeys;
+  std::vector<std::uint32_t> Rank;
   std::vector<TetVertex> VertexBuffer;
   std::vector<std::uint32_t> IndexBuffer;
   std::size_t Count = 0;

@@ -1,14 +1,19 @@
 // SPDX-License-Identifier: BSD-3-Clause
 /**
  * @file Transform.h
- * @brief Stage 1 of a frame: every mesh point to normalized device coordinates.
+ * @brief Stage 1 of a frame: every mesh point to eye and normalized device coordinates.
  *
- * Conventions: see MeshView.h (row-major matrices on column vectors, OpenGL NDC).
- * The transform runs and stores its results in double precision. Decomposition classifies
- * and measures with these values: with float NDC the thickness at a thick vertex near a
- * silhouette edge would carry an absolute error of about 1e-7 of the cell's projected size
- * (tens of percent for thin segments), and meshes far from the origin would lose their
- * relative precision. Only the records handed to the rasterizer are rounded to float.
+ * Conventions: see MeshView.h (row-major matrices on column vectors, OpenGL NDC, the
+ * camera looking down -z in eye space).
+ *
+ * Each point becomes one 64-byte record holding everything the later stages read about
+ * it, so a tetrahedron costs four cache-line gathers instead of a dozen scattered reads of
+ * coordinates, projections and scalars. Records are double precision: decomposition
+ * classifies and measures with them, and with float NDC the thickness at a thick vertex
+ * near a silhouette edge would carry an absolute error of about 1e-7 of the cell's
+ * projected size (large relative errors for thin segments); eye coordinates are relative
+ * to the camera, so meshes far from the origin keep their precision. Only the records
+ * handed to the rasterizer are rounded to float.
  */
 #ifndef mtpt_Transform_h
 #define mtpt_Transform_h
@@ -21,26 +26,26 @@ namespace mtpt
 /**
  * A point after projection. x, y, z are NDC (clip coordinates divided by w); w is the
  * clip-space w (1 for orthographic projections, the distance along the view axis for
- * perspective ones). w <= 0 marks a point at or behind the eye plane: its x, y, z are then
+ * perspective ones). w <= 0 marks a point at or behind the eye plane: its NDC are then
  * meaningless and decomposition treats any cell using it as not drawable.
  */
-struct NdcPoint
+struct alignas(64) ProjectedPoint
 {
-  double x, y, z, w;
+  double x, y, z, w;       ///< NDC and clip w
+  double eyeX, eyeY, eyeZ; ///< eye coordinates (model-view applied)
+  float scalar;            ///< the point's scalar; 0 without point scalars
 };
 
 /**
- * Projects `points` with `modelViewProjection` (projection * view * model) into `out`
- * (points.count entries).
+ * Projects `points` into `out` (points.count records) with the model-view matrix
+ * (view * model) and the projection matrix, and copies point scalars alongside.
  *
  * Thread safety: reentrant; runs on `threads` OpenMP threads (<= 0: all available).
- * Determinism: each output depends only on its own input point: identical for any
+ * Determinism: each record depends only on its own input point: identical for any
  * thread count.
  */
-void TransformToNDC(const PointsView& points,
-  const Matrix4& modelViewProjection,
-  NdcPoint* out,
-  int threads);
+void ProjectPoints(const PointsView& points, const ScalarsView& scalars, const Matrix4& modelView,
+  const Matrix4& projection, ProjectedPoint* out, int threads);
 
 } // namespace mtpt
 

@@ -55,8 +55,8 @@ constexpr std::size_t DefaultMaxSubArraySize = 1u << 15;
 
 /// Creates an implementation. `maxSubArraySize` is MAX for PartitionSort (clamped to at
 /// least 16) and ignored by the others.
-std::unique_ptr<VisibilityOrder> MakeVisibilityOrder(OrderMethod method,
-  std::size_t maxSubArraySize = DefaultMaxSubArraySize);
+std::unique_ptr<VisibilityOrder> MakeVisibilityOrder(
+  OrderMethod method, std::size_t maxSubArraySize = DefaultMaxSubArraySize);
 
 } // namespace mtpt
 
