@@ -4,14 +4,11 @@
 #include "detail/MeshAccess.h"
 #include "detail/Parallel.h"
 
-#include <omp.h>
-
 #if defined(__x86_64__) || defined(_M_X64)
 #include <immintrin.h>
 #endif
 
 #include <cmath>
-#include <type_traits>
 #include <cstring>
 
 namespace mtpt
@@ -143,11 +140,12 @@ namespace
 {
 
 /// Parameter along a 3D segment a->b of the point that projects at screen-space parameter
-/// s: 1/w is affine in screen space (perspective-correct interpolation). For orthographic
-/// projections w is 1 at both ends and the result is s.
-inline double PerspectiveCorrect(double s, double wa, double wb)
+/// s: 1/w is affine in screen space (perspective-correct interpolation), so
+/// t = (s / wb) / ((1 - s) / wa + s / wb). For orthographic projections w is 1 at both
+/// ends and the result is s.
+inline double PerspectiveCorrect(double s, double inverseWa, double inverseWb)
 {
-  return s * wa / ((1.0 - s) * wb + s * wa); // wa, wb > 0: the denominator is positive
+  return s * inverseWb / ((1.0 - s) * inverseWa + s * inverseWb); // both positive
 }
 
 inline void WriteDegenerateSlot(
@@ -160,24 +158,12 @@ inline void WriteDegenerateSlot(
   }
 }
 
-/// Beyond this magnitude a coordinate is treated as unusable: it keeps every value written
-/// to the float records finite (float overflows near 3.4e38).
-constexpr double CoordinateLimit = 1e30;
-
-/// Every corner in front of the eye plane with bounded, finite coordinates, and every
-/// scalar finite. Comparisons with NaN are false, so NaN fails every test.
+/// Every corner usable (ProjectPoints checked its coordinates and point scalar) and every
+/// scalar finite (cell scalars are not checked there).
 inline bool Drawable(const ProjectedPoint* const c[4], const float scalars[4])
 {
-  bool ok = true;
-  for (int i = 0; i < 4; ++i)
-  {
-    const ProjectedPoint& q = *c[i];
-    ok &= q.w > 0.0 && q.w < CoordinateLimit && std::fabs(q.x) < CoordinateLimit &&
-      std::fabs(q.y) < CoordinateLimit && std::fabs(q.z) < CoordinateLimit &&
-      std::fabs(q.eyeX) < CoordinateLimit && std::fabs(q.eyeY) < CoordinateLimit &&
-      std::fabs(q.eyeZ) < CoordinateLimit && std::isfinite(scalars[i]);
-  }
-  return ok;
+  return (c[0]->usable & c[1]->usable & c[2]->usable & c[3]->usable) != 0 &&
+    std::isfinite(scalars[0] + scalars[1] + scalars[2] + scalars[3]);
 }
 
 /// The decomposition of one tetrahedron into a slot whose indices start at `base`.
@@ -213,8 +199,8 @@ inline Projection Decompose(const ProjectedPoint* const c[4], const float scalar
   {
     const int a = p.vertex[0], b = p.vertex[1], d0 = p.vertex[2], d1 = p.vertex[3];
     // alpha along P_a P_b and beta along P_d0 P_d1 (VTK's OpenGL PT uses alpha for both).
-    const double tab = PerspectiveCorrect(p.alpha, c[a]->w, c[b]->w);
-    const double tcd = PerspectiveCorrect(p.beta, c[d0]->w, c[d1]->w);
+    const double tab = PerspectiveCorrect(p.alpha, c[a]->inverseW, c[b]->inverseW);
+    const double tcd = PerspectiveCorrect(p.beta, c[d0]->inverseW, c[d1]->inverseW);
     first[0] = c[a]->eyeX + tab * (c[b]->eyeX - c[a]->eyeX);
     first[1] = c[a]->eyeY + tab * (c[b]->eyeY - c[a]->eyeY);
     first[2] = c[a]->eyeZ + tab * (c[b]->eyeZ - c[a]->eyeZ);
@@ -242,8 +228,8 @@ inline Projection Decompose(const ProjectedPoint* const c[4], const float scalar
     const int j0 = p.vertex[0], j1 = p.vertex[1], j2 = p.vertex[2], t = p.vertex[3];
     // The ray through the inner vertex meets the opposite face at screen barycentrics
     // weights[]; divided by w and renormalized they are the eye-space barycentrics.
-    const double m0 = p.weights[0] / c[j0]->w, m1 = p.weights[1] / c[j1]->w,
-                 m2 = p.weights[2] / c[j2]->w;
+    const double m0 = p.weights[0] * c[j0]->inverseW, m1 = p.weights[1] * c[j1]->inverseW,
+                 m2 = p.weights[2] * c[j2]->inverseW;
     const double inv = 1.0 / (m0 + m1 + m2); // weights sum to 1, w > 0: positive
     const double u0 = m0 * inv, u1 = m1 * inv, u2 = m2 * inv;
     first[0] = c[t]->eyeX;
@@ -372,20 +358,14 @@ void DecomposeAll(const Access& cells, const DecomposeInput& input, const SortKe
   const auto n = static_cast<std::int64_t>(count);
   const float* cellScalars =
     input.scalars.association == ScalarsView::Association::Cells ? input.scalars.values : nullptr;
-  using IndexT = std::remove_const_t<std::remove_pointer_t<decltype(cells.offsets)>>;
-  const detail::GatherPrefetcher<IndexT, ProjectedPoint> prefetcher{ cells, input.points };
-  const auto cellOf = [order](std::int64_t k) { return CellOfKey(order[k]); };
   const bool streaming = CanStream(vertices, indices);
 #pragma omp parallel num_threads(threads)
   {
-    // Contiguous ranges per thread (as schedule(static)), so the prefetcher looks ahead
-    // inside the range this thread will actually visit.
-    const std::int64_t team = omp_get_num_threads(), t = omp_get_thread_num();
-    const std::int64_t first = n * t / team, end = n * (t + 1) / team;
-    for (std::int64_t k = first; k < end; ++k)
+#pragma omp for schedule(static) nowait
+    for (std::int64_t k = 0; k < n; ++k)
     {
-      prefetcher.Ahead(k, end, cellOf);
-      DecomposeSlot(cells, input, cellScalars, cellOf(k), k, vertices, indices, classes, streaming);
+      DecomposeSlot(
+        cells, input, cellScalars, CellOfKey(order[k]), k, vertices, indices, classes, streaming);
     }
     FinishStores();
   }

@@ -3,6 +3,7 @@
 
 #include "detail/Parallel.h"
 
+#include <cmath>
 #include <cstdint>
 
 namespace mtpt
@@ -29,19 +30,25 @@ void ProjectAll(const PointT* xyz, const float* pointScalars, std::int64_t count
     const double cy = p[4] * ex + p[5] * ey + p[6] * ez + p[7] * ew;
     const double cz = p[8] * ex + p[9] * ey + p[10] * ez + p[11] * ew;
     const double cw = p[12] * ex + p[13] * ey + p[14] * ez + p[15] * ew;
-    // The division is done even for w <= 0: decomposition rejects those points by w, and
-    // IEEE division never traps, so there is no branch in this loop.
-    const double inv = 1.0 / cw;
+    // The divisions are done even for unusable points (IEEE division never traps); the
+    // flag below keeps them out of every cell.
+    const double inverseW = 1.0 / cw;
     const double invEye = 1.0 / ew; // 1 for affine model-view matrices
     ProjectedPoint& r = out[i];
-    r.x = cx * inv;
-    r.y = cy * inv;
-    r.z = cz * inv;
-    r.w = cw;
+    r.x = cx * inverseW;
+    r.y = cy * inverseW;
+    r.z = cz * inverseW;
+    r.inverseW = inverseW;
     r.eyeX = ex * invEye;
     r.eyeY = ey * invEye;
     r.eyeZ = ez * invEye;
     r.scalar = pointScalars ? pointScalars[i] : 0.0f;
+    // Comparisons with NaN are false, so NaN fails every test.
+    const bool bounded = cw > 0.0 && cw < CoordinateLimit && std::fabs(r.x) < CoordinateLimit &&
+      std::fabs(r.y) < CoordinateLimit && std::fabs(r.z) < CoordinateLimit &&
+      std::fabs(r.eyeX) < CoordinateLimit && std::fabs(r.eyeY) < CoordinateLimit &&
+      std::fabs(r.eyeZ) < CoordinateLimit && std::isfinite(r.scalar);
+    r.usable = bounded ? 1 : 0;
   }
 }
 

@@ -33,8 +33,8 @@ TEST(Helpers, InverseIsInverse)
 
 bool SameRecord(const mtpt::ProjectedPoint& a, const mtpt::ProjectedPoint& b)
 {
-  return a.x == b.x && a.y == b.y && a.z == b.z && a.w == b.w && a.eyeX == b.eyeX &&
-    a.eyeY == b.eyeY && a.eyeZ == b.eyeZ && a.scalar == b.scalar;
+  return a.x == b.x && a.y == b.y && a.z == b.z && a.inverseW == b.inverseW && a.eyeX == b.eyeX &&
+    a.eyeY == b.eyeY && a.eyeZ == b.eyeZ && a.scalar == b.scalar && a.usable == b.usable;
 }
 
 TEST(Transform, MatchesDoubleReferenceForFloatAndDoublePoints)
@@ -64,7 +64,8 @@ TEST(Transform, MatchesDoubleReferenceForFloatAndDoublePoints)
     EXPECT_NEAR(fromFloat[i].x, expected[0], 1e-12);
     EXPECT_NEAR(fromFloat[i].y, expected[1], 1e-12);
     EXPECT_NEAR(fromFloat[i].z, expected[2], 1e-12);
-    EXPECT_NEAR(fromFloat[i].w, w, 1e-12);
+    EXPECT_NEAR(fromFloat[i].inverseW, 1.0 / w, 1e-12);
+    EXPECT_EQ(fromFloat[i].usable, 1);
     EXPECT_NEAR(fromFloat[i].eyeX, eye[0], 1e-12);
     EXPECT_NEAR(fromFloat[i].eyeY, eye[1], 1e-12);
     EXPECT_NEAR(fromFloat[i].eyeZ, eye[2], 1e-12);
@@ -76,6 +77,26 @@ TEST(Transform, MatchesDoubleReferenceForFloatAndDoublePoints)
     { mesh.scalars.data(), mtpt::ScalarsView::Association::Cells }, mv, proj,
     withCellScalars.data(), 2);
   EXPECT_EQ(withCellScalars[7].scalar, 0.0f);
+}
+
+TEST(Transform, FlagsPointsNoCellMayUse)
+{
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  // In front of the eye; behind it; on the eye plane; NaN; infinite; fine but NaN scalar;
+  // beyond the coordinate limit (double input).
+  const std::vector<double> xyz = { 0, 0, 0, 0, 0, 10, 0.5, 0, 5, nan, 0, 0, inf, 0, 0, 0.1, 0.2,
+    0.3, 1e31, 0, 0 };
+  const std::vector<float> scalars = { 1, 1, 1, 1, 1, nan, 1 };
+  std::vector<mtpt::ProjectedPoint> out(7);
+  mtpt::ProjectPoints(mtpt::PointsView::FromDouble(xyz.data(), 7),
+    { scalars.data(), mtpt::ScalarsView::Association::Points },
+    LookAt({ 0, 0, 5 }, { 0, 0, 0 }, { 0, 1, 0 }), Perspective(60, 1, 0.1, 100), out.data(), 2);
+  const std::int32_t expected[7] = { 1, 0, 0, 0, 0, 0, 0 };
+  for (int i = 0; i < 7; ++i)
+  {
+    EXPECT_EQ(out[i].usable, expected[i]) << "point " << i;
+  }
 }
 
 TEST(Transform, FarFromTheOriginKeepsPrecision)

@@ -20,21 +20,30 @@
 
 #include "mtpt/MeshView.h"
 
+#include <cstdint>
+
 namespace mtpt
 {
 
 /**
- * A point after projection. x, y, z are NDC (clip coordinates divided by w); w is the
- * clip-space w (1 for orthographic projections, the distance along the view axis for
- * perspective ones). w <= 0 marks a point at or behind the eye plane: its NDC are then
- * meaningless and decomposition treats any cell using it as not drawable.
+ * A point after projection. x, y, z are NDC (clip coordinates divided by w) and inverseW is
+ * 1 / w, the clip-space w (1 for orthographic projections, the distance along the view axis
+ * for perspective ones): decomposition interpolates perspective-correctly with it.
+ * `usable` is 0 for a point that no cell may be drawn with: at or behind the eye plane
+ * (w <= 0), a coordinate or scalar that is not finite, or a magnitude beyond
+ * CoordinateLimit. Its other fields are then meaningless.
  */
 struct alignas(64) ProjectedPoint
 {
-  double x, y, z, w;       ///< NDC and clip w
-  double eyeX, eyeY, eyeZ; ///< eye coordinates (model-view applied)
-  float scalar;            ///< the point's scalar; 0 without point scalars
+  double x, y, z, inverseW; ///< NDC and 1 / clip w
+  double eyeX, eyeY, eyeZ;  ///< eye coordinates (model-view applied)
+  float scalar;             ///< the point's scalar; 0 without point scalars
+  std::int32_t usable;      ///< 1 if usable, 0 if not (checked once here, not per cell)
 };
+
+/// Beyond this magnitude a coordinate is unusable: it keeps every value written to the
+/// float vertex records finite (float overflows near 3.4e38).
+constexpr double CoordinateLimit = 1e30;
 
 /**
  * Projects `points` into `out` (points.count records) with the model-view matrix
