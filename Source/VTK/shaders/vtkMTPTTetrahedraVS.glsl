@@ -1,0 +1,28 @@
+//VTK::System::Dec
+// SPDX-License-Identifier: BSD-3-Clause
+// MTPT vertex shader. Positions arrive in NDC (the CPU stages projected them); each vertex
+// carries the scalar where the ray through it enters and leaves its tetrahedron and the
+// eye-space length between (0 except at the thick vertex).
+in vec3 vertexNDC;
+in vec2 scalarFrontBack;
+in float thickness;
+
+// Colour (rgb) and scalar opacity (a) of the transfer functions, sampled over the scalar
+// range: texture coordinate = scalar * scalarScale + scalarShift.
+uniform sampler2D transferFunction;
+uniform float scalarScale;
+uniform float scalarShift;
+
+out vec4 classified;
+out float segmentLength;
+
+void main()
+{
+  // Vertex classification as VTK's PT, with float colours: at the thick vertex the
+  // colour and attenuation are the mean of the front and back values.
+  vec4 front = texture(transferFunction, vec2(scalarFrontBack.x * scalarScale + scalarShift, 0.5));
+  vec4 back = texture(transferFunction, vec2(scalarFrontBack.y * scalarScale + scalarShift, 0.5));
+  classified = 0.5 * (front + back);
+  segmentLength = thickness;
+  gl_Position = vec4(vertexNDC, 1.0);
+}

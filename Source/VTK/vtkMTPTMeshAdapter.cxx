@@ -1,0 +1,217 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "vtkMTPTMeshAdapter.h"
+
+#include "vtkCellArray.h"
+#include "vtkCellType.h"
+#include "vtkCellTypes.h"
+#include "vtkDataArray.h"
+#include "vtkDataArrayRange.h"
+#include "vtkDoubleArray.h"
+#include "vtkFloatArray.h"
+#include "vtkIdList.h"
+#include "vtkPoints.h"
+#include "vtkTypeInt32Array.h"
+#include "vtkTypeInt64Array.h"
+#include "vtkUnsignedCharArray.h"
+#include "vtkUnstructuredGrid.h"
+#include "vtkUnstructuredGridBase.h"
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace mtpt
+{
+
+vtkMTPTMeshAdapter::vtkMTPTMeshAdapter() = default;
+vtkMTPTMeshAdapter::~vtkMTPTMeshAdapter() = default;
+
+bool vtkMTPTMeshAdapter::Update(vtkUnstructuredGridBase* input)
+{
+  if (input == this->LastInput && input->GetMTime() == this->InputTime &&
+    this->ErrorMessage.empty())
+  {
+    return true;
+  }
+  this->LastInput = input;
+  this->InputTime = input->GetMTime();
+  this->ErrorMessage.clear();
+  this->WarningMessage.clear();
+  this->PointData = PointsView{};
+  this->CellData = CellsView{};
+
+  // Points: float or double arrays in VTK's interleaved layout are used in place.
+  vtkPoints* points = input->GetPoints();
+  if (!points || points->GetNumberOfPoints() == 0)
+  {
+    this->ErrorMessage = "the input has no points";
+    return false;
+  }
+  vtkDataArray* coordinates = points->GetData();
+  const auto pointCount = static_cast<std::size_t>(points->GetNumberOfPoints());
+  if (auto* f = vtkFloatArray::FastDownCast(coordinates))
+  {
+    this->PointData = PointsView::FromFloat(f->GetPointer(0), pointCount);
+  }
+  else if (auto* d = vtkDoubleArray::FastDownCast(coordinates))
+  {
+    this->PointData = PointsView::FromDouble(d->GetPointer(0), pointCount);
+  }
+  else
+  {
+    this->PointCopy = vtkSmartPointer<vtkDoubleArray>::New();
+    this->PointCopy->DeepCopy(coordinates);
+    this->PointData = PointsView::FromDouble(this->PointCopy->GetPointer(0), pointCount);
+  }
+
+  // Cells: a vtkUnstructuredGrid's own vtkCellArray is used in place; any other
+  // vtkUnstructuredGridBase is copied into one through its cell interface.
+  const vtkIdType cellCount = input->GetNumberOfCells();
+  vtkCellArray* cells = nullptr;
+  auto* grid = vtkUnstructuredGrid::SafeDownCast(input);
+  if (grid && grid->GetCells())
+  {
+    cells = grid->GetCells();
+  }
+  else
+  {
+    this->CellCopy = vtkSmartPointer<vtkCellArray>::New();
+    this->CellCopy->AllocateEstimate(cellCount, 4);
+    vtkNew<vtkIdList> ids;
+    for (vtkIdType c = 0; c < cellCount; ++c)
+    {
+      input->GetCellPoints(c, ids);
+      this->CellCopy->InsertNextCell(ids);
+    }
+    cells = this->CellCopy;
+  }
+
+  // Every cell must be a tetrahedron (a later version tetrahedralizes other cells).
+  vtkIdType nonTetrahedra = 0, firstBad = -1;
+  int firstBadType = VTK_EMPTY_CELL;
+  const unsigned char* types =
+    grid && grid->GetCellTypesArray() ? grid->GetCellTypesArray()->GetPointer(0) : nullptr;
+  for (vtkIdType c = 0; c < cellCount; ++c)
+  {
+    const int type = types ? types[c] : input->GetCellType(c);
+    if (type != VTK_TETRA)
+    {
+      if (nonTetrahedra++ == 0)
+      {
+        firstBad = c;
+        firstBadType = type;
+      }
+    }
+  }
+  if (nonTetrahedra > 0)
+  {
+    std::ostringstream message;
+    message << nonTetrahedra << " of " << cellCount << " cells are not tetrahedra (first: cell "
+            << firstBad << ", " << vtkCellTypes::GetClassNameFromTypeId(firstBadType)
+            << "); tetrahedralize the input first, e.g. with vtkDataSetTriangleFilter";
+    this->ErrorMessage = message.str();
+    return false;
+  }
+
+  // vtkTypeInt64 is long long, std::int64_t may be long: same size and representation.
+  static_assert(sizeof(vtkTypeInt64) == sizeof(std::int64_t), "64-bit ids");
+  static_assert(sizeof(vtkTypeInt32) == sizeof(std::int32_t), "32-bit ids");
+  if (cells->IsStorage64Bit())
+  {
+    this->CellData = CellsView::FromInt64(
+      reinterpret_cast<const std::int64_t*>(cells->GetConnectivityArray64()->GetPointer(0)),
+      reinterpret_cast<const std::int64_t*>(cells->GetOffsetsArray64()->GetPointer(0)),
+      static_cast<std::size_t>(cellCount));
+  }
+  else
+  {
+    this->CellData = CellsView::FromInt32(
+      reinterpret_cast<const std::int32_t*>(cells->GetConnectivityArray32()->GetPointer(0)),
+      reinterpret_cast<const std::int32_t*>(cells->GetOffsetsArray32()->GetPointer(0)),
+      static_cast<std::size_t>(cellCount));
+  }
+
+  // Point ids out of range: the core skips those cells; say so once per input change.
+  vtkIdType outOfRange = 0;
+  const vtkIdType pointIds = static_cast<vtkIdType>(pointCount);
+  for (const auto id : vtk::DataArrayValueRange<1>(cells->GetConnectivityArray()))
+  {
+    outOfRange += (id < 0 || id >= pointIds) ? 1 : 0;
+  }
+  if (outOfRange > 0)
+  {
+    std::ostringstream message;
+    message << outOfRange << " connectivity entries name points outside [0, " << pointIds
+            << "); the cells using them are not drawn";
+    this->WarningMessage = message.str();
+  }
+  return true;
+}
+
+const float* vtkMTPTMeshAdapter::Scalars(
+  vtkDataArray* array, int component, double range[2], vtkIdType& nonFinite)
+{
+  const int components = array->GetNumberOfComponents();
+  if (components == 1)
+  {
+    component = 0;
+  }
+  else if (component >= components)
+  {
+    component = components - 1;
+  }
+  if (array != this->ScalarArray || array->GetMTime() != this->ScalarTime ||
+    component != this->ScalarComponent)
+  {
+    this->ScalarArray = array;
+    this->ScalarTime = array->GetMTime();
+    this->ScalarComponent = component;
+    const vtkIdType tuples = array->GetNumberOfTuples();
+    this->ScalarValues.resize(static_cast<std::size_t>(tuples));
+    double low = std::numeric_limits<double>::infinity();
+    double high = -low;
+    vtkIdType bad = 0;
+    const auto values = vtk::DataArrayTupleRange(array);
+    vtkIdType t = 0;
+    for (const auto tuple : values)
+    {
+      double v = 0;
+      if (component >= 0)
+      {
+        v = tuple[component];
+      }
+      else
+      {
+        for (int k = 0; k < components; ++k)
+        {
+          v += static_cast<double>(tuple[k]) * tuple[k];
+        }
+        v = std::sqrt(v);
+      }
+      const auto f = static_cast<float>(v);
+      this->ScalarValues[static_cast<std::size_t>(t++)] = f;
+      if (std::isfinite(f))
+      {
+        low = v < low ? v : low;
+        high = v > high ? v : high;
+      }
+      else
+      {
+        ++bad;
+      }
+    }
+    if (!(low <= high))
+    {
+      low = high = 0;
+    }
+    this->ScalarRange[0] = low;
+    this->ScalarRange[1] = high;
+    this->ScalarNonFinite = bad;
+  }
+  range[0] = this->ScalarRange[0];
+  range[1] = this->ScalarRange[1];
+  nonFinite = this->ScalarNonFinite;
+  return this->ScalarValues.data();
+}
+
+} // namespace mtpt

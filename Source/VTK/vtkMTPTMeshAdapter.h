@@ -1,0 +1,81 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file vtkMTPTMeshAdapter.h
+ * @brief Private glue: presents a vtkUnstructuredGridBase to mtpt_core as views, without
+ * copying where VTK's storage already has the core's layout.
+ *
+ * Points stored as float or double (AOS) and a vtkUnstructuredGrid's vtkCellArray (32- or
+ * 64-bit) are used in place. Other storage (implicit arrays, vtkUnstructuredGridBase
+ * subclasses) is copied once per input change. Scalars become one float per tuple (a
+ * component or the magnitude), recomputed only when the array or the selection changes.
+ */
+#ifndef vtkMTPTMeshAdapter_h
+#define vtkMTPTMeshAdapter_h
+
+#include "mtpt/MeshView.h"
+
+#include "vtkNew.h"
+#include "vtkSmartPointer.h"
+#include "vtkType.h"
+
+#include <string>
+#include <vector>
+
+class vtkCellArray;
+class vtkDataArray;
+class vtkDoubleArray;
+class vtkUnstructuredGridBase;
+
+namespace mtpt
+{
+
+class vtkMTPTMeshAdapter
+{
+public:
+  vtkMTPTMeshAdapter();
+  ~vtkMTPTMeshAdapter();
+
+  /**
+   * Brings the views up to date with `input` (cheap when nothing changed). Returns false
+   * with a message in Error() when the input cannot be rendered at all (no points, or
+   * cells that are not tetrahedra).
+   */
+  bool Update(vtkUnstructuredGridBase* input);
+  const std::string& Error() const { return this->ErrorMessage; }
+  /// A problem that does not stop rendering (ids out of range); empty if none.
+  const std::string& Warning() const { return this->WarningMessage; }
+
+  PointsView Points() const { return this->PointData; }
+  CellsView Cells() const { return this->CellData; }
+
+  /**
+   * One float scalar per tuple of `array`: its `component`, or its magnitude when
+   * component < 0 (single-component arrays: the value). Cached; returns the values and
+   * sets the finite range and the number of non-finite values.
+   */
+  const float* Scalars(vtkDataArray* array, int component, double range[2], vtkIdType& nonFinite);
+
+private:
+  vtkMTPTMeshAdapter(const vtkMTPTMeshAdapter&) = delete;
+  void operator=(const vtkMTPTMeshAdapter&) = delete;
+
+  PointsView PointData;
+  CellsView CellData;
+  std::string ErrorMessage;
+  std::string WarningMessage;
+  vtkMTimeType InputTime = 0;
+  vtkUnstructuredGridBase* LastInput = nullptr;
+  vtkSmartPointer<vtkDoubleArray> PointCopy;
+  vtkSmartPointer<vtkCellArray> CellCopy;
+
+  std::vector<float> ScalarValues;
+  vtkDataArray* ScalarArray = nullptr;
+  vtkMTimeType ScalarTime = 0;
+  int ScalarComponent = -2;
+  double ScalarRange[2] = { 0, 0 };
+  vtkIdType ScalarNonFinite = 0;
+};
+
+} // namespace mtpt
+
+#endif

@@ -1,0 +1,569 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "vtkMultiThreadedProjectedTetrahedraMapper.h"
+
+#include "vtkMTPTMeshAdapter.h"
+#include "vtkMTPTTetrahedraFS.h"
+#include "vtkMTPTTetrahedraVS.h"
+
+#include "mtpt/FramePipeline.h"
+
+#include "vtkCamera.h"
+#include "vtkColorTransferFunction.h"
+#include "vtkDataArray.h"
+#include "vtkMatrix4x4.h"
+#include "vtkObjectFactory.h"
+#include "vtkOpenGLBufferObject.h"
+#include "vtkOpenGLFramebufferObject.h"
+#include "vtkOpenGLHelper.h"
+#include "vtkOpenGLIndexBufferObject.h"
+#include "vtkOpenGLRenderWindow.h"
+#include "vtkOpenGLShaderCache.h"
+#include "vtkOpenGLState.h"
+#include "vtkOpenGLVertexArrayObject.h"
+#include "vtkOpenGLVertexBufferObject.h"
+#include "vtkPiecewiseFunction.h"
+#include "vtkRenderer.h"
+#include "vtkShaderProgram.h"
+#include "vtkTextureObject.h"
+#include "vtkUnstructuredGridBase.h"
+#include "vtkVolume.h"
+#include "vtkVolumeProperty.h"
+#include "vtk_glew.h"
+
+#include <algorithm>
+#include <chrono>
+#include <climits>
+#include <cmath>
+#include <vector>
+
+vtkStandardNewMacro(vtkMultiThreadedProjectedTetrahedraMapper);
+
+namespace
+{
+/// Entries of the transfer-function table. The functions are piecewise linear and the
+/// table is sampled with linear filtering, so it reproduces them exactly except within one
+/// entry (1/4095 of the scalar range) of a breakpoint.
+constexpr int TransferFunctionTableSize = 4096;
+
+double SecondsSince(std::chrono::steady_clock::time_point start)
+{
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+mtpt::Matrix4 ToMatrix4(vtkMatrix4x4* m)
+{
+  mtpt::Matrix4 out;
+  for (int r = 0; r < 4; ++r)
+  {
+    for (int c = 0; c < 4; ++c)
+    {
+      out[4 * r + c] = m->GetElement(r, c);
+    }
+  }
+  return out;
+}
+} // namespace
+
+class vtkMultiThreadedProjectedTetrahedraMapper::Internals
+{
+public:
+  mtpt::vtkMTPTMeshAdapter Adapter;
+  mtpt::FramePipeline Pipeline;
+
+  // OpenGL resources, owned by LastWindow's context.
+  vtkRenderWindow* LastWindow = nullptr;
+  vtkNew<vtkOpenGLVertexBufferObject> VertexBuffer;
+  vtkOpenGLHelper Triangles;
+  vtkNew<vtkTextureObject> TransferFunction;
+  vtkMTimeType TransferFunctionTime = 0;
+  vtkVolumeProperty* TransferFunctionProperty = nullptr;
+  double TableRange[2] = { 0, 0 };
+  vtkNew<vtkOpenGLFramebufferObject> Framebuffer;
+  bool FramebufferAllocated = false;
+  bool FramebufferFailed = false;
+  int FramebufferSize[2] = { 0, 0 };
+
+  // Timers of the last frame.
+  double UploadSeconds = 0, DrawSeconds = 0;
+  vtkIdType Tetrahedra = 0;
+
+  // Messages are reported once per change of what caused them, not every frame.
+  vtkMTimeType ReportedInputTime = 0;
+  std::string ReportedMessage;
+  bool Report(vtkUnstructuredGridBase* input, const std::string& message)
+  {
+    if (input->GetMTime() == this->ReportedInputTime && message == this->ReportedMessage)
+    {
+      return false;
+    }
+    this->ReportedInputTime = input->GetMTime();
+    this->ReportedMessage = message;
+    return true;
+  }
+};
+
+vtkMultiThreadedProjectedTetrahedraMapper::vtkMultiThreadedProjectedTetrahedraMapper()
+  : Internal(new Internals)
+{
+}
+
+vtkMultiThreadedProjectedTetrahedraMapper::~vtkMultiThreadedProjectedTetrahedraMapper()
+{
+  this->ReleaseGraphicsResources(this->Internal->LastWindow);
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::SetNumberOfThreads(int threads)
+{
+  if (threads < 0)
+  {
+    vtkWarningMacro(<< "SetNumberOfThreads(" << threads
+                    << "): the thread count must be 0 (all cores) or positive; keeping "
+                    << this->NumberOfThreads);
+    return;
+  }
+  if (threads != this->NumberOfThreads)
+  {
+    this->NumberOfThreads = threads;
+    this->Modified();
+  }
+}
+
+const char* vtkMultiThreadedProjectedTetrahedraMapper::GetOrderMethodAsString()
+{
+  return this->OrderMethod == PARTITION_SORT ? "PartitionSort" : "RadixSort";
+}
+
+double vtkMultiThreadedProjectedTetrahedraMapper::GetTransformSeconds()
+{
+  return this->Internal->Pipeline.Times().transform;
+}
+double vtkMultiThreadedProjectedTetrahedraMapper::GetDepthKeySeconds()
+{
+  return this->Internal->Pipeline.Times().keys;
+}
+double vtkMultiThreadedProjectedTetrahedraMapper::GetOrderSeconds()
+{
+  return this->Internal->Pipeline.Times().order;
+}
+double vtkMultiThreadedProjectedTetrahedraMapper::GetDecomposeSeconds()
+{
+  return this->Internal->Pipeline.Times().decompose;
+}
+double vtkMultiThreadedProjectedTetrahedraMapper::GetCPUStageSeconds()
+{
+  return this->Internal->Pipeline.Times().Total();
+}
+double vtkMultiThreadedProjectedTetrahedraMapper::GetUploadSeconds()
+{
+  return this->Internal->UploadSeconds;
+}
+double vtkMultiThreadedProjectedTetrahedraMapper::GetDrawSeconds()
+{
+  return this->Internal->DrawSeconds;
+}
+vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfTetrahedra()
+{
+  return this->Internal->Tetrahedra;
+}
+
+bool vtkMultiThreadedProjectedTetrahedraMapper::IsSupported(vtkRenderWindow* window)
+{
+  return vtkOpenGLRenderWindow::SafeDownCast(window) != nullptr;
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::ReleaseGraphicsResources(vtkWindow* window)
+{
+  Internals& in = *this->Internal;
+  in.VertexBuffer->ReleaseGraphicsResources();
+  in.Triangles.ReleaseGraphicsResources(window);
+  if (window)
+  {
+    in.TransferFunction->ReleaseGraphicsResources(window);
+    in.Framebuffer->ReleaseGraphicsResources(window);
+  }
+  in.TransferFunctionTime = 0;
+  in.FramebufferAllocated = false;
+  in.FramebufferFailed = false;
+  in.LastWindow = nullptr;
+  this->Superclass::ReleaseGraphicsResources(window);
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vtkVolume* volume)
+{
+  Internals& in = *this->Internal;
+  in.UploadSeconds = in.DrawSeconds = 0;
+  in.Tetrahedra = 0;
+  auto* window = vtkOpenGLRenderWindow::SafeDownCast(renderer->GetRenderWindow());
+  if (!window)
+  {
+    vtkErrorMacro(<< "needs an OpenGL render window (vtkOpenGLRenderWindow)");
+    return;
+  }
+  if (in.LastWindow && in.LastWindow != window)
+  {
+    // GL resources belong to one context: release them there before moving windows.
+    this->ReleaseGraphicsResources(in.LastWindow);
+  }
+  in.LastWindow = window;
+
+  vtkUnstructuredGridBase* input = this->GetInput();
+  if (!input)
+  {
+    vtkErrorMacro(<< "no input: connect an unstructured grid of tetrahedra");
+    return;
+  }
+  if (input->GetNumberOfCells() == 0)
+  {
+    if (in.Report(input, "empty"))
+    {
+      vtkWarningMacro(<< "the input has no cells: nothing to draw");
+    }
+    return;
+  }
+  if (this->BlendMode != vtkUnstructuredGridVolumeMapper::COMPOSITE_BLEND && in.Report(input, "blend mode"))
+  {
+    vtkWarningMacro(<< "only composite blending is supported; drawing with it");
+  }
+  if (!in.Adapter.Update(input))
+  {
+    if (in.Report(input, in.Adapter.Error()))
+    {
+      vtkErrorMacro(<< "cannot render the input: " << in.Adapter.Error());
+    }
+    return;
+  }
+  if (!in.Adapter.Warning().empty() && in.Report(input, in.Adapter.Warning()))
+  {
+    vtkWarningMacro(<< in.Adapter.Warning());
+  }
+
+  // Scalars: the same selection rules as every VTK mapper.
+  int cellFlag = 0;
+  vtkDataArray* scalars = vtkAbstractMapper::GetScalars(
+    input, this->ScalarMode, this->ArrayAccessMode, this->ArrayId, this->ArrayName, cellFlag);
+  if (!scalars)
+  {
+    if (in.Report(input, "no scalars"))
+    {
+      vtkErrorMacro(<< "the input has no scalars to map: give it point or cell scalars, or "
+                       "select an array with SelectScalarArray() and SetScalarMode()");
+    }
+    return;
+  }
+  const vtkIdType needed = cellFlag ? input->GetNumberOfCells() : input->GetNumberOfPoints();
+  if (scalars->GetNumberOfTuples() < needed)
+  {
+    if (in.Report(input, "short scalars"))
+    {
+      vtkErrorMacro(<< "the scalar array '" << (scalars->GetName() ? scalars->GetName() : "")
+                    << "' has " << scalars->GetNumberOfTuples() << " tuples for " << needed
+                    << (cellFlag ? " cells" : " points"));
+    }
+    return;
+  }
+  vtkVolumeProperty* property = volume->GetProperty();
+  int component = -1; // magnitude
+  if (property->GetColorChannels(0) == 1)
+  {
+    component = 0;
+  }
+  else if (property->GetRGBTransferFunction(0)->GetVectorMode() == vtkScalarsToColors::COMPONENT)
+  {
+    component = property->GetRGBTransferFunction(0)->GetVectorComponent();
+  }
+  double range[2];
+  vtkIdType nonFinite = 0;
+  const float* values = in.Adapter.Scalars(scalars, component, range, nonFinite);
+  if (nonFinite > 0 && in.Report(input, "non-finite scalars"))
+  {
+    vtkWarningMacro(<< nonFinite
+                    << " scalar values are NaN or infinite; the cells using them "
+                       "are not drawn");
+  }
+
+  mtpt::FrameInput frame;
+  frame.points = in.Adapter.Points();
+  frame.cells = in.Adapter.Cells();
+  frame.scalars = { values,
+    cellFlag ? mtpt::ScalarsView::Association::Cells : mtpt::ScalarsView::Association::Points };
+  vtkCamera* camera = renderer->GetActiveCamera();
+  vtkNew<vtkMatrix4x4> modelView;
+  vtkMatrix4x4::Multiply4x4(camera->GetModelViewTransformMatrix(), volume->GetMatrix(), modelView);
+  frame.modelView = ToMatrix4(modelView);
+  frame.projection =
+    ToMatrix4(camera->GetProjectionTransformMatrix(renderer->GetTiledAspectRatio(), -1.0, 1.0));
+  frame.perspective = camera->GetParallelProjection() == 0;
+
+  in.Pipeline.SetOrderMethod(this->OrderMethod == PARTITION_SORT ? mtpt::OrderMethod::PartitionSort
+                                                                 : mtpt::OrderMethod::RadixSort,
+    static_cast<std::size_t>(this->MaxSubArraySize));
+  if (!in.Pipeline.Run(frame, this->NumberOfThreads))
+  {
+    vtkErrorMacro(<< "the input has " << input->GetNumberOfCells()
+                  << " cells; this mapper draws at most " << mtpt::FramePipeline::MaxTetrahedra());
+    return;
+  }
+  const std::size_t count = in.Pipeline.TetrahedronCount();
+  in.Tetrahedra = static_cast<vtkIdType>(count);
+
+  // Upload: one vertex and one index buffer per frame.
+  auto start = std::chrono::steady_clock::now();
+  const auto& vertices = in.Pipeline.Vertices();
+  const auto& indices = in.Pipeline.Indices();
+  in.VertexBuffer->SetStride(static_cast<unsigned int>(sizeof(mtpt::TetVertex)));
+  in.VertexBuffer->Upload(reinterpret_cast<const float*>(vertices.data()), vertices.size() * 6,
+    vtkOpenGLBufferObject::ArrayBuffer);
+  in.Triangles.IBO->Upload(
+    indices.data(), indices.size(), vtkOpenGLBufferObject::ElementArrayBuffer);
+  in.Triangles.IBO->IndexCount = indices.size();
+  if (this->SynchronizedTiming)
+  {
+    glFinish();
+  }
+  in.UploadSeconds = SecondsSince(start);
+
+  start = std::chrono::steady_clock::now();
+  this->DrawTriangles(renderer, volume, window, range);
+  if (this->SynchronizedTiming)
+  {
+    glFinish();
+  }
+  in.DrawSeconds = SecondsSince(start);
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::DrawTriangles(
+  vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window, const double range[2])
+{
+  Internals& in = *this->Internal;
+  vtkOpenGLState* state = window->GetState();
+  vtkVolumeProperty* property = volume->GetProperty();
+
+  // Program and vertex layout (the layout of mtpt::TetVertex).
+  vtkShaderProgram* program = in.Triangles.Program;
+  if (!program)
+  {
+    program =
+      window->GetShaderCache()->ReadyShaderProgram(vtkMTPTTetrahedraVS, vtkMTPTTetrahedraFS, "");
+    if (!program)
+    {
+      vtkErrorMacro(<< "could not compile the MTPT shaders");
+      return;
+    }
+    in.Triangles.Program = program;
+    in.Triangles.VAO->ShaderProgramChanged();
+    in.Triangles.ShaderSourceTime.Modified();
+  }
+  else
+  {
+    window->GetShaderCache()->ReadyShaderProgram(program);
+  }
+  in.VertexBuffer->Bind();
+  in.Triangles.VAO->Bind();
+  if (in.Triangles.ShaderSourceTime > in.Triangles.AttributeUpdateTime)
+  {
+    const auto stride = sizeof(mtpt::TetVertex);
+    if (!in.Triangles.VAO->AddAttributeArray(
+          program, in.VertexBuffer, "vertexNDC", 0, stride, VTK_FLOAT, 3, false) ||
+      !in.Triangles.VAO->AddAttributeArray(
+        program, in.VertexBuffer, "scalarFrontBack", 12, stride, VTK_FLOAT, 2, false) ||
+      !in.Triangles.VAO->AddAttributeArray(
+        program, in.VertexBuffer, "thickness", 20, stride, VTK_FLOAT, 1, false))
+    {
+      vtkErrorMacro(<< "could not set the vertex attributes");
+    }
+    in.Triangles.AttributeUpdateTime.Modified();
+  }
+
+  this->UpdateTransferFunction(window, property, range);
+  in.TransferFunction->Activate();
+  program->SetUniformi("transferFunction", in.TransferFunction->GetTextureUnit());
+  const double low = in.TableRange[0], high = in.TableRange[1];
+  // Texel centres: scalar `low` at 0.5/N, `high` at (N-0.5)/N.
+  const double n = TransferFunctionTableSize;
+  const double scale = (n - 1.0) / n / (high - low);
+  program->SetUniformf("scalarScale", static_cast<float>(scale));
+  program->SetUniformf("scalarShift", static_cast<float>(0.5 / n - low * scale));
+  double unitDistance = property->GetScalarOpacityUnitDistance(0);
+  if (!(unitDistance > 0))
+  {
+    unitDistance = 1.0;
+  }
+  program->SetUniformf("inverseUnitDistance", static_cast<float>(1.0 / unitDistance));
+
+  int width = 0, height = 0, x0 = 0, y0 = 0;
+  renderer->GetTiledSizeAndOrigin(&width, &height, &x0, &y0);
+  const bool floatTarget =
+    this->UseFloatingPointFrameBuffer && this->PrepareFramebuffer(window, width, height);
+
+  vtkOpenGLState::ScopedglDepthMask depthMaskSaver(state);
+  vtkOpenGLState::ScopedglBlendFuncSeparate blendSaver(state);
+  vtkOpenGLState::ScopedglEnableDisable depthTestSaver(state, GL_DEPTH_TEST);
+  vtkOpenGLState::ScopedglEnableDisable blendSaver2(state, GL_BLEND);
+  vtkOpenGLState::ScopedglEnableDisable cullSaver(state, GL_CULL_FACE);
+  vtkOpenGLState::ScopedglViewport viewportSaver(state);
+  vtkOpenGLState::ScopedglScissor scissorSaver(state);
+
+  if (floatTarget)
+  {
+    // Copy what is drawn so far (colour and the opaque geometry's depth) into the float
+    // target, blend there, and copy the colour back.
+    state->PushFramebufferBindings();
+    in.Framebuffer->Bind(vtkOpenGLFramebufferObject::GetDrawMode());
+    in.Framebuffer->ActivateDrawBuffer(0);
+    state->vtkglBlitFramebuffer(x0, y0, x0 + width, y0 + height, 0, 0, width, height,
+      GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+    state->vtkglViewport(0, 0, width, height);
+    state->vtkglScissor(0, 0, width, height);
+  }
+
+  // VTK's PT state: depth test against opaque geometry without depth writes, back-to-front
+  // "over" blending of non-premultiplied colour (DESIGN.md section 2, step 6).
+  state->vtkglDepthMask(GL_FALSE);
+  state->vtkglEnable(GL_DEPTH_TEST);
+  state->vtkglEnable(GL_BLEND);
+  state->vtkglDisable(GL_CULL_FACE);
+  state->vtkglBlendFuncSeparate(
+    GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
+
+  in.Triangles.IBO->Bind();
+  // GLsizei is 32-bit: draw in chunks of whole tetrahedra below that limit.
+  const std::size_t total = in.Triangles.IBO->IndexCount;
+  const std::size_t chunk = (static_cast<std::size_t>(INT_MAX) / 12) * 12;
+  for (std::size_t first = 0; first < total; first += chunk)
+  {
+    const std::size_t size = std::min(chunk, total - first);
+    glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(size), GL_UNSIGNED_INT,
+      reinterpret_cast<const void*>(first * sizeof(std::uint32_t)));
+  }
+  in.Triangles.IBO->Release();
+  in.Triangles.VAO->Release();
+  in.VertexBuffer->Release();
+  in.TransferFunction->Deactivate();
+
+  if (floatTarget)
+  {
+    in.Framebuffer->Bind(vtkOpenGLFramebufferObject::GetReadMode());
+    state->PopDrawFramebufferBinding();
+    state->vtkglBlitFramebuffer(
+      0, 0, width, height, x0, y0, x0 + width, y0 + height, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    state->PopReadFramebufferBinding();
+  }
+}
+
+bool vtkMultiThreadedProjectedTetrahedraMapper::PrepareFramebuffer(
+  vtkOpenGLRenderWindow* window, int width, int height)
+{
+  Internals& in = *this->Internal;
+  if (in.FramebufferFailed || width <= 0 || height <= 0)
+  {
+    return false;
+  }
+  // A multisampled target cannot take a depth blit into a single-sampled one.
+  GLint sampleBuffers = 0;
+  glGetIntegerv(GL_SAMPLE_BUFFERS, &sampleBuffers);
+  if (sampleBuffers > 0)
+  {
+    return false;
+  }
+  vtkOpenGLState* state = window->GetState();
+  if (!in.FramebufferAllocated)
+  {
+    state->PushFramebufferBindings();
+    in.Framebuffer->SetContext(window);
+    int depthBits = window->GetDepthBufferSize();
+    const bool ok = in.Framebuffer->PopulateFramebuffer(
+      width, height, true, 1, VTK_FLOAT, true, depthBits > 0 ? depthBits : 24, 0);
+    const char* description = nullptr;
+    const bool complete = ok &&
+      vtkOpenGLFramebufferObject::GetFrameBufferStatus(
+        vtkOpenGLFramebufferObject::GetDrawMode(), description);
+    state->PopFramebufferBindings();
+    if (!complete)
+    {
+      vtkWarningMacro(<< "no float framebuffer ("
+                      << (description ? description : "allocation failed")
+                      << "); blending in the window's own framebuffer");
+      in.FramebufferFailed = true;
+      return false;
+    }
+    in.FramebufferAllocated = true;
+    in.FramebufferSize[0] = width;
+    in.FramebufferSize[1] = height;
+  }
+  else if (in.FramebufferSize[0] != width || in.FramebufferSize[1] != height)
+  {
+    state->PushFramebufferBindings();
+    in.Framebuffer->Bind();
+    in.Framebuffer->Resize(width, height);
+    in.Framebuffer->UnBind();
+    state->PopFramebufferBindings();
+    in.FramebufferSize[0] = width;
+    in.FramebufferSize[1] = height;
+  }
+  return true;
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::UpdateTransferFunction(
+  vtkOpenGLRenderWindow* window, vtkVolumeProperty* property, const double range[2])
+{
+  Internals& in = *this->Internal;
+  double low = range[0], high = range[1];
+  if (!(high > low))
+  {
+    high = low + 1.0; // a constant field still needs a table with a width
+  }
+  if (in.TransferFunctionTime >= property->GetMTime() && in.TransferFunctionProperty == property &&
+    in.TableRange[0] == low && in.TableRange[1] == high && in.TransferFunction->GetHandle() != 0)
+  {
+    return;
+  }
+  const int n = TransferFunctionTableSize;
+  std::vector<float> rgb(3 * n), opacity(n), table(4 * n);
+  if (property->GetColorChannels(0) == 1)
+  {
+    std::vector<float> gray(n);
+    property->GetGrayTransferFunction(0)->GetTable(low, high, n, gray.data());
+    for (int i = 0; i < n; ++i)
+    {
+      rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = gray[i];
+    }
+  }
+  else
+  {
+    property->GetRGBTransferFunction(0)->GetTable(low, high, n, rgb.data());
+  }
+  property->GetScalarOpacity(0)->GetTable(low, high, n, opacity.data());
+  for (int i = 0; i < n; ++i)
+  {
+    table[4 * i + 0] = rgb[3 * i + 0];
+    table[4 * i + 1] = rgb[3 * i + 1];
+    table[4 * i + 2] = rgb[3 * i + 2];
+    table[4 * i + 3] = opacity[i];
+  }
+  in.TransferFunction->SetContext(window);
+  in.TransferFunction->SetWrapS(vtkTextureObject::ClampToEdge);
+  in.TransferFunction->SetWrapT(vtkTextureObject::ClampToEdge);
+  in.TransferFunction->SetMinificationFilter(vtkTextureObject::Linear);
+  in.TransferFunction->SetMagnificationFilter(vtkTextureObject::Linear);
+  in.TransferFunction->Create2DFromRaw(n, 1, 4, VTK_FLOAT, table.data());
+  in.TransferFunctionTime = property->GetMTime();
+  in.TransferFunctionProperty = property;
+  in.TableRange[0] = low;
+  in.TableRange[1] = high;
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "NumberOfThreads: " << this->NumberOfThreads
+     << (this->NumberOfThreads == 0 ? " (all cores)" : "") << "\n";
+  os << indent << "OrderMethod: " << this->GetOrderMethodAsString() << "\n";
+  os << indent << "MaxSubArraySize: " << this->MaxSubArraySize << "\n";
+  os << indent << "UseFloatingPointFrameBuffer: " << this->UseFloatingPointFrameBuffer << "\n";
+  os << indent << "SynchronizedTiming: " << this->SynchronizedTiming << "\n";
+  os << indent << "Last frame: " << this->Internal->Tetrahedra << " tetrahedra; transform "
+     << this->GetTransformSeconds() << " s, depth keys " << this->GetDepthKeySeconds()
+     << " s, order " << this->GetOrderSeconds() << " s, decompose " << this->GetDecomposeSeconds()
+     << " s, upload " << this->GetUploadSeconds() << " s, draw " << this->GetDrawSeconds()
+     << " s\n";
+}
