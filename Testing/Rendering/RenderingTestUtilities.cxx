@@ -1,0 +1,275 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "RenderingTestUtilities.h"
+
+#include "vtkCamera.h"
+#include "vtkCellArray.h"
+#include "vtkColorTransferFunction.h"
+#include "vtkDoubleArray.h"
+#include "vtkFloatArray.h"
+#include "vtkImageData.h"
+#include "vtkPNGReader.h"
+#include "vtkPNGWriter.h"
+#include "vtkPiecewiseFunction.h"
+#include "vtkPointData.h"
+#include "vtkCellData.h"
+#include "vtkPoints.h"
+#include "vtkRenderWindow.h"
+#include "vtkRenderer.h"
+#include "vtkUnsignedCharArray.h"
+#include "vtkUnstructuredGrid.h"
+#include "vtkUnstructuredGridVolumeMapper.h"
+#include "vtkVolume.h"
+#include "vtkVolumeProperty.h"
+#include "vtkWindowToImageFilter.h"
+#include "vtkXMLUnstructuredGridReader.h"
+
+#include <vtksys/SystemTools.hxx>
+
+#include <cmath>
+#include <cstdlib>
+
+#ifndef MTPT_SOURCE_DIR
+#error "MTPT_SOURCE_DIR must be defined"
+#endif
+
+namespace mtpt
+{
+namespace rendering_test
+{
+
+const double Background[3] = { 0.1, 0.1, 0.2 };
+
+vtkSmartPointer<vtkUnstructuredGrid> MakeTetrahedralBox(int n)
+{
+  auto grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  vtkNew<vtkPoints> points;
+  vtkNew<vtkFloatArray> field;
+  field->SetName("field");
+  auto id = [n](int i, int j, int k)
+  { return static_cast<vtkIdType>((k * (n + 1) + j) * (n + 1) + i); };
+  auto value = [](double x, double y, double z) {
+    return std::exp(-2.0 * (x * x + y * y + z * z)) + 0.3 * std::sin(3.0 * x) * std::cos(2.0 * y);
+  };
+  const double h = 2.0 / n;
+  for (int k = 0; k <= n; ++k)
+  {
+    for (int j = 0; j <= n; ++j)
+    {
+      for (int i = 0; i <= n; ++i)
+      {
+        const double x = -1 + h * i, y = -1 + h * j, z = -1 + h * k;
+        points->InsertNextPoint(x, y, z);
+        field->InsertNextValue(static_cast<float>(value(x, y, z)));
+      }
+    }
+  }
+  grid->SetPoints(points);
+  grid->GetPointData()->SetScalars(field);
+  vtkNew<vtkFloatArray> cellField;
+  cellField->SetName("cellField");
+  // 5-tetrahedron split with alternating orientation so faces match between cubes.
+  static const int even[5][4] = { { 0, 1, 3, 4 }, { 1, 2, 3, 6 }, { 1, 4, 5, 6 }, { 3, 4, 6, 7 },
+    { 1, 3, 4, 6 } };
+  static const int odd[5][4] = { { 0, 1, 2, 5 }, { 0, 2, 3, 7 }, { 0, 4, 5, 7 }, { 2, 5, 6, 7 },
+    { 0, 2, 5, 7 } };
+  for (int k = 0; k < n; ++k)
+  {
+    for (int j = 0; j < n; ++j)
+    {
+      for (int i = 0; i < n; ++i)
+      {
+        const vtkIdType corner[8] = { id(i, j, k), id(i + 1, j, k), id(i + 1, j + 1, k),
+          id(i, j + 1, k), id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1),
+          id(i, j + 1, k + 1) };
+        const auto& split = ((i + j + k) % 2 == 0) ? even : odd;
+        for (const auto& tet : split)
+        {
+          const vtkIdType ids[4] = { corner[tet[0]], corner[tet[1]], corner[tet[2]],
+            corner[tet[3]] };
+          grid->InsertNextCell(VTK_TETRA, 4, ids);
+          double c[3] = { 0, 0, 0 };
+          for (vtkIdType p : ids)
+          {
+            double q[3];
+            points->GetPoint(p, q);
+            c[0] += q[0] / 4;
+            c[1] += q[1] / 4;
+            c[2] += q[2] / 4;
+          }
+          cellField->InsertNextValue(static_cast<float>(value(c[0], c[1], c[2])));
+        }
+      }
+    }
+  }
+  grid->GetCellData()->AddArray(cellField);
+  return grid;
+}
+
+vtkSmartPointer<vtkUnstructuredGrid> LoadBluntFin()
+{
+  vtkNew<vtkXMLUnstructuredGridReader> reader;
+  reader->SetFileName(MTPT_SOURCE_DIR "/Data/bluntfin_tets.vtu");
+  reader->Update();
+  auto grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  grid->ShallowCopy(reader->GetOutput());
+  grid->GetPointData()->SetActiveScalars("Density");
+  return grid;
+}
+
+vtkSmartPointer<vtkVolumeProperty> MakeProperty(double low, double high, double unitDistance)
+{
+  vtkNew<vtkColorTransferFunction> color;
+  color->AddRGBPoint(low, 0.2, 0.3, 0.9);
+  color->AddRGBPoint(0.5 * (low + high), 0.95, 0.95, 0.6);
+  color->AddRGBPoint(high, 0.9, 0.2, 0.1);
+  vtkNew<vtkPiecewiseFunction> opacity;
+  opacity->AddPoint(low, 0.05);
+  opacity->AddPoint(high, 0.9);
+  auto property = vtkSmartPointer<vtkVolumeProperty>::New();
+  property->SetColor(color);
+  property->SetScalarOpacity(opacity);
+  property->SetScalarOpacityUnitDistance(unitDistance);
+  return property;
+}
+
+vtkSmartPointer<vtkImageData> Render(
+  const Scene& scene, vtkUnstructuredGridVolumeMapper* mapper, int frames)
+{
+  mapper->SetInputData(scene.grid);
+  vtkNew<vtkVolume> volume;
+  volume->SetMapper(mapper);
+  volume->SetProperty(scene.property);
+  vtkNew<vtkRenderer> renderer;
+  renderer->SetBackground(Background[0], Background[1], Background[2]);
+  renderer->AddVolume(volume);
+  vtkNew<vtkRenderWindow> window;
+  window->SetOffScreenRendering(1);
+  window->SetMultiSamples(0);
+  window->SetSize(scene.size, scene.size);
+  window->AddRenderer(renderer);
+  if (scene.customize)
+  {
+    scene.customize(volume, renderer);
+  }
+  renderer->ResetCamera();
+  vtkCamera* camera = renderer->GetActiveCamera();
+  camera->SetParallelProjection(scene.perspective ? 0 : 1);
+  camera->Azimuth(scene.azimuth);
+  camera->Elevation(scene.elevation);
+  camera->OrthogonalizeViewUp();
+  renderer->ResetCameraClippingRange();
+  for (int f = 0; f < frames; ++f)
+  {
+    window->Render();
+  }
+  vtkNew<vtkWindowToImageFilter> grab;
+  grab->SetInput(window);
+  grab->SetInputBufferTypeToRGB();
+  grab->ReadFrontBufferOff();
+  grab->Update();
+  auto image = vtkSmartPointer<vtkImageData>::New();
+  image->DeepCopy(grab->GetOutput());
+  // The mapper may outlive this window: free its GL resources while the context exists.
+  mapper->ReleaseGraphicsResources(window);
+  return image;
+}
+
+ImageDifference Compare(vtkImageData* a, vtkImageData* b)
+{
+  ImageDifference d;
+  auto* pa = vtkUnsignedCharArray::SafeDownCast(a->GetPointData()->GetScalars());
+  auto* pb = vtkUnsignedCharArray::SafeDownCast(b->GetPointData()->GetScalars());
+  if (!pa || !pb || pa->GetNumberOfValues() != pb->GetNumberOfValues() ||
+    pa->GetNumberOfComponents() != pb->GetNumberOfComponents())
+  {
+    d.rmse = d.worst = d.fractionOver = 1;
+    return d;
+  }
+  const int components = pa->GetNumberOfComponents();
+  const vtkIdType pixels = pa->GetNumberOfTuples();
+  double sum = 0;
+  vtkIdType over = 0;
+  for (vtkIdType p = 0; p < pixels; ++p)
+  {
+    double pixelWorst = 0;
+    for (int c = 0; c < 3 && c < components; ++c)
+    {
+      const double diff =
+        std::fabs(pa->GetValue(p * components + c) - pb->GetValue(p * components + c)) / 255.0;
+      sum += diff * diff;
+      pixelWorst = std::max(pixelWorst, diff);
+    }
+    d.worst = std::max(d.worst, pixelWorst);
+    over += pixelWorst > 0.1 ? 1 : 0;
+  }
+  d.rmse = std::sqrt(sum / (3.0 * static_cast<double>(pixels)));
+  d.fractionOver = static_cast<double>(over) / static_cast<double>(pixels);
+  return d;
+}
+
+double CoveredFraction(vtkImageData* image, const double background[3])
+{
+  auto* p = vtkUnsignedCharArray::SafeDownCast(image->GetPointData()->GetScalars());
+  const int components = p->GetNumberOfComponents();
+  vtkIdType covered = 0;
+  for (vtkIdType i = 0; i < p->GetNumberOfTuples(); ++i)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      if (std::fabs(p->GetValue(i * components + c) - 255.0 * background[c]) > 2.0)
+      {
+        ++covered;
+        break;
+      }
+    }
+  }
+  return static_cast<double>(covered) / static_cast<double>(p->GetNumberOfTuples());
+}
+
+void Save(vtkImageData* image, const std::string& name)
+{
+  vtkNew<vtkPNGWriter> writer;
+  writer->SetFileName((name + ".png").c_str());
+  writer->SetInputData(image);
+  writer->Write();
+}
+
+ImageDifference CompareWithBaseline(vtkImageData* image, const std::string& name)
+{
+  const std::string path = std::string(MTPT_SOURCE_DIR) + "/Testing/Data/Baseline/" + name + ".png";
+  const char* update = std::getenv("MTPT_UPDATE_BASELINES");
+  if (update && std::string(update) == "1")
+  {
+    vtkNew<vtkPNGWriter> writer;
+    writer->SetFileName(path.c_str());
+    writer->SetInputData(image);
+    writer->Write();
+    return {};
+  }
+  if (!vtksys::SystemTools::FileExists(path))
+  {
+    ImageDifference missing;
+    missing.rmse = missing.worst = missing.fractionOver = 1;
+    return missing;
+  }
+  vtkNew<vtkPNGReader> reader;
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  return Compare(image, reader->GetOutput());
+}
+
+void MessageObserver::Execute(vtkObject*, unsigned long event, void* data)
+{
+  const std::string text = data ? static_cast<const char*>(data) : "";
+  if (event == vtkCommand::ErrorEvent)
+  {
+    this->errors.push_back(text);
+  }
+  else if (event == vtkCommand::WarningEvent)
+  {
+    this->warnings.push_back(text);
+  }
+}
+
+} // namespace rendering_test
+} // namespace mtpt

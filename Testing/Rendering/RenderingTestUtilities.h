@@ -1,0 +1,91 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Scenes, rendering and image metrics shared by the mapper's image tests.
+#ifndef mtpt_RenderingTestUtilities_h
+#define mtpt_RenderingTestUtilities_h
+
+#include "vtkCommand.h"
+#include "vtkNew.h"
+#include "vtkSmartPointer.h"
+
+#include <functional>
+#include <string>
+#include <vector>
+
+class vtkActor;
+class vtkImageData;
+class vtkRenderer;
+class vtkUnstructuredGrid;
+class vtkUnstructuredGridVolumeMapper;
+class vtkVolume;
+class vtkVolumeProperty;
+
+namespace mtpt
+{
+namespace rendering_test
+{
+
+/// n^3 cubes over [-1, 1]^3, 5 tetrahedra each, a smooth point scalar "field" and a cell
+/// scalar "cellField" (its value at the cell centre).
+vtkSmartPointer<vtkUnstructuredGrid> MakeTetrahedralBox(int n);
+
+/// A real mesh: Data/bluntfin_tets.vtu (scalar "Density").
+vtkSmartPointer<vtkUnstructuredGrid> LoadBluntFin();
+
+/// Colour ramp and linearly rising opacity over [low, high].
+vtkSmartPointer<vtkVolumeProperty> MakeProperty(double low, double high, double unitDistance);
+
+struct Scene
+{
+  vtkUnstructuredGrid* grid = nullptr;
+  vtkVolumeProperty* property = nullptr;
+  bool perspective = true;
+  int size = 200;
+  double azimuth = 30, elevation = 20;
+  /// Called with the volume and renderer before rendering (transform, extra actors...).
+  std::function<void(vtkVolume*, vtkRenderer*)> customize;
+};
+
+/// Renders `scene` with `mapper` offscreen and returns the RGB image. `frames` > 1 renders
+/// again before reading back (catches state carried between frames).
+vtkSmartPointer<vtkImageData> Render(
+  const Scene& scene, vtkUnstructuredGridVolumeMapper* mapper, int frames = 1);
+
+struct ImageDifference
+{
+  double rmse = 0;         ///< root mean square over RGB in [0, 1]
+  double worst = 0;        ///< largest channel difference in [0, 1]
+  double fractionOver = 0; ///< fraction of pixels with a channel difference > 0.1
+};
+ImageDifference Compare(vtkImageData* a, vtkImageData* b);
+
+/// Fraction of pixels that differ from the background colour by more than 2/255.
+double CoveredFraction(vtkImageData* image, const double background[3]);
+
+/// Background of every scene.
+extern const double Background[3];
+
+/// Baseline comparison: Testing/Data/Baseline/<name>.png. With MTPT_UPDATE_BASELINES=1 in
+/// the environment the image is written there instead (and the comparison passes).
+ImageDifference CompareWithBaseline(vtkImageData* image, const std::string& name);
+
+/// Writes the image next to the test binary (for inspection after a failure).
+void Save(vtkImageData* image, const std::string& name);
+
+/// Collects error and warning events of one object.
+class MessageObserver : public vtkCommand
+{
+public:
+  static MessageObserver* New() { return new MessageObserver; }
+  void Execute(vtkObject*, unsigned long event, void* data) override;
+  std::vector<std::string> errors, warnings;
+  void Clear()
+  {
+    errors.clear();
+    warnings.clear();
+  }
+};
+
+} // namespace rendering_test
+} // namespace mtpt
+
+#endif
