@@ -11,4 +11,10 @@ jobs="$(nproc)"
 cmake -S "$here" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release
 cmake --build "$build" --parallel "$jobs"
 cd "$build"
+# Render-window tests share one X server (Mesa llvmpipe) when there is no display; see
+# Testing/xvfb-launch.sh for why -noreset.
+if [ -z "${DISPLAY:-}" ]; then
+  exec xvfb-run -a -s "-screen 0 1024x768x24 -noreset" \
+    ctest --output-on-failure --parallel "$jobs" --timeout 900
+fi
 ctest --output-on-failure --parallel "$jobs" --timeout 900

@@ -162,6 +162,14 @@ vtkSmartPointer<vtkImageData> Render(
   {
     window->Render();
   }
+  auto image = Grab(window);
+  // The mapper may outlive this window: free its GL resources while the context exists.
+  mapper->ReleaseGraphicsResources(window);
+  return image;
+}
+
+vtkSmartPointer<vtkImageData> Grab(vtkRenderWindow* window)
+{
   vtkNew<vtkWindowToImageFilter> grab;
   grab->SetInput(window);
   grab->SetInputBufferTypeToRGB();
@@ -169,8 +177,6 @@ vtkSmartPointer<vtkImageData> Render(
   grab->Update();
   auto image = vtkSmartPointer<vtkImageData>::New();
   image->DeepCopy(grab->GetOutput());
-  // The mapper may outlive this window: free its GL resources while the context exists.
-  mapper->ReleaseGraphicsResources(window);
   return image;
 }
 

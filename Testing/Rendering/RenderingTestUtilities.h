@@ -13,6 +13,7 @@
 
 class vtkActor;
 class vtkImageData;
+class vtkRenderWindow;
 class vtkRenderer;
 class vtkUnstructuredGrid;
 class vtkUnstructuredGridVolumeMapper;
@@ -49,6 +50,9 @@ struct Scene
 /// again before reading back (catches state carried between frames).
 vtkSmartPointer<vtkImageData> Render(
   const Scene& scene, vtkUnstructuredGridVolumeMapper* mapper, int frames = 1);
+
+/// The RGB back buffer of a rendered window.
+vtkSmartPointer<vtkImageData> Grab(vtkRenderWindow* window);
 
 struct ImageDifference
 {

@@ -189,25 +189,25 @@ TEST_F(MapperImages, IdenticalForEveryThreadCountAndOrderMethod)
   }
 }
 
-TEST_F(MapperImages, BaselineSyntheticPerspective)
+/// The mapper's own output against its stored baseline: same renderer, same build, so
+/// identical up to driver rounding.
+void ExpectMatchesBaseline(const Scene& scene, const std::string& name)
 {
   vtkNew<vtkMultiThreadedProjectedTetrahedraMapper> mapper;
-  auto image = Render(BoxScene(true), mapper);
-  const ImageDifference d = CompareWithBaseline(image, "MTPT_BoxPerspective");
-  std::printf("baseline box: RMSE %.5f worst %.3f\n", d.rmse, d.worst);
-  // Same renderer, same build: identical up to driver rounding.
-  EXPECT_LT(d.rmse, 0.004);
-  EXPECT_LT(d.fractionOver, 0.001);
+  const ImageDifference d = CompareWithBaseline(Render(scene, mapper), name);
+  std::printf("baseline %s: RMSE %.5f worst %.3f\n", name.c_str(), d.rmse, d.worst);
+  EXPECT_LT(d.rmse, 0.004) << name;
+  EXPECT_LT(d.fractionOver, 0.001) << name;
+}
+
+TEST_F(MapperImages, BaselineSyntheticPerspective)
+{
+  ExpectMatchesBaseline(BoxScene(true), "MTPT_BoxPerspective");
 }
 
 TEST_F(MapperImages, BaselineRealMeshOrthographic)
 {
-  vtkNew<vtkMultiThreadedProjectedTetrahedraMapper> mapper;
-  auto image = Render(BluntFinScene(false), mapper);
-  const ImageDifference d = CompareWithBaseline(image, "MTPT_BluntFinOrthographic");
-  std::printf("baseline bluntfin: RMSE %.5f worst %.3f\n", d.rmse, d.worst);
-  EXPECT_LT(d.rmse, 0.004);
-  EXPECT_LT(d.fractionOver, 0.001);
+  ExpectMatchesBaseline(BluntFinScene(false), "MTPT_BluntFinOrthographic");
 }
 
 } // namespace

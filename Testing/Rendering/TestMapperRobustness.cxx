@@ -16,7 +16,6 @@
 #include "vtkUnstructuredGrid.h"
 #include "vtkVolume.h"
 #include "vtkVolumeProperty.h"
-#include "vtkWindowToImageFilter.h"
 
 #include <gtest/gtest.h>
 
@@ -237,14 +236,10 @@ TEST_F(MapperRobustness, SeveralRenderersInOneWindowAndOneMapperInTwoWindows)
     renderer->ResetCameraClippingRange();
   }
   window->Render();
-  vtkNew<vtkWindowToImageFilter> grab;
-  grab->SetInput(window);
-  grab->SetInputBufferTypeToRGB();
-  grab->ReadFrontBufferOff();
-  grab->Update();
+  const auto image = Grab(window);
   const auto reference = Columns(expected, 0, 200);
-  EXPECT_EQ(Columns(grab->GetOutput(), 0, 200), reference) << "left renderer";
-  EXPECT_EQ(Columns(grab->GetOutput(), 200, 200), reference) << "right renderer";
+  EXPECT_EQ(Columns(image, 0, 200), reference) << "left renderer";
+  EXPECT_EQ(Columns(image, 200, 200), reference) << "right renderer";
   left->ReleaseGraphicsResources(window);
   right->ReleaseGraphicsResources(window);
 

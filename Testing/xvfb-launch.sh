@@ -1,0 +1,11 @@
+#!/usr/bin/env bash
+# Test launcher for everything that opens a render window. With a DISPLAY it runs the
+# command as is; without one it runs it under a private Xvfb (Mesa llvmpipe). xvfb-run -a
+# picks the first free display number racily, so concurrent launches start their search
+# at a random number instead of all at :99. -noreset: by default Xvfb resets when its last
+# client disconnects, and a window opened during the reset fails to connect.
+set -euo pipefail
+if [ -n "${DISPLAY:-}" ]; then
+  exec "$@"
+fi
+exec xvfb-run -a -n $((100 + RANDOM % 800)) -s "-screen 0 1024x768x24 -noreset" "$@"
