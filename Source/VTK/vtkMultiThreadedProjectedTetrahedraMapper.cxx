@@ -1,10 +1,12 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
 
+#include "vtkMTPTCompositeFS.h"
 #include "vtkMTPTMeshAdapter.h"
 #include "vtkMTPTTetrahedraFS.h"
 #include "vtkMTPTTetrahedraVS.h"
 
+#include "mtpt/Compositor.h"
 #include "mtpt/FramePipeline.h"
 
 #include "vtkCamera.h"
@@ -16,6 +18,8 @@
 #include "vtkOpenGLFramebufferObject.h"
 #include "vtkOpenGLHelper.h"
 #include "vtkOpenGLIndexBufferObject.h"
+#include "vtkOpenGLQuadHelper.h"
+#include "vtkOpenGLRenderUtilities.h"
 #include "vtkOpenGLRenderWindow.h"
 #include "vtkOpenGLShaderCache.h"
 #include "vtkOpenGLState.h"
@@ -34,6 +38,7 @@
 #include <chrono>
 #include <climits>
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 vtkStandardNewMacro(vtkMultiThreadedProjectedTetrahedraMapper);
@@ -75,16 +80,29 @@ public:
   vtkNew<vtkOpenGLVertexBufferObject> VertexBuffer;
   vtkOpenGLHelper Triangles;
   vtkNew<vtkTextureObject> TransferFunction;
-  vtkMTimeType TransferFunctionTime = 0;
-  vtkVolumeProperty* TransferFunctionProperty = nullptr;
+  vtkTimeStamp TransferFunctionUploadTime;
+  vtkNew<vtkTextureObject> ImageTexture;
+  std::unique_ptr<vtkOpenGLQuadHelper> Quad;
+  int SoftwareRenderer = -1; // of LastWindow: -1 unknown, 0 no, 1 yes
+
+  // The transfer functions sampled over the scalar range (both backends read it).
+  std::vector<float> Table;
+  vtkTimeStamp TableBuildTime;
+  vtkMTimeType TablePropertyTime = 0;
+  vtkVolumeProperty* TableProperty = nullptr;
   double TableRange[2] = { 0, 0 };
+
+  // CPU backend.
+  mtpt::Compositor Compositor;
+  std::vector<float> Image, Depth;
   vtkNew<vtkOpenGLFramebufferObject> Framebuffer;
   bool FramebufferAllocated = false;
   bool FramebufferFailed = false;
   int FramebufferSize[2] = { 0, 0 };
 
   // Timers of the last frame.
-  double UploadSeconds = 0, DrawSeconds = 0;
+  double UploadSeconds = 0, DrawSeconds = 0, CompositeSeconds = 0;
+  int LastBackend = OPENGL_BACKEND;
   vtkIdType Tetrahedra = 0;
 
   // Messages are reported once per change of what caused them, not every frame.
@@ -161,6 +179,30 @@ double vtkMultiThreadedProjectedTetrahedraMapper::GetDrawSeconds()
 {
   return this->Internal->DrawSeconds;
 }
+double vtkMultiThreadedProjectedTetrahedraMapper::GetCompositeSeconds()
+{
+  return this->Internal->CompositeSeconds;
+}
+int vtkMultiThreadedProjectedTetrahedraMapper::GetLastBackend()
+{
+  return this->Internal->LastBackend;
+}
+
+bool vtkMultiThreadedProjectedTetrahedraMapper::IsSoftwareRenderer(const char* renderer)
+{
+  if (!renderer)
+  {
+    return false;
+  }
+  for (const char* name : { "llvmpipe", "softpipe", "SWR", "swrast", "Software Rasterizer" })
+  {
+    if (std::strstr(renderer, name))
+    {
+      return true;
+    }
+  }
+  return false;
+}
 vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfTetrahedra()
 {
   return this->Internal->Tetrahedra;
@@ -179,9 +221,15 @@ void vtkMultiThreadedProjectedTetrahedraMapper::ReleaseGraphicsResources(vtkWind
   if (window)
   {
     in.TransferFunction->ReleaseGraphicsResources(window);
+    in.ImageTexture->ReleaseGraphicsResources(window);
     in.Framebuffer->ReleaseGraphicsResources(window);
+    if (in.Quad)
+    {
+      in.Quad->ReleaseGraphicsResources(window);
+    }
   }
-  in.TransferFunctionTime = 0;
+  in.Quad.reset();
+  in.SoftwareRenderer = -1;
   in.FramebufferAllocated = false;
   in.FramebufferFailed = false;
   in.LastWindow = nullptr;
@@ -191,7 +239,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::ReleaseGraphicsResources(vtkWind
 void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vtkVolume* volume)
 {
   Internals& in = *this->Internal;
-  in.UploadSeconds = in.DrawSeconds = 0;
+  in.UploadSeconds = in.DrawSeconds = in.CompositeSeconds = 0;
   in.Tetrahedra = 0;
   auto* window = vtkOpenGLRenderWindow::SafeDownCast(renderer->GetRenderWindow());
   if (!window)
@@ -220,7 +268,8 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
     }
     return;
   }
-  if (this->BlendMode != vtkUnstructuredGridVolumeMapper::COMPOSITE_BLEND && in.Report(input, "blend mode"))
+  if (this->BlendMode != vtkUnstructuredGridVolumeMapper::COMPOSITE_BLEND &&
+    in.Report(input, "blend mode"))
   {
     vtkWarningMacro(<< "only composite blending is supported; drawing with it");
   }
@@ -306,6 +355,24 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
   const std::size_t count = in.Pipeline.TetrahedronCount();
   in.Tetrahedra = static_cast<vtkIdType>(count);
 
+  this->UpdateTransferFunctionTable(property, range);
+  int backend = this->Backend;
+  if (backend == AUTOMATIC_BACKEND)
+  {
+    if (in.SoftwareRenderer < 0)
+    {
+      in.SoftwareRenderer =
+        IsSoftwareRenderer(reinterpret_cast<const char*>(glGetString(GL_RENDERER))) ? 1 : 0;
+    }
+    backend = in.SoftwareRenderer ? CPU_BACKEND : OPENGL_BACKEND;
+  }
+  in.LastBackend = backend;
+  if (backend == CPU_BACKEND)
+  {
+    this->CompositeOnCPU(renderer, volume, window);
+    return;
+  }
+
   // Upload: one vertex and one index buffer per frame.
   auto start = std::chrono::steady_clock::now();
   const auto& vertices = in.Pipeline.Vertices();
@@ -323,7 +390,91 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
   in.UploadSeconds = SecondsSince(start);
 
   start = std::chrono::steady_clock::now();
-  this->DrawTriangles(renderer, volume, window, range);
+  this->DrawTriangles(renderer, volume, window);
+  if (this->SynchronizedTiming)
+  {
+    glFinish();
+  }
+  in.DrawSeconds = SecondsSince(start);
+}
+
+double vtkMultiThreadedProjectedTetrahedraMapper::UnitDistance(vtkVolume* volume)
+{
+  const double unitDistance = volume->GetProperty()->GetScalarOpacityUnitDistance(0);
+  return unitDistance > 0 ? unitDistance : 1.0;
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::CompositeOnCPU(
+  vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window)
+{
+  Internals& in = *this->Internal;
+  int width = 0, height = 0, x0 = 0, y0 = 0;
+  renderer->GetTiledSizeAndOrigin(&width, &height, &x0, &y0);
+  if (width <= 0 || height <= 0)
+  {
+    return;
+  }
+  // The opaque geometry drawn so far occludes the volume: read its depth back.
+  auto start = std::chrono::steady_clock::now();
+  in.Depth.resize(static_cast<std::size_t>(width) * height);
+  glPixelStorei(GL_PACK_ALIGNMENT, 4);
+  glReadPixels(x0, y0, width, height, GL_DEPTH_COMPONENT, GL_FLOAT, in.Depth.data());
+  double upload = SecondsSince(start);
+
+  start = std::chrono::steady_clock::now();
+  mtpt::CompositeSettings settings;
+  settings.width = width;
+  settings.height = height;
+  settings.transferFunction = { in.Table.data(), TransferFunctionTableSize, in.TableRange[0],
+    in.TableRange[1] };
+  settings.unitDistance = UnitDistance(volume);
+  settings.opaqueDepth = in.Depth.data();
+  in.Compositor.Composite(in.Pipeline.Vertices().data(), in.Pipeline.Indices().data(),
+    in.Pipeline.TetrahedronCount(), settings, in.Image, this->NumberOfThreads);
+  in.CompositeSeconds = SecondsSince(start);
+
+  start = std::chrono::steady_clock::now();
+  in.ImageTexture->SetContext(window);
+  in.ImageTexture->SetWrapS(vtkTextureObject::ClampToEdge);
+  in.ImageTexture->SetWrapT(vtkTextureObject::ClampToEdge);
+  in.ImageTexture->SetMinificationFilter(vtkTextureObject::Nearest);
+  in.ImageTexture->SetMagnificationFilter(vtkTextureObject::Nearest);
+  in.ImageTexture->Create2DFromRaw(width, height, 4, VTK_FLOAT, in.Image.data());
+  if (this->SynchronizedTiming)
+  {
+    glFinish();
+  }
+  in.UploadSeconds = upload + SecondsSince(start);
+
+  start = std::chrono::steady_clock::now();
+  if (!in.Quad)
+  {
+    in.Quad = std::make_unique<vtkOpenGLQuadHelper>(window,
+      vtkOpenGLRenderUtilities::GetFullScreenQuadVertexShader().c_str(), vtkMTPTCompositeFS, "");
+  }
+  else
+  {
+    window->GetShaderCache()->ReadyShaderProgram(in.Quad->Program);
+  }
+  if (!in.Quad->Program || !in.Quad->Program->GetCompiled())
+  {
+    vtkErrorMacro(<< "could not compile the compositing shader");
+    return;
+  }
+  vtkOpenGLState* state = window->GetState();
+  vtkOpenGLState::ScopedglDepthMask depthMaskSaver(state);
+  vtkOpenGLState::ScopedglBlendFuncSeparate blendSaver(state);
+  vtkOpenGLState::ScopedglEnableDisable depthTestSaver(state, GL_DEPTH_TEST);
+  vtkOpenGLState::ScopedglEnableDisable blendEnableSaver(state, GL_BLEND);
+  state->vtkglDepthMask(GL_FALSE);
+  state->vtkglDisable(GL_DEPTH_TEST);
+  state->vtkglEnable(GL_BLEND);
+  // Premultiplied colour over the framebuffer.
+  state->vtkglBlendFuncSeparate(GL_ONE, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
+  in.ImageTexture->Activate();
+  in.Quad->Program->SetUniformi("image", in.ImageTexture->GetTextureUnit());
+  in.Quad->Render();
+  in.ImageTexture->Deactivate();
   if (this->SynchronizedTiming)
   {
     glFinish();
@@ -332,11 +483,10 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
 }
 
 void vtkMultiThreadedProjectedTetrahedraMapper::DrawTriangles(
-  vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window, const double range[2])
+  vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window)
 {
   Internals& in = *this->Internal;
   vtkOpenGLState* state = window->GetState();
-  vtkVolumeProperty* property = volume->GetProperty();
 
   // Program and vertex layout (the layout of mtpt::TetVertex).
   vtkShaderProgram* program = in.Triangles.Program;
@@ -374,7 +524,17 @@ void vtkMultiThreadedProjectedTetrahedraMapper::DrawTriangles(
     in.Triangles.AttributeUpdateTime.Modified();
   }
 
-  this->UpdateTransferFunction(window, property, range);
+  if (in.TransferFunctionUploadTime < in.TableBuildTime || in.TransferFunction->GetHandle() == 0)
+  {
+    in.TransferFunction->SetContext(window);
+    in.TransferFunction->SetWrapS(vtkTextureObject::ClampToEdge);
+    in.TransferFunction->SetWrapT(vtkTextureObject::ClampToEdge);
+    in.TransferFunction->SetMinificationFilter(vtkTextureObject::Linear);
+    in.TransferFunction->SetMagnificationFilter(vtkTextureObject::Linear);
+    in.TransferFunction->Create2DFromRaw(
+      TransferFunctionTableSize, 1, 4, VTK_FLOAT, in.Table.data());
+    in.TransferFunctionUploadTime.Modified();
+  }
   in.TransferFunction->Activate();
   program->SetUniformi("transferFunction", in.TransferFunction->GetTextureUnit());
   const double low = in.TableRange[0], high = in.TableRange[1];
@@ -383,12 +543,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::DrawTriangles(
   const double scale = (n - 1.0) / n / (high - low);
   program->SetUniformf("scalarScale", static_cast<float>(scale));
   program->SetUniformf("scalarShift", static_cast<float>(0.5 / n - low * scale));
-  double unitDistance = property->GetScalarOpacityUnitDistance(0);
-  if (!(unitDistance > 0))
-  {
-    unitDistance = 1.0;
-  }
-  program->SetUniformf("inverseUnitDistance", static_cast<float>(1.0 / unitDistance));
+  program->SetUniformf("inverseUnitDistance", static_cast<float>(1.0 / UnitDistance(volume)));
 
   int width = 0, height = 0, x0 = 0, y0 = 0;
   renderer->GetTiledSizeAndOrigin(&width, &height, &x0, &y0);
@@ -503,8 +658,8 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::PrepareFramebuffer(
   return true;
 }
 
-void vtkMultiThreadedProjectedTetrahedraMapper::UpdateTransferFunction(
-  vtkOpenGLRenderWindow* window, vtkVolumeProperty* property, const double range[2])
+void vtkMultiThreadedProjectedTetrahedraMapper::UpdateTransferFunctionTable(
+  vtkVolumeProperty* property, const double range[2])
 {
   Internals& in = *this->Internal;
   double low = range[0], high = range[1];
@@ -512,13 +667,13 @@ void vtkMultiThreadedProjectedTetrahedraMapper::UpdateTransferFunction(
   {
     high = low + 1.0; // a constant field still needs a table with a width
   }
-  if (in.TransferFunctionTime >= property->GetMTime() && in.TransferFunctionProperty == property &&
-    in.TableRange[0] == low && in.TableRange[1] == high && in.TransferFunction->GetHandle() != 0)
+  if (in.TablePropertyTime >= property->GetMTime() && in.TableProperty == property &&
+    in.TableRange[0] == low && in.TableRange[1] == high && !in.Table.empty())
   {
     return;
   }
   const int n = TransferFunctionTableSize;
-  std::vector<float> rgb(3 * n), opacity(n), table(4 * n);
+  std::vector<float> rgb(3 * n), opacity(n);
   if (property->GetColorChannels(0) == 1)
   {
     std::vector<float> gray(n);
@@ -533,23 +688,19 @@ void vtkMultiThreadedProjectedTetrahedraMapper::UpdateTransferFunction(
     property->GetRGBTransferFunction(0)->GetTable(low, high, n, rgb.data());
   }
   property->GetScalarOpacity(0)->GetTable(low, high, n, opacity.data());
+  in.Table.resize(4 * static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i)
   {
-    table[4 * i + 0] = rgb[3 * i + 0];
-    table[4 * i + 1] = rgb[3 * i + 1];
-    table[4 * i + 2] = rgb[3 * i + 2];
-    table[4 * i + 3] = opacity[i];
+    in.Table[4 * i + 0] = rgb[3 * i + 0];
+    in.Table[4 * i + 1] = rgb[3 * i + 1];
+    in.Table[4 * i + 2] = rgb[3 * i + 2];
+    in.Table[4 * i + 3] = opacity[i];
   }
-  in.TransferFunction->SetContext(window);
-  in.TransferFunction->SetWrapS(vtkTextureObject::ClampToEdge);
-  in.TransferFunction->SetWrapT(vtkTextureObject::ClampToEdge);
-  in.TransferFunction->SetMinificationFilter(vtkTextureObject::Linear);
-  in.TransferFunction->SetMagnificationFilter(vtkTextureObject::Linear);
-  in.TransferFunction->Create2DFromRaw(n, 1, 4, VTK_FLOAT, table.data());
-  in.TransferFunctionTime = property->GetMTime();
-  in.TransferFunctionProperty = property;
+  in.TablePropertyTime = property->GetMTime();
+  in.TableProperty = property;
   in.TableRange[0] = low;
   in.TableRange[1] = high;
+  in.TableBuildTime.Modified();
 }
 
 void vtkMultiThreadedProjectedTetrahedraMapper::PrintSelf(ostream& os, vtkIndent indent)
@@ -557,6 +708,11 @@ void vtkMultiThreadedProjectedTetrahedraMapper::PrintSelf(ostream& os, vtkIndent
   this->Superclass::PrintSelf(os, indent);
   os << indent << "NumberOfThreads: " << this->NumberOfThreads
      << (this->NumberOfThreads == 0 ? " (all cores)" : "") << "\n";
+  os << indent << "Backend: "
+     << (this->Backend == AUTOMATIC_BACKEND ? "Automatic"
+                                            : (this->Backend == CPU_BACKEND ? "CPU" : "OpenGL"))
+     << " (last frame: " << (this->Internal->LastBackend == CPU_BACKEND ? "CPU" : "OpenGL")
+     << ")\n";
   os << indent << "OrderMethod: " << this->GetOrderMethodAsString() << "\n";
   os << indent << "MaxSubArraySize: " << this->MaxSubArraySize << "\n";
   os << indent << "UseFloatingPointFrameBuffer: " << this->UseFloatingPointFrameBuffer << "\n";

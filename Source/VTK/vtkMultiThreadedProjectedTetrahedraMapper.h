@@ -11,7 +11,12 @@
  * sorted back to front by a parallel visibility order (radix sort or the paper's partition
  * sort), and every tetrahedron is decomposed into exactly 4 triangles written at a fixed
  * stride into one vertex and one index buffer (race-free, identical for any thread count).
- * The buffers are uploaded once and drawn with one call, blended back to front.
+ * Two backends draw the buffers (DESIGN.md section 7): OpenGL uploads them once and draws
+ * them with one call, blended back to front; the CPU compositor blends the same triangles
+ * with the same per-fragment math on the CPU, tiled and multi-threaded, and puts the image
+ * into the framebuffer over what is drawn, respecting the depth of opaque geometry. The
+ * CPU compositor is chosen automatically where OpenGL is itself a software rasterizer
+ * (Mesa llvmpipe, softpipe, SWR: machines without a GPU), where it is several times faster.
  *
  * Input, scalar selection (scalar mode, array by name or id, point or cell data, vector
  * component or magnitude as the colour transfer function's vector mode selects) and the
@@ -62,6 +67,27 @@ public:
     PARTITION_SORT = 0, ///< the paper's Algorithm 1: sequential partition, parallel sorts
     RADIX_SORT = 1      ///< parallel LSD radix sort: no sequential phase (default)
   };
+
+  /// How the sorted triangles reach the framebuffer.
+  enum Backends
+  {
+    AUTOMATIC_BACKEND = 0, ///< CPU compositor on software OpenGL, OpenGL otherwise (default)
+    OPENGL_BACKEND = 1,    ///< upload and draw with OpenGL blending
+    CPU_BACKEND = 2        ///< the multi-threaded CPU compositor
+  };
+
+  ///@{
+  /// Backend selection, and the backend the last Render used.
+  vtkSetClampMacro(Backend, int, AUTOMATIC_BACKEND, CPU_BACKEND);
+  vtkGetMacro(Backend, int);
+  void SetBackendToAutomatic() { this->SetBackend(AUTOMATIC_BACKEND); }
+  void SetBackendToOpenGL() { this->SetBackend(OPENGL_BACKEND); }
+  void SetBackendToCPU() { this->SetBackend(CPU_BACKEND); }
+  int GetLastBackend();
+  ///@}
+
+  /// True if `renderer` names a software rasterizer (llvmpipe, softpipe, SWR, swrast).
+  static bool IsSoftwareRenderer(const char* renderer);
 
   ///@{
   /**
@@ -114,8 +140,12 @@ public:
   double GetDepthKeySeconds();
   double GetOrderSeconds();
   double GetDecomposeSeconds();
+  /// OpenGL backend: buffer upload. CPU backend: depth read-back and image upload.
   double GetUploadSeconds();
+  /// OpenGL backend: the draw call. CPU backend: the quad that blends the image in.
   double GetDrawSeconds();
+  /// CPU backend: compositing on the CPU (0 with the OpenGL backend).
+  double GetCompositeSeconds();
   /// transform + depth keys + order + decompose
   double GetCPUStageSeconds();
   ///@}
@@ -133,6 +163,7 @@ protected:
   vtkMultiThreadedProjectedTetrahedraMapper();
   ~vtkMultiThreadedProjectedTetrahedraMapper() override;
 
+  int Backend = AUTOMATIC_BACKEND;
   int NumberOfThreads = 0;
   int OrderMethod = RADIX_SORT;
   vtkIdType MaxSubArraySize = 32768;
@@ -144,11 +175,11 @@ private:
     const vtkMultiThreadedProjectedTetrahedraMapper&) = delete;
   void operator=(const vtkMultiThreadedProjectedTetrahedraMapper&) = delete;
 
-  void DrawTriangles(
-    vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window, const double range[2]);
+  void CompositeOnCPU(vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window);
+  void DrawTriangles(vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window);
   bool PrepareFramebuffer(vtkOpenGLRenderWindow* window, int width, int height);
-  void UpdateTransferFunction(
-    vtkOpenGLRenderWindow* window, vtkVolumeProperty* property, const double range[2]);
+  void UpdateTransferFunctionTable(vtkVolumeProperty* property, const double range[2]);
+  static double UnitDistance(vtkVolume* volume);
 
   class Internals;
   std::unique_ptr<Internals> Internal;

@@ -38,7 +38,7 @@ vtkSmartPointer<vtkVolumeProperty> MakeProperty(double low, double high, double 
 struct Scene
 {
   vtkUnstructuredGrid* grid = nullptr;
-  vtkVolumeProperty* property = nullptr;
+  vtkSmartPointer<vtkVolumeProperty> property;
   bool perspective = true;
   int size = 200;
   double azimuth = 30, elevation = 20;

@@ -23,6 +23,7 @@
 #include "vtkPolyDataMapper.h"
 #include "vtkProjectedTetrahedraMapper.h"
 #include "vtkProperty.h"
+#include "vtkRenderWindow.h"
 #include "vtkRenderer.h"
 #include "vtkSphereSource.h"
 #include "vtkUnstructuredGrid.h"
@@ -32,6 +33,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <string>
 
 namespace
 {
@@ -42,23 +44,44 @@ struct Thresholds
   double rmse, fractionOver;
 };
 
-/// Renders `scene` with both mappers, saves both images, and checks the difference.
+using Mapper = vtkMultiThreadedProjectedTetrahedraMapper;
+
+vtkSmartPointer<Mapper> MakeMapper(int backend)
+{
+  auto mapper = vtkSmartPointer<Mapper>::New();
+  mapper->SetBackend(backend);
+  return mapper;
+}
+
+const char* BackendName(int backend)
+{
+  return backend == Mapper::CPU_BACKEND ? "cpu" : "gl";
+}
+
+/// Renders `scene` with VTK's PT and with this mapper through each backend, saves the
+/// images, and checks the differences.
 void ExpectCloseToVTK(const Scene& scene, const std::string& name, Thresholds limit)
 {
-  vtkNew<vtkMultiThreadedProjectedTetrahedraMapper> mtpt;
   vtkNew<vtkProjectedTetrahedraMapper> vtkpt;
-  auto ours = Render(scene, mtpt);
   auto theirs = Render(scene, vtkpt);
-  Save(ours, name + "-mtpt");
   Save(theirs, name + "-vtkpt");
-  const ImageDifference d = Compare(ours, theirs);
-  std::printf("%s: RMSE %.5f, worst %.3f, pixels over 0.1: %.4f%%, covered %.1f%%\n", name.c_str(),
-    d.rmse, d.worst, 100 * d.fractionOver, 100 * CoveredFraction(ours, Background));
-  ::testing::Test::RecordProperty(name + "_rmse", std::to_string(d.rmse));
-  EXPECT_LT(d.rmse, limit.rmse) << name;
-  EXPECT_LT(d.fractionOver, limit.fractionOver) << name;
-  // Not a blank frame: the volume covers a good part of the window.
-  EXPECT_GT(CoveredFraction(ours, Background), 0.15) << name;
+  for (int backend : { Mapper::OPENGL_BACKEND, Mapper::CPU_BACKEND })
+  {
+    const std::string label = name + "-" + BackendName(backend);
+    auto mapper = MakeMapper(backend);
+    auto ours = Render(scene, mapper);
+    EXPECT_EQ(mapper->GetLastBackend(), backend);
+    Save(ours, label);
+    const ImageDifference d = Compare(ours, theirs);
+    std::printf("%s vs VTK PT: RMSE %.5f, worst %.3f, pixels over 0.1: %.4f%%, covered %.1f%%\n",
+      label.c_str(), d.rmse, d.worst, 100 * d.fractionOver,
+      100 * CoveredFraction(ours, Background));
+    ::testing::Test::RecordProperty(label + "_rmse", std::to_string(d.rmse));
+    EXPECT_LT(d.rmse, limit.rmse) << label;
+    EXPECT_LT(d.fractionOver, limit.fractionOver) << label;
+    // Not a blank frame: the volume covers a good part of the window.
+    EXPECT_GT(CoveredFraction(ours, Background), 0.15) << label;
+  }
 }
 
 class MapperImages : public ::testing::Test
@@ -171,21 +194,90 @@ TEST_F(MapperImages, OpaqueGeometryOccludesTheVolume)
 TEST_F(MapperImages, IdenticalForEveryThreadCountAndOrderMethod)
 {
   const Scene s = BluntFinScene(true);
-  vtkNew<vtkMultiThreadedProjectedTetrahedraMapper> reference;
-  reference->SetNumberOfThreads(1);
-  reference->SetOrderMethodToPartitionSort();
-  auto expected = Render(s, reference);
-  for (int threads : { 2, 3, 8 })
+  for (int backend : { Mapper::OPENGL_BACKEND, Mapper::CPU_BACKEND })
   {
-    for (bool radix : { false, true })
+    auto reference = MakeMapper(backend);
+    reference->SetNumberOfThreads(1);
+    reference->SetOrderMethodToPartitionSort();
+    auto expected = Render(s, reference);
+    for (int threads : { 2, 3, 8 })
     {
-      vtkNew<vtkMultiThreadedProjectedTetrahedraMapper> mapper;
-      mapper->SetNumberOfThreads(threads);
-      mapper->SetOrderMethod(radix ? vtkMultiThreadedProjectedTetrahedraMapper::RADIX_SORT
-                                   : vtkMultiThreadedProjectedTetrahedraMapper::PARTITION_SORT);
-      const ImageDifference d = Compare(Render(s, mapper), expected);
-      EXPECT_EQ(d.worst, 0.0) << threads << " threads, radix " << radix;
+      for (bool radix : { false, true })
+      {
+        auto mapper = MakeMapper(backend);
+        mapper->SetNumberOfThreads(threads);
+        mapper->SetOrderMethod(radix ? Mapper::RADIX_SORT : Mapper::PARTITION_SORT);
+        const ImageDifference d = Compare(Render(s, mapper), expected);
+        EXPECT_EQ(d.worst, 0.0) << BackendName(backend) << ", " << threads << " threads, radix "
+                                << radix;
+      }
     }
+  }
+}
+
+/// The CPU compositor and the OpenGL path draw the same triangles with the same math:
+/// they may differ only where the rasterizers' coverage rules and interpolation rounding
+/// differ (pixels on triangle edges, Mesa's 8-bit texture filter weights).
+TEST_F(MapperImages, CPUCompositorMatchesTheOpenGLPath)
+{
+  struct Case
+  {
+    const char* name;
+    Scene scene;
+  };
+  Scene sphere = BoxScene(false);
+  sphere.customize = [](vtkVolume*, vtkRenderer* renderer)
+  {
+    vtkNew<vtkSphereSource> source;
+    source->SetCenter(0.3, 0.2, 0.4);
+    source->SetRadius(0.6);
+    vtkNew<vtkPolyDataMapper> mapper;
+    mapper->SetInputConnection(source->GetOutputPort());
+    vtkNew<vtkActor> actor;
+    actor->SetMapper(mapper);
+    renderer->AddActor(actor);
+  };
+  const Case cases[] = { { "box-ortho", BoxScene(false) }, { "box-persp", BoxScene(true) },
+    { "bluntfin-persp", BluntFinScene(true) }, { "bluntfin-ortho", BluntFinScene(false) },
+    { "box-sphere", sphere } };
+  for (const Case& c : cases)
+  {
+    auto gl = MakeMapper(Mapper::OPENGL_BACKEND);
+    auto cpu = MakeMapper(Mapper::CPU_BACKEND);
+    const ImageDifference d = Compare(Render(c.scene, cpu), Render(c.scene, gl));
+    std::printf("%s CPU vs GL: RMSE %.5f, worst %.3f, pixels over 0.1: %.4f%%\n", c.name, d.rmse,
+      d.worst, 100 * d.fractionOver);
+    EXPECT_LT(d.rmse, 0.004) << c.name;
+    EXPECT_LT(d.fractionOver, 0.0005) << c.name;
+  }
+}
+
+TEST_F(MapperImages, AutomaticBackendPicksTheCPUCompositorOnSoftwareOpenGL)
+{
+  EXPECT_TRUE(Mapper::IsSoftwareRenderer("llvmpipe (LLVM 15.0.6, 256 bits)"));
+  EXPECT_TRUE(Mapper::IsSoftwareRenderer("Gallium 0.4 on softpipe"));
+  EXPECT_FALSE(Mapper::IsSoftwareRenderer("NVIDIA H100 80GB HBM3/PCIe/SSE2"));
+  EXPECT_FALSE(Mapper::IsSoftwareRenderer(nullptr));
+  // Ask this machine's OpenGL which renderer it is, and check the automatic choice.
+  vtkNew<vtkRenderWindow> window;
+  window->SetOffScreenRendering(1);
+  window->Render();
+  const std::string capabilities = window->ReportCapabilities();
+  const std::string key = "OpenGL renderer string:";
+  const auto at = capabilities.find(key);
+  ASSERT_NE(at, std::string::npos);
+  const std::string renderer =
+    capabilities.substr(at + key.size(), capabilities.find('\n', at) - at - key.size());
+  auto mapper = MakeMapper(Mapper::AUTOMATIC_BACKEND);
+  Render(BoxScene(true), mapper);
+  if (Mapper::IsSoftwareRenderer(renderer.c_str()))
+  {
+    EXPECT_EQ(mapper->GetLastBackend(), Mapper::CPU_BACKEND) << renderer;
+    EXPECT_GT(mapper->GetCompositeSeconds(), 0.0);
+  }
+  else
+  {
+    EXPECT_EQ(mapper->GetLastBackend(), Mapper::OPENGL_BACKEND) << renderer;
   }
 }
 
@@ -193,11 +285,15 @@ TEST_F(MapperImages, IdenticalForEveryThreadCountAndOrderMethod)
 /// identical up to driver rounding.
 void ExpectMatchesBaseline(const Scene& scene, const std::string& name)
 {
-  vtkNew<vtkMultiThreadedProjectedTetrahedraMapper> mapper;
-  const ImageDifference d = CompareWithBaseline(Render(scene, mapper), name);
-  std::printf("baseline %s: RMSE %.5f worst %.3f\n", name.c_str(), d.rmse, d.worst);
-  EXPECT_LT(d.rmse, 0.004) << name;
-  EXPECT_LT(d.fractionOver, 0.001) << name;
+  for (int backend : { Mapper::OPENGL_BACKEND, Mapper::CPU_BACKEND })
+  {
+    const std::string label = name + (backend == Mapper::CPU_BACKEND ? "_CPU" : "");
+    auto mapper = MakeMapper(backend);
+    const ImageDifference d = CompareWithBaseline(Render(scene, mapper), label);
+    std::printf("baseline %s: RMSE %.5f worst %.3f\n", label.c_str(), d.rmse, d.worst);
+    EXPECT_LT(d.rmse, 0.004) << label;
+    EXPECT_LT(d.fractionOver, 0.001) << label;
+  }
 }
 
 TEST_F(MapperImages, BaselineSyntheticPerspective)

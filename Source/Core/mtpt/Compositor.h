@@ -1,0 +1,91 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file Compositor.h
+ * @brief The CPU compositor: blends the decomposition's sorted triangles into a float RGBA
+ * image with the per-fragment math of the OpenGL path, for machines where OpenGL is itself
+ * a software rasterizer (DESIGN.md section 7).
+ *
+ * Conventions:
+ * - Window coordinates: pixel (x, y) covers [x, x+1) x [y, y+1), y up (OpenGL), its
+ *   sample point is the centre (x + 0.5, y + 0.5). NDC map to window coordinates as
+ *   X = (x_ndc + 1) / 2 * width, Y = (y_ndc + 1) / 2 * height; depth = (z_ndc + 1) / 2.
+ * - Coverage: a pixel belongs to a triangle if its centre is inside, or on an edge that is
+ *   a top or a left edge (the top-left rule of Direct3D and of Mesa's rasterizers), so a
+ *   pixel on an edge shared by two triangles is covered exactly once.
+ * - Shading, exactly as the GL path's shaders: each vertex is classified as the mean of
+ *   the transfer function at its front and back scalars (colour rgb, attenuation a);
+ *   colour, attenuation and segment length are interpolated linearly in screen space;
+ *   fragment opacity = 1 - exp(-a * length / unitDistance).
+ * - Blending, as glBlendFuncSeparate(SRC_ALPHA, ONE_MINUS_SRC_ALPHA, ONE,
+ *   ONE_MINUS_SRC_ALPHA) starting from a transparent image: the result is premultiplied
+ *   colour and coverage alpha, to be composited over the framebuffer with (ONE,
+ *   ONE_MINUS_SRC_ALPHA). Slots are drawn in buffer order (back to front).
+ * - Depth: with an opaque depth image, a fragment is kept if its depth is <= the opaque
+ *   depth at that pixel (GL_LEQUAL, no depth writes).
+ */
+#ifndef mtpt_Compositor_h
+#define mtpt_Compositor_h
+
+#include "mtpt/Decompose.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace mtpt
+{
+
+/**
+ * A transfer function sampled over a scalar range: `table` holds `size` RGBA entries,
+ * entry i at scalar low + i * (high - low) / (size - 1), read with linear interpolation and
+ * clamped at both ends (the GL path's texture with linear filtering and clamp to edge).
+ */
+struct TransferFunctionTable
+{
+  const float* table = nullptr; ///< 4 * size floats
+  int size = 0;
+  double low = 0, high = 1;
+
+  /// RGBA at `scalar`.
+  void Lookup(float scalar, float rgba[4]) const;
+};
+
+struct CompositeSettings
+{
+  int width = 0, height = 0;
+  TransferFunctionTable transferFunction;
+  double unitDistance = 1.0;
+  /// Optional window depth of opaque geometry in [0, 1], width * height floats, row 0 at
+  /// the bottom. Null: no occlusion.
+  const float* opaqueDepth = nullptr;
+  /// Side of the square screen tiles that threads own (default 32).
+  int tileSize = 32;
+};
+
+/**
+ * Composites slots [0, count) of the decomposition buffers into `rgba` (4 * width *
+ * height floats, premultiplied, row 0 at the bottom), which it resizes and clears.
+ *
+ * Thread safety: reentrant. Determinism: every pixel is blended by one thread in slot
+ * order, so the image is bit-identical for any thread count.
+ */
+class Compositor
+{
+public:
+  void Composite(const TetVertex* vertices, const std::uint32_t* indices, std::size_t count,
+    const CompositeSettings& settings, std::vector<float>& rgba, int threads);
+
+  /// (Triangle, tile) pairs that covered at least one pixel centre in the last Composite.
+  std::size_t RasterizedTriangles() const { return this->Rasterized; }
+
+private:
+  std::vector<float> Classified;           ///< per vertex: rgb, attenuation
+  std::vector<std::uint32_t> BinCounts;    ///< per thread and tile
+  std::vector<std::uint32_t> BinStarts;    ///< per tile, into BinTriangles
+  std::vector<std::uint32_t> BinTriangles; ///< triangle ids (slot * 4 + k) per tile
+  std::size_t Rasterized = 0;
+};
+
+} // namespace mtpt
+
+#endif

@@ -1,0 +1,248 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The CPU compositor: coverage rule, fragment math, occlusion, and determinism.
+#include "TestHelpers.h"
+
+#include "mtpt/Compositor.h"
+#include "mtpt/FramePipeline.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+namespace
+{
+
+using mtpt::TetVertex;
+
+/// A constant transfer function: colour (r, g, b), attenuation a.
+std::vector<float> ConstantTable(float r, float g, float b, float a)
+{
+  return { r, g, b, a, r, g, b, a };
+}
+
+mtpt::CompositeSettings Settings(int w, int h, const std::vector<float>& table)
+{
+  mtpt::CompositeSettings s;
+  s.width = w;
+  s.height = h;
+  s.transferFunction = { table.data(), static_cast<int>(table.size() / 4), 0.0, 1.0 };
+  s.unitDistance = 1.0;
+  s.tileSize = 4; // several tiles even in small test images
+  return s;
+}
+
+/// NDC of window coordinate `p` in a window of `size` pixels.
+float Ndc(double p, int size)
+{
+  return static_cast<float>(2.0 * p / size - 1.0);
+}
+
+/// One slot holding a square split along a diagonal into two triangles, with a constant
+/// segment length (so every covered pixel gets the same opacity).
+void SquareSlot(double x0, double y0, double x1, double y1, int w, int h, float length,
+  TetVertex vertices[5], std::uint32_t indices[12], std::uint32_t base)
+{
+  const double xs[4] = { x0, x1, x1, x0 }, ys[4] = { y0, y0, y1, y1 };
+  for (int i = 0; i < 4; ++i)
+  {
+    vertices[i] = TetVertex{ Ndc(xs[i], w), Ndc(ys[i], h), 0.0f, 0.5f, 0.5f, length };
+  }
+  vertices[4] = vertices[0];
+  const std::uint32_t local[12] = { 0, 1, 2, 0, 2, 3, 4, 4, 4, 4, 4, 4 };
+  for (int i = 0; i < 12; ++i)
+  {
+    indices[i] = base + local[i];
+  }
+}
+
+TEST(Compositor, SharedEdgesAreCoveredExactlyOnce)
+{
+  const int w = 16, h = 12;
+  const auto table = ConstantTable(1.0f, 0.5f, 0.25f, 1.0f);
+  // Two squares sharing the edge x = 6.5, every edge and the diagonals through pixel
+  // centres: the worst case for a coverage rule.
+  TetVertex vertices[10];
+  std::uint32_t indices[24];
+  SquareSlot(0.5, 1.5, 6.5, 7.5, w, h, 0.3f, vertices, indices, 0);
+  SquareSlot(6.5, 1.5, 12.5, 7.5, w, h, 0.3f, vertices + 5, indices + 12, 5);
+  for (int threads : { 1, 3 })
+  {
+    mtpt::Compositor compositor;
+    std::vector<float> rgba;
+    compositor.Composite(vertices, indices, 2, Settings(w, h, table), rgba, threads);
+    const float once = 1.0f - std::exp(-0.3f);
+    int covered = 0;
+    for (int y = 0; y < h; ++y)
+    {
+      for (int x = 0; x < w; ++x)
+      {
+        const float alpha = rgba[4 * (y * w + x) + 3];
+        // Top-left rule, y up: the left edge x = 0.5 and the top edge y = 7.5 own their
+        // centres; the right edge x = 12.5 and the bottom edge y = 1.5 do not.
+        const bool inside = x >= 0 && x <= 11 && y >= 2 && y <= 7;
+        if (inside)
+        {
+          ++covered;
+          ASSERT_FLOAT_EQ(alpha, once) << x << "," << y;
+          ASSERT_FLOAT_EQ(rgba[4 * (y * w + x)], once * 1.0f);
+        }
+        else
+        {
+          ASSERT_EQ(alpha, 0.0f) << x << "," << y;
+        }
+      }
+    }
+    EXPECT_EQ(covered, 12 * 6);
+  }
+}
+
+TEST(Compositor, FragmentMathMatchesTheShader)
+{
+  // One triangle with different attributes at its vertices; check one pixel by hand.
+  const int w = 8, h = 8;
+  std::vector<float> table = { 0.0f, 0.0f, 1.0f, 0.0f, 1.0f, 0.0f, 0.0f, 2.0f }; // 2 entries
+  TetVertex v[5] = { { Ndc(0, w), Ndc(0, h), 0.0f, 0.0f, 0.0f, 0.0f },
+    { Ndc(8, w), Ndc(0, h), 0.0f, 1.0f, 1.0f, 0.0f },
+    { Ndc(0, w), Ndc(8, h), 0.0f, 0.0f, 1.0f, 2.0f }, // thick: front 0, back 1, length 2
+    {}, {} };
+  const std::uint32_t idx[12] = { 0, 1, 2, 3, 3, 3, 3, 3, 3, 3, 3, 3 };
+  mtpt::Compositor compositor;
+  std::vector<float> rgba;
+  auto settings = Settings(w, h, table);
+  settings.unitDistance = 0.5;
+  compositor.Composite(v, idx, 1, settings, rgba, 2);
+  // Pixel (1, 2): centre (1.5, 2.5); barycentrics l1 = 1.5/8, l2 = 2.5/8, l0 = 0.5.
+  const double l0 = 0.5, l1 = 1.5 / 8, l2 = 2.5 / 8;
+  // Vertex classification: mean of the table at front and back scalars.
+  const double c0[4] = { 0, 0, 1, 0 }, c1[4] = { 1, 0, 0, 2 }, c2[4] = { 0.5, 0, 0.5, 1 };
+  double f[4];
+  for (int c = 0; c < 4; ++c)
+  {
+    f[c] = l0 * c0[c] + l1 * c1[c] + l2 * c2[c];
+  }
+  const double length = l2 * 2.0;
+  const double opacity = 1.0 - std::exp(-f[3] * length / 0.5);
+  const float* p = rgba.data() + 4 * (2 * w + 1);
+  EXPECT_NEAR(p[3], opacity, 1e-6);
+  EXPECT_NEAR(p[0], opacity * f[0], 1e-6);
+  EXPECT_NEAR(p[2], opacity * f[2], 1e-6);
+  // Outside the triangle nothing is drawn.
+  EXPECT_EQ(rgba[4 * (7 * w + 7) + 3], 0.0f);
+}
+
+TEST(Compositor, BlendsBackToFrontInSlotOrder)
+{
+  const int w = 4, h = 4;
+  // Slot 0 red behind, slot 1 blue in front, both covering the whole window.
+  std::vector<float> table = { 1, 0, 0, 1, 0, 0, 1, 1 }; // scalar 0 red, 1 blue
+  TetVertex v[10];
+  std::uint32_t idx[24];
+  SquareSlot(-1, -1, 5, 5, w, h, 0.5f, v, idx, 0);
+  SquareSlot(-1, -1, 5, 5, w, h, 0.5f, v + 5, idx + 12, 5);
+  for (int i = 0; i < 5; ++i)
+  {
+    v[i].scalarFront = v[i].scalarBack = 0.0f;
+    v[5 + i].scalarFront = v[5 + i].scalarBack = 1.0f;
+  }
+  mtpt::Compositor compositor;
+  std::vector<float> rgba;
+  compositor.Composite(v, idx, 2, Settings(w, h, table), rgba, 2);
+  const float a = 1.0f - std::exp(-0.5f);
+  EXPECT_NEAR(rgba[0], (1 - a) * a, 1e-6); // red, seen through the blue layer
+  EXPECT_NEAR(rgba[2], a, 1e-6);
+  EXPECT_NEAR(rgba[3], a + (1 - a) * a, 1e-6);
+}
+
+TEST(Compositor, OpaqueDepthOccludesFragmentsBehindIt)
+{
+  const int w = 8, h = 8;
+  const auto table = ConstantTable(1, 1, 1, 1);
+  TetVertex v[5];
+  std::uint32_t idx[12];
+  SquareSlot(-1, -1, 9, 9, w, h, 1.0f, v, idx, 0); // NDC z 0: window depth 0.5
+  std::vector<float> depth(w * h, 1.0f);
+  for (int x = 0; x < w; ++x)
+  {
+    depth[x] = 0.25f;    // row 0: an opaque surface in front of the volume
+    depth[w + x] = 0.5f; // row 1: at exactly the same depth (GL_LEQUAL keeps it)
+  }
+  auto settings = Settings(w, h, table);
+  settings.opaqueDepth = depth.data();
+  mtpt::Compositor compositor;
+  std::vector<float> rgba;
+  compositor.Composite(v, idx, 1, settings, rgba, 2);
+  for (int x = 0; x < w; ++x)
+  {
+    EXPECT_EQ(rgba[4 * x + 3], 0.0f);
+    EXPECT_GT(rgba[4 * (w + x) + 3], 0.0f);
+    EXPECT_GT(rgba[4 * (5 * w + x) + 3], 0.0f);
+  }
+}
+
+TEST(Compositor, TransferFunctionLookupInterpolatesAndClamps)
+{
+  const std::vector<float> table = { 0, 0, 0, 0, 1, 2, 3, 4, 3, 2, 1, 0 };
+  const mtpt::TransferFunctionTable tf{ table.data(), 3, 10.0, 20.0 };
+  float rgba[4];
+  tf.Lookup(12.5f, rgba); // halfway between entries 0 and 1
+  EXPECT_FLOAT_EQ(rgba[0], 0.5f);
+  EXPECT_FLOAT_EQ(rgba[3], 2.0f);
+  tf.Lookup(17.5f, rgba);
+  EXPECT_FLOAT_EQ(rgba[0], 2.0f);
+  tf.Lookup(-100.0f, rgba);
+  EXPECT_FLOAT_EQ(rgba[1], 0.0f);
+  tf.Lookup(1e9f, rgba);
+  EXPECT_FLOAT_EQ(rgba[2], 1.0f);
+}
+
+TEST(Compositor, BitIdenticalForEveryThreadCountAndTileSize)
+{
+  const mtpt::test::TetMesh mesh = mtpt::test::JitteredGrid(12, 21);
+  mtpt::FrameInput input;
+  input.points = mesh.Points();
+  input.cells = mesh.Cells();
+  input.scalars = { mesh.scalars.data(), mtpt::ScalarsView::Association::Points };
+  input.modelView = mtpt::test::LookAt({ 1.0, 1.5, 4.0 }, { 0, 0, 0 }, { 0, 1, 0 });
+  input.projection = mtpt::test::Perspective(45, 1.25, 1, 10);
+  input.perspective = true;
+  mtpt::FramePipeline pipeline;
+  ASSERT_TRUE(pipeline.Run(input, 2));
+  std::vector<float> table;
+  for (int i = 0; i < 64; ++i)
+  {
+    const float t = i / 63.0f;
+    table.insert(table.end(), { t, 1 - t, 0.5f, 2.0f * t });
+  }
+  auto settings = Settings(100, 80, table);
+  settings.transferFunction.low = -2.0;
+  settings.transferFunction.high = 3.0;
+  settings.unitDistance = 0.2;
+  settings.tileSize = 32;
+  mtpt::Compositor compositor;
+  std::vector<float> reference;
+  compositor.Composite(pipeline.Vertices().data(), pipeline.Indices().data(),
+    pipeline.TetrahedronCount(), settings, reference, 1);
+  float maxAlpha = 0;
+  for (std::size_t i = 3; i < reference.size(); i += 4)
+  {
+    ASSERT_TRUE(std::isfinite(reference[i]));
+    maxAlpha = std::max(maxAlpha, reference[i]);
+  }
+  EXPECT_GT(maxAlpha, 0.3f); // something substantial was drawn
+  for (int threads : { 2, 3, 8 })
+  {
+    for (int tile : { 7, 32, 200 })
+    {
+      settings.tileSize = tile;
+      std::vector<float> image;
+      compositor.Composite(pipeline.Vertices().data(), pipeline.Indices().data(),
+        pipeline.TetrahedronCount(), settings, image, threads);
+      ASSERT_EQ(0, std::memcmp(image.data(), reference.data(), image.size() * sizeof(float)))
+        << threads << " threads, tile " << tile;
+    }
+  }
+}
+
+} // namespace
