@@ -16,11 +16,13 @@ void TransferFunctionTable::Lookup(float scalar, float rgba[4]) const
 {
   // Texel-space coordinate of a texture sampled with linear filtering and clamp to edge.
   const double span = this->high > this->low ? this->high - this->low : 1.0;
-  double t = (static_cast<double>(scalar) - this->low) / span * (this->size - 1);
-  t = t < 0 ? 0 : (t > this->size - 1 ? this->size - 1 : t);
+  const auto scale = static_cast<float>((this->size - 1) / span);
+  float t = (scalar - static_cast<float>(this->low)) * scale;
+  const auto last = static_cast<float>(this->size - 1);
+  t = t > 0.0f ? (t < last ? t : last) : 0.0f; // NaN maps to 0
   const int i = static_cast<int>(t);
   const int j = i + 1 < this->size ? i + 1 : i;
-  const auto f = static_cast<float>(t - i);
+  const float f = t - static_cast<float>(i);
   const float* a = this->table + 4 * i;
   const float* b = this->table + 4 * j;
   for (int k = 0; k < 4; ++k)
@@ -101,6 +103,161 @@ inline Edge MakeEdge(std::int64_t ax, std::int64_t ay, std::int64_t bx, std::int
   return e;
 }
 
+/// Rasterizes a set-up triangle over the pixel range in `s` (the caller may have clipped
+/// it): coverage by the top-left rule on 8-bit sub-pixel fixed point, the shaders' fragment
+/// math, GL_LEQUAL against the opaque depth, "over" blending. True if it covered a pixel.
+bool RasterizeTriangle(const TetVertex* vertices, const std::uint32_t* tri, const ScreenTriangle& s,
+  int width, const float* opaqueDepth, const TransferFunctionTable& tf, float inverseUnit,
+  float* rgba)
+{
+  for (int k = 0; k < 3; ++k)
+  {
+    if (!(std::fabs(s.x[k]) < FixedPointLimit && std::fabs(s.y[k]) < FixedPointLimit))
+    {
+      return false; // beyond 4 million pixels off screen: the GL path clips such triangles
+    }
+  }
+  std::int64_t fx[3], fy[3];
+  for (int k = 0; k < 3; ++k)
+  {
+    fx[k] = static_cast<std::int64_t>(std::nearbyint(s.x[k] * SubpixelScale));
+    fy[k] = static_cast<std::int64_t>(std::nearbyint(s.y[k] * SubpixelScale));
+  }
+  // Orient counter-clockwise so that inside means all edge functions positive.
+  const std::int64_t area2 = (fx[1] - fx[0]) * (fy[2] - fy[0]) - (fy[1] - fy[0]) * (fx[2] - fx[0]);
+  if (area2 == 0)
+  {
+    return false;
+  }
+  int order[3] = { 0, 1, 2 };
+  if (area2 < 0)
+  {
+    std::swap(order[1], order[2]);
+  }
+  Edge edges[3];
+  for (int k = 0; k < 3; ++k)
+  {
+    const int a = order[(k + 1) % 3], c = order[(k + 2) % 3];
+    edges[k] = MakeEdge(fx[a], fy[a], fx[c], fy[c]); // the edge opposite order[k]
+  }
+  const double inverseArea = 1.0 / static_cast<double>(area2 < 0 ? -area2 : area2);
+  constexpr std::int64_t Step = std::int64_t(1) << SubpixelBits;
+  constexpr std::int64_t Half = Step / 2;
+
+  bool classified = false;
+  float attributes[3][6]; // per vertex: r, g, b, attenuation, length, NDC z
+  bool any = false;
+  for (int y = s.ymin; y <= s.ymax; ++y)
+  {
+    const std::int64_t py = y * Step + Half;
+    const std::int64_t px0 = s.xmin * Step + Half;
+    // Edge functions at the row's first pixel, then stepped by one pixel.
+    std::int64_t e[3];
+    for (int k = 0; k < 3; ++k)
+    {
+      e[k] = edges[k].a * px0 + edges[k].b * py + edges[k].c;
+    }
+    for (int x = s.xmin; x <= s.xmax;
+         ++x, e[0] += edges[0].a * Step, e[1] += edges[1].a * Step, e[2] += edges[2].a * Step)
+    {
+      bool inside = true;
+      for (int k = 0; k < 3; ++k)
+      {
+        inside = inside && (e[k] > 0 || (e[k] == 0 && edges[k].owns));
+      }
+      if (!inside)
+      {
+        continue;
+      }
+      any = true;
+      if (!classified)
+      {
+        for (int k = 0; k < 3; ++k)
+        {
+          const TetVertex& v = vertices[tri[order[k]]];
+          float front[4], back[4];
+          tf.Lookup(v.scalarFront, front);
+          tf.Lookup(v.scalarBack, back);
+          for (int c = 0; c < 4; ++c)
+          {
+            attributes[k][c] = 0.5f * (front[c] + back[c]);
+          }
+          attributes[k][4] = v.thickness;
+          attributes[k][5] = v.z;
+        }
+        classified = true;
+      }
+      // Barycentric weight of vertex order[k]: its opposite edge's function over the area.
+      const double l0 = e[0] * inverseArea, l1 = e[1] * inverseArea, l2 = e[2] * inverseArea;
+      float f[6];
+      for (int c = 0; c < 6; ++c)
+      {
+        f[c] =
+          static_cast<float>(l0 * attributes[0][c] + l1 * attributes[1][c] + l2 * attributes[2][c]);
+      }
+      if (f[5] < -1.0f || f[5] > 1.0f)
+      {
+        continue; // clipped by the near or far plane
+      }
+      const std::size_t pixel = static_cast<std::size_t>(y) * width + x;
+      if (opaqueDepth && 0.5f * (f[5] + 1.0f) > opaqueDepth[pixel])
+      {
+        continue;
+      }
+      const float opacity = 1.0f - std::exp(-f[3] * f[4] * inverseUnit);
+      if (!(opacity > 0.0f))
+      {
+        continue;
+      }
+      float* d = rgba + 4 * pixel;
+      const float keep = 1.0f - opacity;
+      d[0] = opacity * f[0] + keep * d[0];
+      d[1] = opacity * f[1] + keep * d[1];
+      d[2] = opacity * f[2] + keep * d[2];
+      d[3] = opacity + keep * d[3];
+    }
+  }
+  return any;
+}
+
+} // namespace
+
+namespace
+{
+
+/// Rows [y0, y1] and columns [x0, x1] whose pixel centres the slot's 5 vertices span
+/// (empty when y0 > y1 or x0 > x1). All of the slot's triangles lie inside.
+inline void SlotPixels(
+  const TetVertex* slot, int width, int height, int& x0, int& x1, int& y0, int& y1)
+{
+  float minX = slot[0].x, maxX = slot[0].x, minY = slot[0].y, maxY = slot[0].y;
+  for (int k = 1; k < 5; ++k)
+  {
+    minX = std::min(minX, slot[k].x);
+    maxX = std::max(maxX, slot[k].x);
+    minY = std::min(minY, slot[k].y);
+    maxY = std::max(maxY, slot[k].y);
+  }
+  // Conservative (half a 1/1000 pixel of slack): SetUp decides exactly. The clamps keep
+  // the conversions to int defined for huge or infinite values; NaN gives an empty range.
+  const float lx = (minX + 1.0f) * 0.5f * width - 0.5f, hx = (maxX + 1.0f) * 0.5f * width - 0.5f;
+  const float ly = (minY + 1.0f) * 0.5f * height - 0.5f, hy = (maxY + 1.0f) * 0.5f * height - 0.5f;
+  auto low = [](float v, int size)
+  { return v > 0.0f ? (v < size ? static_cast<int>(std::ceil(v - 1e-3f)) : size) : 0; };
+  auto high = [](float v, int size) {
+    return v < size - 1.0f ? (v > -1.0f ? static_cast<int>(std::floor(v + 1e-3f)) : -1) : size - 1;
+  };
+  x0 = low(lx, width);
+  x1 = high(hx, width);
+  y0 = low(ly, height);
+  y1 = high(hy, height);
+  if (!(lx == lx && hx == hx && ly == ly && hy == hy))
+  {
+    y0 = 1;
+    y1 = 0;
+  }
+}
+
 } // namespace
 
 void Compositor::Composite(const TetVertex* vertices, const std::uint32_t* indices,
@@ -115,193 +272,79 @@ void Compositor::Composite(const TetVertex* vertices, const std::uint32_t* indic
     return;
   }
   const int nthreads = detail::ResolveThreads(threads);
-  const int tileSize = std::max(4, settings.tileSize);
-  const int tilesX = (width + tileSize - 1) / tileSize;
-  const int tilesY = (height + tileSize - 1) / tileSize;
-  const std::size_t tiles = static_cast<std::size_t>(tilesX) * tilesY;
-  const std::size_t triangles = 4 * count;
+  const auto slots = static_cast<std::int64_t>(count);
 
-  // Binning, in two passes over the same static partition of the triangles, so that each
-  // tile's list is in triangle order (thread 0's part first, then thread 1's...).
-  this->BinCounts.assign(static_cast<std::size_t>(nthreads) * tiles, 0);
-  auto forEachTile = [&](const ScreenTriangle& s, auto&& visit)
-  {
-    for (int ty = s.ymin / tileSize; ty <= s.ymax / tileSize; ++ty)
-    {
-      for (int tx = s.xmin / tileSize; tx <= s.xmax / tileSize; ++tx)
-      {
-        visit(static_cast<std::size_t>(ty) * tilesX + tx);
-      }
-    }
-  };
+  // Balance: count the slots that reach a pixel by their first row, then cut the image
+  // into one band of rows per thread holding about the same number of slots.
+  this->RowCounts.assign(static_cast<std::size_t>(nthreads) * (height + 1), 0);
 #pragma omp parallel num_threads(nthreads)
   {
-    const int t = omp_get_thread_num();
-    const int team = omp_get_num_threads();
-    const std::size_t begin = triangles * t / team, end = triangles * (t + 1) / team;
-    std::uint32_t* counts = this->BinCounts.data() + static_cast<std::size_t>(t) * tiles;
-    ScreenTriangle s{};
-    for (std::size_t i = begin; i < end; ++i)
+    std::uint32_t* rows =
+      this->RowCounts.data() + static_cast<std::size_t>(omp_get_thread_num()) * (height + 1);
+#pragma omp for schedule(static)
+    for (std::int64_t k = 0; k < slots; ++k)
     {
-      if (SetUp(vertices, indices, i, width, height, s))
+      int x0, x1, y0, y1;
+      SlotPixels(vertices + 5 * k, width, height, x0, x1, y0, y1);
+      if (x0 <= x1 && y0 <= y1)
       {
-        forEachTile(s, [&](std::size_t tile) { ++counts[tile]; });
-      }
-    }
-#pragma omp barrier
-#pragma omp single
-    {
-      this->BinStarts.assign(tiles + 1, 0);
-      std::uint32_t running = 0;
-      for (std::size_t tile = 0; tile < tiles; ++tile)
-      {
-        this->BinStarts[tile] = running;
-        for (int u = 0; u < team; ++u)
-        {
-          std::uint32_t& c = this->BinCounts[static_cast<std::size_t>(u) * tiles + tile];
-          const std::uint32_t n = c;
-          c = running; // becomes thread u's write position in this tile's list
-          running += n;
-        }
-      }
-      this->BinStarts[tiles] = running;
-      this->BinTriangles.resize(running);
-    } // implicit barrier
-    for (std::size_t i = begin; i < end; ++i)
-    {
-      if (SetUp(vertices, indices, i, width, height, s))
-      {
-        forEachTile(s,
-          [&](std::size_t tile)
-          { this->BinTriangles[counts[tile]++] = static_cast<std::uint32_t>(i); });
+        ++rows[y0];
       }
     }
   }
+  std::vector<std::uint64_t> cumulative(static_cast<std::size_t>(height) + 1, 0);
+  for (int y = 0; y < height; ++y)
+  {
+    std::uint64_t n = 0;
+    for (int t = 0; t < nthreads; ++t)
+    {
+      n += this->RowCounts[static_cast<std::size_t>(t) * (height + 1) + y];
+    }
+    cumulative[y + 1] = cumulative[y] + n;
+  }
+  const int bands = std::min(nthreads, height);
+  std::vector<int> bandStart(static_cast<std::size_t>(bands) + 1, height);
+  bandStart[0] = 0;
+  for (int b = 1; b < bands; ++b)
+  {
+    const std::uint64_t target = cumulative[height] * b / bands;
+    int y = static_cast<int>(
+      std::lower_bound(cumulative.begin(), cumulative.end(), target) - cumulative.begin());
+    bandStart[b] = std::max(bandStart[b - 1] + 1, std::min(y, height - (bands - b)));
+  }
 
-  // Rasterization: one thread per tile at a time, triangles in order within the tile.
+  // Each band: every slot in order, whole tetrahedra rejected by their bounding box, the
+  // rest rasterized triangle by triangle into this band's rows only.
   const float inverseUnit = static_cast<float>(1.0 / settings.unitDistance);
   const TransferFunctionTable& tf = settings.transferFunction;
   std::size_t rasterized = 0;
-#pragma omp parallel for num_threads(nthreads) schedule(dynamic, 1) reduction(+ : rasterized)
-  for (std::int64_t tileIndex = 0; tileIndex < static_cast<std::int64_t>(tiles); ++tileIndex)
+#pragma omp parallel for num_threads(nthreads) schedule(static, 1) reduction(+ : rasterized)
+  for (int band = 0; band < bands; ++band)
   {
-    const int tx = static_cast<int>(tileIndex % tilesX), ty = static_cast<int>(tileIndex / tilesX);
-    const int tileX0 = tx * tileSize, tileY0 = ty * tileSize;
-    const int tileX1 = std::min(width - 1, tileX0 + tileSize - 1);
-    const int tileY1 = std::min(height - 1, tileY0 + tileSize - 1);
+    const int rowBegin = bandStart[band], rowEnd = bandStart[band + 1] - 1;
     ScreenTriangle s{};
-    for (std::uint32_t b = this->BinStarts[tileIndex]; b < this->BinStarts[tileIndex + 1]; ++b)
+    for (std::int64_t k = 0; k < slots; ++k)
     {
-      const std::size_t t = this->BinTriangles[b];
-      SetUp(vertices, indices, t, width, height, s);
-      const std::uint32_t* tri = indices + 12 * (t / 4) + 3 * (t % 4);
-      const bool fixedPoint = std::fabs(s.x[0]) < FixedPointLimit &&
-        std::fabs(s.x[1]) < FixedPointLimit && std::fabs(s.x[2]) < FixedPointLimit &&
-        std::fabs(s.y[0]) < FixedPointLimit && std::fabs(s.y[1]) < FixedPointLimit &&
-        std::fabs(s.y[2]) < FixedPointLimit;
-      if (!fixedPoint)
-      {
-        continue; // beyond 4 million pixels off screen: the GL path clips such triangles
-      }
-      std::int64_t fx[3], fy[3];
-      for (int k = 0; k < 3; ++k)
-      {
-        fx[k] = std::llround(s.x[k] * SubpixelScale);
-        fy[k] = std::llround(s.y[k] * SubpixelScale);
-      }
-      // Orient counter-clockwise so that inside means all edge functions positive.
-      const std::int64_t area2 =
-        (fx[1] - fx[0]) * (fy[2] - fy[0]) - (fy[1] - fy[0]) * (fx[2] - fx[0]);
-      if (area2 == 0)
+      int sx0, sx1, sy0, sy1;
+      SlotPixels(vertices + 5 * k, width, height, sx0, sx1, sy0, sy1);
+      if (sx0 > sx1 || sy0 > sy1 || sy1 < rowBegin || sy0 > rowEnd)
       {
         continue;
       }
-      int order[3] = { 0, 1, 2 };
-      if (area2 < 0)
+      for (std::size_t t = 4 * static_cast<std::size_t>(k); t < 4 * static_cast<std::size_t>(k) + 4;
+           ++t)
       {
-        std::swap(order[1], order[2]);
-      }
-      Edge edges[3];
-      for (int k = 0; k < 3; ++k)
-      {
-        const int a = order[(k + 1) % 3], c = order[(k + 2) % 3];
-        edges[k] = MakeEdge(fx[a], fy[a], fx[c], fy[c]); // edge opposite order[k]
-      }
-      const double inverseArea = 1.0 / static_cast<double>(area2 < 0 ? -area2 : area2);
-
-      bool classified = false;
-      float attributes[3][6]; // per vertex: r, g, b, attenuation, length, NDC z
-      const int x0 = std::max(s.xmin, tileX0), x1 = std::min(s.xmax, tileX1);
-      const int y0 = std::max(s.ymin, tileY0), y1 = std::min(s.ymax, tileY1);
-      bool any = false;
-      for (int y = y0; y <= y1; ++y)
-      {
-        const std::int64_t py =
-          static_cast<std::int64_t>(y) * (1 << SubpixelBits) + (1 << (SubpixelBits - 1));
-        for (int x = x0; x <= x1; ++x)
+        if (!SetUp(vertices, indices, t, width, height, s) || s.ymax < rowBegin || s.ymin > rowEnd)
         {
-          const std::int64_t px =
-            static_cast<std::int64_t>(x) * (1 << SubpixelBits) + (1 << (SubpixelBits - 1));
-          std::int64_t e[3];
-          bool inside = true;
-          for (int k = 0; k < 3; ++k)
-          {
-            e[k] = edges[k].a * px + edges[k].b * py + edges[k].c;
-            inside = inside && (e[k] > 0 || (e[k] == 0 && edges[k].owns));
-          }
-          if (!inside)
-          {
-            continue;
-          }
-          any = true;
-          if (!classified)
-          {
-            for (int k = 0; k < 3; ++k)
-            {
-              const TetVertex& v = vertices[tri[order[k]]];
-              float front[4], back[4];
-              tf.Lookup(v.scalarFront, front);
-              tf.Lookup(v.scalarBack, back);
-              for (int c = 0; c < 4; ++c)
-              {
-                attributes[k][c] = 0.5f * (front[c] + back[c]);
-              }
-              attributes[k][4] = v.thickness;
-              attributes[k][5] = v.z;
-            }
-            classified = true;
-          }
-          // Barycentric weight of vertex order[k] is its opposite edge's function / area.
-          const double l0 = e[0] * inverseArea, l1 = e[1] * inverseArea, l2 = e[2] * inverseArea;
-          float f[6];
-          for (int c = 0; c < 6; ++c)
-          {
-            f[c] = static_cast<float>(
-              l0 * attributes[0][c] + l1 * attributes[1][c] + l2 * attributes[2][c]);
-          }
-          if (f[5] < -1.0f || f[5] > 1.0f)
-          {
-            continue; // clipped by the near or far plane
-          }
-          const std::size_t pixel = static_cast<std::size_t>(y) * width + x;
-          if (settings.opaqueDepth && 0.5f * (f[5] + 1.0f) > settings.opaqueDepth[pixel])
-          {
-            continue;
-          }
-          const float opacity = 1.0f - std::exp(-f[3] * f[4] * inverseUnit);
-          if (!(opacity > 0.0f))
-          {
-            continue;
-          }
-          float* d = rgba.data() + 4 * pixel;
-          const float keep = 1.0f - opacity;
-          d[0] = opacity * f[0] + keep * d[0];
-          d[1] = opacity * f[1] + keep * d[1];
-          d[2] = opacity * f[2] + keep * d[2];
-          d[3] = opacity + keep * d[3];
+          continue;
         }
+        s.ymin = std::max(s.ymin, rowBegin);
+        s.ymax = std::min(s.ymax, rowEnd);
+        rasterized += RasterizeTriangle(vertices, indices + 12 * (t / 4) + 3 * (t % 4), s, width,
+                        settings.opaqueDepth, tf, inverseUnit, rgba.data())
+          ? 1
+          : 0;
       }
-      rasterized += any ? 1 : 0;
     }
   }
   this->Rasterized = rasterized;

@@ -16,6 +16,9 @@
  *   the transfer function at its front and back scalars (colour rgb, attenuation a);
  *   colour, attenuation and segment length are interpolated linearly in screen space;
  *   fragment opacity = 1 - exp(-a * length / unitDistance).
+ * - Threads: the image is cut into one band of rows per thread, balanced by the number of
+ *   tetrahedra starting in each row; each thread streams through all slots in order,
+ *   rejects whole tetrahedra by their bounding box, and rasterizes into its own rows.
  * - Blending, as glBlendFuncSeparate(SRC_ALPHA, ONE_MINUS_SRC_ALPHA, ONE,
  *   ONE_MINUS_SRC_ALPHA) starting from a transparent image: the result is premultiplied
  *   colour and coverage alpha, to be composited over the framebuffer with (ONE,
@@ -58,8 +61,6 @@ struct CompositeSettings
   /// Optional window depth of opaque geometry in [0, 1], width * height floats, row 0 at
   /// the bottom. Null: no occlusion.
   const float* opaqueDepth = nullptr;
-  /// Side of the square screen tiles that threads own (default 32).
-  int tileSize = 32;
 };
 
 /**
@@ -75,14 +76,11 @@ public:
   void Composite(const TetVertex* vertices, const std::uint32_t* indices, std::size_t count,
     const CompositeSettings& settings, std::vector<float>& rgba, int threads);
 
-  /// (Triangle, tile) pairs that covered at least one pixel centre in the last Composite.
+  /// (Triangle, band) pairs that covered at least one pixel centre in the last Composite.
   std::size_t RasterizedTriangles() const { return this->Rasterized; }
 
 private:
-  std::vector<float> Classified;           ///< per vertex: rgb, attenuation
-  std::vector<std::uint32_t> BinCounts;    ///< per thread and tile
-  std::vector<std::uint32_t> BinStarts;    ///< per tile, into BinTriangles
-  std::vector<std::uint32_t> BinTriangles; ///< triangle ids (slot * 4 + k) per tile
+  std::vector<std::uint32_t> RowCounts; ///< per thread: slots by their first pixel row
   std::size_t Rasterized = 0;
 };
 
