@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# A downstream project finds the installed package: install this build to a temporary
+# prefix, build Examples/ against it with find_package(MTPT), render the default data set,
+# and check that the image shows something.
+# Usage: test_downstream.sh <source-dir> <build-dir>
+set -euo pipefail
+source_dir="$1"
+build_dir="$2"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+cmake --install "$build_dir" --prefix "$work/prefix" >/dev/null
+cmake -S "$source_dir/Examples" -B "$work/example" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+  -DCMAKE_PREFIX_PATH="$work/prefix" >/dev/null
+cmake --build "$work/example" >/dev/null
+"$source_dir/Testing/xvfb-launch.sh" "$work/example/mtpt_render" --size 160x120 --frames 1 \
+  --output "$work/out.png"
+/usr/bin/python3 - "$work/out.png" <<'PY'
+import sys
+from vtkmodules.vtkIOImage import vtkPNGReader
+reader = vtkPNGReader()
+reader.SetFileName(sys.argv[1])
+reader.Update()
+pixels = reader.GetOutput().GetPointData().GetScalars()
+n = pixels.GetNumberOfTuples()
+c = pixels.GetNumberOfComponents()
+drawn = sum(1 for i in range(n) if any(pixels.GetValue(i * c + k) < 250 for k in range(3)))
+print("downstream render: %d of %d pixels drawn" % (drawn, n))
+sys.exit(0 if drawn > 0.01 * n else 1)
+PY

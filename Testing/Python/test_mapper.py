@@ -1,0 +1,117 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""The mapper from Python (Debian's python3-vtk9): import, settings, and a rendering
+compared with VTK's own vtkProjectedTetrahedraMapper on the same scene."""
+import math
+import os
+import sys
+import traceback
+
+from vtkmodules.vtkCommonDataModel import vtkPiecewiseFunction
+from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
+from vtkmodules.vtkRenderingCore import (vtkColorTransferFunction, vtkRenderer,
+                                         vtkRenderWindow, vtkVolume, vtkVolumeProperty,
+                                         vtkWindowToImageFilter)
+from vtkmodules.vtkRenderingVolume import vtkProjectedTetrahedraMapper
+import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 (factory overrides)
+import vtkmodules.vtkRenderingVolumeOpenGL2  # noqa: F401
+
+from mtpt import vtkMultiThreadedProjectedTetrahedraMapper as Mapper
+
+SOURCE = os.environ.get("MTPT_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
+BACKGROUND = (0.1, 0.1, 0.2)
+
+
+def load():
+    reader = vtkXMLUnstructuredGridReader()
+    reader.SetFileName(os.path.join(SOURCE, "Data", "bluntfin_tets.vtu"))
+    reader.Update()
+    grid = reader.GetOutput()
+    grid.GetPointData().SetActiveScalars("Density")
+    return grid
+
+
+def render(grid, mapper, size=200):
+    color = vtkColorTransferFunction()
+    color.AddRGBPoint(0.19, 0.2, 0.3, 0.9)
+    color.AddRGBPoint(4.98, 0.9, 0.2, 0.1)
+    opacity = vtkPiecewiseFunction()
+    opacity.AddPoint(0.19, 0.05)
+    opacity.AddPoint(4.98, 0.9)
+    prop = vtkVolumeProperty()
+    prop.SetColor(color)
+    prop.SetScalarOpacity(opacity)
+    prop.SetScalarOpacityUnitDistance(1.5)
+    mapper.SetInputData(grid)
+    volume = vtkVolume()
+    volume.SetMapper(mapper)
+    volume.SetProperty(prop)
+    renderer = vtkRenderer()
+    renderer.SetBackground(*BACKGROUND)
+    renderer.AddVolume(volume)
+    window = vtkRenderWindow()
+    window.SetOffScreenRendering(1)
+    window.SetMultiSamples(0)
+    window.SetSize(size, size)
+    window.AddRenderer(renderer)
+    renderer.ResetCamera()
+    renderer.GetActiveCamera().Azimuth(30)
+    renderer.GetActiveCamera().Elevation(20)
+    renderer.ResetCameraClippingRange()
+    window.Render()
+    grab = vtkWindowToImageFilter()
+    grab.SetInput(window)
+    grab.SetInputBufferTypeToRGB()
+    grab.ReadFrontBufferOff()
+    grab.Update()
+    image = grab.GetOutput().GetPointData().GetScalars()
+    values = [image.GetValue(i) / 255.0 for i in range(image.GetNumberOfValues())]
+    mapper.ReleaseGraphicsResources(window)
+    return values
+
+
+def test_import_and_settings():
+    mapper = Mapper()
+    assert mapper.GetClassName() == "vtkMultiThreadedProjectedTetrahedraMapper"
+    assert mapper.IsA("vtkUnstructuredGridVolumeMapper")
+    mapper.SetNumberOfThreads(2)
+    assert mapper.GetNumberOfThreads() == 2
+    mapper.SetNumberOfThreads(-1)  # rejected with a warning
+    assert mapper.GetNumberOfThreads() == 2
+    mapper.SetOrderMethodToPartitionSort()
+    assert mapper.GetOrderMethod() == Mapper.PARTITION_SORT
+    assert mapper.GetOrderMethodAsString() == "PartitionSort"
+    mapper.SetBackendToCPU()
+    assert mapper.GetBackend() == Mapper.CPU_BACKEND
+
+
+def test_render_matches_vtk_pt():
+    grid = load()
+    ours = render(grid, Mapper())
+    theirs = render(grid, vtkProjectedTetrahedraMapper())
+    rmse = math.sqrt(sum((a - b) ** 2 for a, b in zip(ours, theirs)) / len(ours))
+    covered = sum(1 for i in range(0, len(ours), 3)
+                  if any(abs(ours[i + c] - BACKGROUND[c]) > 2 / 255 for c in range(3)))
+    print("RMSE against vtkProjectedTetrahedraMapper: %.5f; covered pixels: %d" % (rmse, covered))
+    # Measured 0.0083 (the C++ image tests explain the difference: the perspective sort and
+    # VTK's 8-bit colours, concentrated near the fin's tip).
+    assert rmse < 0.02, rmse
+    assert covered > 0.15 * len(ours) / 3, covered
+
+
+def main():
+    tests = [test_import_and_settings, test_render_matches_vtk_pt]
+    failed = 0
+    for test in tests:
+        try:
+            test()
+            print("PASS", test.__name__)
+        except Exception:  # report every failure, then exit non-zero
+            failed += 1
+            print("FAIL", test.__name__)
+            traceback.print_exc()
+    print("%d passed, %d failed" % (len(tests) - failed, failed))
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
