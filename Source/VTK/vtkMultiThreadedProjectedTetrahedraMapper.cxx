@@ -32,6 +32,7 @@
 #include "vtkUnstructuredGridBase.h"
 #include "vtkVolume.h"
 #include "vtkVolumeProperty.h"
+#include "vtkWeakPointer.h"
 #include "vtk_glew.h"
 
 #include <algorithm>
@@ -75,8 +76,9 @@ public:
   mtpt::vtkMTPTMeshAdapter Adapter;
   mtpt::FramePipeline Pipeline;
 
-  // OpenGL resources, owned by LastWindow's context.
-  vtkRenderWindow* LastWindow = nullptr;
+  // OpenGL resources, owned by LastWindow's context. Weak: a window destroyed while this
+  // mapper was not in it must not be touched again.
+  vtkWeakPointer<vtkRenderWindow> LastWindow;
   vtkNew<vtkOpenGLVertexBufferObject> VertexBuffer;
   vtkOpenGLHelper Triangles;
   vtkNew<vtkTextureObject> TransferFunction;
@@ -107,6 +109,7 @@ public:
 
   // Messages are reported once per change of what caused them, not every frame.
   vtkMTimeType ReportedInputTime = 0;
+  vtkMTimeType BlendWarningTime = 0;
   std::string ReportedMessage;
   bool Report(vtkUnstructuredGridBase* input, const std::string& message)
   {
@@ -127,7 +130,8 @@ vtkMultiThreadedProjectedTetrahedraMapper::vtkMultiThreadedProjectedTetrahedraMa
 
 vtkMultiThreadedProjectedTetrahedraMapper::~vtkMultiThreadedProjectedTetrahedraMapper()
 {
-  this->ReleaseGraphicsResources(this->Internal->LastWindow);
+  // As VTK's own mappers: a live window has released its props' resources already.
+  this->ReleaseGraphicsResources(nullptr);
 }
 
 void vtkMultiThreadedProjectedTetrahedraMapper::SetNumberOfThreads(int threads)
@@ -269,8 +273,9 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
     return;
   }
   if (this->BlendMode != vtkUnstructuredGridVolumeMapper::COMPOSITE_BLEND &&
-    in.Report(input, "blend mode"))
+    in.BlendWarningTime != this->GetMTime())
   {
+    in.BlendWarningTime = this->GetMTime(); // once per change of the mapper's settings
     vtkWarningMacro(<< "only composite blending is supported; drawing with it");
   }
   if (!in.Adapter.Update(input))
