@@ -350,39 +350,52 @@ inline void DecomposeSlot(const Access& cells, const DecomposeInput& input,
   }
 }
 
-template <typename Access>
-void DecomposeAll(const Access& cells, const DecomposeInput& input, const SortKey* order,
-  std::size_t count, TetVertex* vertices, std::uint32_t* indices, ProjectionClass* classes,
-  int threads)
+/// The input's cell scalars, or null when its scalars are per point.
+inline const float* CellScalars(const DecomposeInput& input)
 {
-  const auto n = static_cast<std::int64_t>(count);
-  const float* cellScalars =
-    input.scalars.association == ScalarsView::Association::Cells ? input.scalars.values : nullptr;
-  const bool streaming = CanStream(vertices, indices);
+  return input.scalars.association == ScalarsView::Association::Cells ? input.scalars.values
+                                                                      : nullptr;
+}
+
+/// Runs body(i) for i in [0, n) on `threads` threads, each making its streaming stores
+/// visible before the region ends.
+template <typename Body>
+void ParallelSlots(std::int64_t n, int threads, Body&& body)
+{
 #pragma omp parallel num_threads(threads)
   {
 #pragma omp for schedule(static) nowait
-    for (std::int64_t k = 0; k < n; ++k)
+    for (std::int64_t i = 0; i < n; ++i)
     {
-      DecomposeSlot(
-        cells, input, cellScalars, CellOfKey(order[k]), k, vertices, indices, classes, streaming);
+      body(i);
     }
     FinishStores();
   }
 }
 
 template <typename Access>
+void DecomposeAll(const Access& cells, const DecomposeInput& input, const SortKey* order,
+  std::size_t count, TetVertex* vertices, std::uint32_t* indices, ProjectionClass* classes,
+  int threads)
+{
+  const float* cellScalars = CellScalars(input);
+  const bool streaming = CanStream(vertices, indices);
+  ParallelSlots(static_cast<std::int64_t>(count), threads,
+    [&](std::int64_t k)
+    {
+      DecomposeSlot(
+        cells, input, cellScalars, CellOfKey(order[k]), k, vertices, indices, classes, streaming);
+    });
+}
+
+template <typename Access>
 void DecomposeAllByRank(const Access& cells, const DecomposeInput& input, const std::uint32_t* rank,
   TetVertex* vertices, std::uint32_t* indices, ProjectionClass* classes, int threads)
 {
-  const auto n = static_cast<std::int64_t>(input.cells.cellCount);
-  const float* cellScalars =
-    input.scalars.association == ScalarsView::Association::Cells ? input.scalars.values : nullptr;
+  const float* cellScalars = CellScalars(input);
   const bool streaming = CanStream(vertices, indices);
-#pragma omp parallel num_threads(threads)
-  {
-#pragma omp for schedule(static) nowait
-    for (std::int64_t c = 0; c < n; ++c)
+  ParallelSlots(static_cast<std::int64_t>(input.cells.cellCount), threads,
+    [&](std::int64_t c)
     {
       const std::uint32_t k = rank[c];
       if (k != NotInOrder)
@@ -390,9 +403,7 @@ void DecomposeAllByRank(const Access& cells, const DecomposeInput& input, const 
         DecomposeSlot(cells, input, cellScalars, static_cast<std::uint32_t>(c), k, vertices,
           indices, classes, streaming);
       }
-    }
-    FinishStores();
-  }
+    });
 }
 
 } // namespace
