@@ -11,12 +11,13 @@
  * sorted back to front by a parallel visibility order (radix sort or the paper's partition
  * sort), and every tetrahedron is decomposed into exactly 4 triangles written at a fixed
  * stride into one vertex and one index buffer (race-free, identical for any thread count).
- * Two backends draw the buffers (DESIGN.md section 7): OpenGL uploads them once and draws
- * them with one call, blended back to front; the CPU compositor blends the same triangles
- * with the same per-fragment math on the CPU, tiled and multi-threaded, and puts the image
- * into the framebuffer over what is drawn, respecting the depth of opaque geometry. The
- * CPU compositor is chosen automatically where OpenGL is itself a software rasterizer
- * (Mesa llvmpipe, softpipe, SWR: machines without a GPU), where it is several times faster.
+ * Two backends draw the buffers: OpenGL uploads them once and draws them with one call,
+ * blended back to front; the CPU compositor blends the same triangles with the same
+ * per-fragment math on the CPU, multi-threaded by bands of rows, and puts the image into the
+ * framebuffer over what is drawn, respecting the depth of opaque geometry. The CPU
+ * compositor is chosen automatically where OpenGL is itself a software rasterizer (Mesa
+ * llvmpipe, softpipe, SWR: machines without a GPU); there it measured 6-7x faster than
+ * VTK's PT at 16x16, 1.6-2.8x at 512x512 and level at 1024x1024 (see the README).
  *
  * Input, scalar selection (scalar mode, array by name or id, point or cell data, vector
  * component or magnitude as the colour transfer function's vector mode selects) and the
