@@ -225,6 +225,14 @@ bool RasterizeTriangle(const TetVertex* vertices, const std::uint32_t* tri, cons
 namespace
 {
 
+/// A slot that draws nothing (not drawable, or culled): its indices all repeat its first
+/// vertex, while every drawn slot's first triangle has distinct corners. Reading two
+/// indices instead of five vertices keeps the pass over culled slots cheap.
+inline bool DegenerateSlot(const std::uint32_t* indices, std::int64_t slot)
+{
+  return indices[12 * slot] == indices[12 * slot + 1];
+}
+
 /// Rows [y0, y1] and columns [x0, x1] whose pixel centres the slot's 5 vertices span
 /// (empty when y0 > y1 or x0 > x1). All of the slot's triangles lie inside.
 inline void SlotPixels(
@@ -284,6 +292,10 @@ void Compositor::Composite(const TetVertex* vertices, const std::uint32_t* indic
 #pragma omp for schedule(static)
     for (std::int64_t k = 0; k < slots; ++k)
     {
+      if (DegenerateSlot(indices, k))
+      {
+        continue;
+      }
       int x0, x1, y0, y1;
       SlotPixels(vertices + 5 * k, width, height, x0, x1, y0, y1);
       if (x0 <= x1 && y0 <= y1)
@@ -325,6 +337,10 @@ void Compositor::Composite(const TetVertex* vertices, const std::uint32_t* indic
     ScreenTriangle s{};
     for (std::int64_t k = 0; k < slots; ++k)
     {
+      if (DegenerateSlot(indices, k))
+      {
+        continue;
+      }
       int sx0, sx1, sy0, sy1;
       SlotPixels(vertices + 5 * k, width, height, sx0, sx1, sy0, sy1);
       if (sx0 > sx1 || sy0 > sy1 || sy1 < rowBegin || sy0 > rowEnd)

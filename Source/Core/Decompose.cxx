@@ -8,6 +8,7 @@
 #include <immintrin.h>
 #endif
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -317,6 +318,27 @@ inline bool CanStream(const TetVertex* vertices, const std::uint32_t* indices)
            7u) == 0;
 }
 
+/// Whether the window-space bounding box of the corners contains a pixel centre of the
+/// viewport. Conservative by 1e-6 pixel, so rounding never culls a covering cell.
+inline bool CoversPixelCentre(const ProjectedPoint* const c[4], int width, int height)
+{
+  double minX = c[0]->x, maxX = c[0]->x, minY = c[0]->y, maxY = c[0]->y;
+  for (int i = 1; i < 4; ++i)
+  {
+    minX = std::min(minX, c[i]->x);
+    maxX = std::max(maxX, c[i]->x);
+    minY = std::min(minY, c[i]->y);
+    maxY = std::max(maxY, c[i]->y);
+  }
+  constexpr double Margin = 1e-6;
+  // Pixel centres x + 0.5 for x in [0, width): window x = (ndc + 1) / 2 * width.
+  const double x0 = std::max(0.0, std::ceil((minX + 1.0) * 0.5 * width - 0.5 - Margin));
+  const double x1 = std::min(width - 1.0, std::floor((maxX + 1.0) * 0.5 * width - 0.5 + Margin));
+  const double y0 = std::max(0.0, std::ceil((minY + 1.0) * 0.5 * height - 0.5 - Margin));
+  const double y1 = std::min(height - 1.0, std::floor((maxY + 1.0) * 0.5 * height - 0.5 + Margin));
+  return x0 <= x1 && y0 <= y1;
+}
+
 /// Slot k, holding `cell`.
 template <typename Access>
 inline void DecomposeSlot(const Access& cells, const DecomposeInput& input,
@@ -337,7 +359,18 @@ inline void DecomposeSlot(const Access& cells, const DecomposeInput& input,
     {
       scalars[i] = cellScalars ? cellScalars[cell] : corners[i]->scalar;
     }
-    kind = Decompose(corners, scalars, slotVertices, slotIndices, base).kind;
+    const bool cull = input.viewportWidth > 0 && input.viewportHeight > 0 &&
+      (corners[0]->usable & corners[1]->usable & corners[2]->usable & corners[3]->usable) != 0 &&
+      !CoversPixelCentre(corners, input.viewportWidth, input.viewportHeight);
+    if (cull)
+    {
+      WriteDegenerateSlot(slotVertices, slotIndices, base);
+      kind = ProjectionClass::CoversNoPixel;
+    }
+    else
+    {
+      kind = Decompose(corners, scalars, slotVertices, slotIndices, base).kind;
+    }
   }
   else
   {

@@ -70,6 +70,8 @@ bool FramePipeline::Run(const FrameInput& input, int threads)
   decompose.pointCount = input.points.count;
   decompose.cells = input.cells;
   decompose.scalars = input.scalars;
+  decompose.viewportWidth = input.viewportWidth;
+  decompose.viewportHeight = input.viewportHeight;
   // Visiting cells in storage order and scattering the slots is several times faster than
   // gathering cells in visibility order on meshes larger than the cache (Decompose.h).
   InvertOrder(this->SortedKeys.data(), n, n, this->Rank.data(), threads);

@@ -348,6 +348,30 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
     ToMatrix4(camera->GetProjectionTransformMatrix(renderer->GetTiledAspectRatio(), -1.0, 1.0));
   frame.perspective = camera->GetParallelProjection() == 0;
 
+  int backend = this->Backend;
+  if (backend == AUTOMATIC_BACKEND)
+  {
+    if (in.SoftwareRenderer < 0)
+    {
+      in.SoftwareRenderer =
+        IsSoftwareRenderer(reinterpret_cast<const char*>(glGetString(GL_RENDERER))) ? 1 : 0;
+    }
+    backend = in.SoftwareRenderer ? CPU_BACKEND : OPENGL_BACKEND;
+  }
+  in.LastBackend = backend;
+  // Cells that cover no pixel centre produce no fragment when every pixel is sampled once
+  // at its centre: always in the CPU compositor, in OpenGL unless the target multisamples.
+  GLint sampleBuffers = 0;
+  if (backend == OPENGL_BACKEND)
+  {
+    glGetIntegerv(GL_SAMPLE_BUFFERS, &sampleBuffers);
+  }
+  if (sampleBuffers == 0)
+  {
+    int x0, y0;
+    renderer->GetTiledSizeAndOrigin(&frame.viewportWidth, &frame.viewportHeight, &x0, &y0);
+  }
+
   in.Pipeline.SetOrderMethod(this->OrderMethod == PARTITION_SORT ? mtpt::OrderMethod::PartitionSort
                                                                  : mtpt::OrderMethod::RadixSort,
     static_cast<std::size_t>(this->MaxSubArraySize));
@@ -361,17 +385,6 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
   in.Tetrahedra = static_cast<vtkIdType>(count);
 
   this->UpdateTransferFunctionTable(property, range);
-  int backend = this->Backend;
-  if (backend == AUTOMATIC_BACKEND)
-  {
-    if (in.SoftwareRenderer < 0)
-    {
-      in.SoftwareRenderer =
-        IsSoftwareRenderer(reinterpret_cast<const char*>(glGetString(GL_RENDERER))) ? 1 : 0;
-    }
-    backend = in.SoftwareRenderer ? CPU_BACKEND : OPENGL_BACKEND;
-  }
-  in.LastBackend = backend;
   if (backend == CPU_BACKEND)
   {
     this->CompositeOnCPU(renderer, volume, window);

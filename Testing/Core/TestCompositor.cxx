@@ -240,4 +240,63 @@ TEST(Compositor, BitIdenticalForEveryThreadCount)
   }
 }
 
+TEST(Compositor, CullingCellsThatCoverNoPixelChangesNothing)
+{
+  // A fine mesh in a small image: most cells are sub-pixel. Culling them in the
+  // decomposition must leave the composited image bit-identical, keep every other slot
+  // unchanged, and turn culled slots into degenerate ones.
+  const mtpt::test::TetMesh mesh = mtpt::test::JitteredGrid(16, 5); // 24,576 tetrahedra
+  mtpt::FrameInput input;
+  input.points = mesh.Points();
+  input.cells = mesh.Cells();
+  input.scalars = { mesh.scalars.data(), mtpt::ScalarsView::Association::Points };
+  input.modelView = mtpt::test::LookAt({ 0.8, 1.2, 3.5 }, { 0.4, 0, 0 }, { 0, 1, 0 });
+  input.projection = mtpt::test::Perspective(40, 1.0, 1, 10);
+  input.perspective = true;
+  std::vector<float> table;
+  for (int i = 0; i < 32; ++i)
+  {
+    const float t = i / 31.0f;
+    table.insert(table.end(), { t, 0.3f, 1 - t, 3.0f * t });
+  }
+  for (int size : { 9, 24, 64 })
+  {
+    mtpt::FramePipeline full, culled;
+    ASSERT_TRUE(full.Run(input, 2));
+    input.viewportWidth = input.viewportHeight = size;
+    ASSERT_TRUE(culled.Run(input, 2));
+    input.viewportWidth = input.viewportHeight = 0;
+    std::size_t culledSlots = 0;
+    for (std::size_t k = 0; k < full.TetrahedronCount(); ++k)
+    {
+      const TetVertex* a = &full.Vertices()[5 * k];
+      const TetVertex* b = &culled.Vertices()[5 * k];
+      const bool degenerate = culled.Indices()[12 * k] == 5 * k &&
+        culled.Indices()[12 * k + 11] == 5 * k && b[0].x == 0.0f && b[4].thickness == 0.0f;
+      if (std::memcmp(a, b, 5 * sizeof(TetVertex)) != 0)
+      {
+        ASSERT_TRUE(degenerate) << "slot " << k;
+        ++culledSlots;
+      }
+    }
+    auto settings = Settings(size, size, table);
+    settings.transferFunction.low = -2.0;
+    settings.transferFunction.high = 3.0;
+    settings.unitDistance = 0.3;
+    mtpt::Compositor compositor;
+    std::vector<float> fromFull, fromCulled;
+    compositor.Composite(full.Vertices().data(), full.Indices().data(), full.TetrahedronCount(),
+      settings, fromFull, 2);
+    compositor.Composite(culled.Vertices().data(), culled.Indices().data(),
+      culled.TetrahedronCount(), settings, fromCulled, 2);
+    ASSERT_EQ(0, std::memcmp(fromFull.data(), fromCulled.data(), fromFull.size() * sizeof(float)))
+      << size << " px";
+    if (size == 9)
+    {
+      EXPECT_GT(culledSlots, full.TetrahedronCount() / 2); // most cells are sub-pixel here
+    }
+    EXPECT_GT(culledSlots, 0u);
+  }
+}
+
 } // namespace

@@ -60,6 +60,11 @@ enum class ProjectionClass : std::uint8_t
   Quadrilateral = 2,      ///< class 2: two opposite edges cross
   VertexOnEdge = 3,       ///< class 3: one point projects onto an edge of the other three
   CoincidentVertices = 4, ///< class 4: two points project onto the same position
+  /// Culled (only with DecomposeInput::viewportWidth/Height set): the projection's bounding
+  /// box contains no pixel centre of the viewport, so no rasterizer that samples at pixel
+  /// centres (OpenGL without multisampling, the CPU compositor) would produce a fragment.
+  /// The slot is degenerate, as for NotDrawable.
+  CoversNoPixel = 5,
 };
 
 /**
@@ -113,6 +118,10 @@ struct DecomposeInput
   CellsView cells;
   /// Only cell scalars are read from here; point scalars travel in the records.
   ScalarsView scalars;
+  /// Viewport size in pixels. When both are > 0, cells whose projection covers no pixel
+  /// centre (sub-pixel cells, cells off screen) become CoversNoPixel slots: same image,
+  /// much less work for small images. 0: no culling.
+  int viewportWidth = 0, viewportHeight = 0;
 };
 
 /**

@@ -33,6 +33,9 @@ struct FrameInput
   Matrix4 modelView = IdentityMatrix();  ///< view * model
   Matrix4 projection = IdentityMatrix(); ///< eye to clip coordinates
   bool perspective = false;
+  /// Viewport in pixels; when set, cells covering no pixel centre are culled (see
+  /// DecomposeInput). Leave 0 for multisampled targets.
+  int viewportWidth = 0, viewportHeight = 0;
 };
 
 /**
