@@ -32,6 +32,10 @@
  *   and back scalars of the thick vertex, from a 4096-entry float table over the data range;
  * - perspective views sort by distance from the eye, not along the view direction.
  *
+ * Cells whose projection covers no pixel centre (sub-pixel cells in a small image, cells
+ * off screen) are culled before decomposition: they would produce no fragment, so the image
+ * is unchanged. Multisampled OpenGL targets sample elsewhere too; there nothing is culled.
+ *
  * Limits: cells must be tetrahedra (apply vtkDataSetTriangleFilter first); cells with a
  * point behind the eye plane are not drawn (as in VTK's PT); at most
  * 858,993,459 tetrahedra (32-bit indices, 5 vertices each); composite blending only.
