@@ -159,12 +159,16 @@ inline void WriteDegenerateSlot(
   }
 }
 
-/// Every corner usable (ProjectPoints checked its coordinates and point scalar) and every
-/// scalar finite (cell scalars are not checked there).
+/// Every corner usable: ProjectPoints checked its coordinates and point scalar.
+inline bool AllUsable(const ProjectedPoint* const c[4])
+{
+  return (c[0]->usable & c[1]->usable & c[2]->usable & c[3]->usable) != 0;
+}
+
+/// Every corner usable and every scalar finite (cell scalars are not checked there).
 inline bool Drawable(const ProjectedPoint* const c[4], const float scalars[4])
 {
-  return (c[0]->usable & c[1]->usable & c[2]->usable & c[3]->usable) != 0 &&
-    std::isfinite(scalars[0] + scalars[1] + scalars[2] + scalars[3]);
+  return AllUsable(c) && std::isfinite(scalars[0] + scalars[1] + scalars[2] + scalars[3]);
 }
 
 /// The decomposition of one tetrahedron into a slot whose indices start at `base`.
@@ -359,8 +363,7 @@ inline void DecomposeSlot(const Access& cells, const DecomposeInput& input,
     {
       scalars[i] = cellScalars ? cellScalars[cell] : corners[i]->scalar;
     }
-    const bool cull = input.viewportWidth > 0 && input.viewportHeight > 0 &&
-      (corners[0]->usable & corners[1]->usable & corners[2]->usable & corners[3]->usable) != 0 &&
+    const bool cull = input.viewportWidth > 0 && input.viewportHeight > 0 && AllUsable(corners) &&
       !CoversPixelCentre(corners, input.viewportWidth, input.viewportHeight);
     if (cull)
     {

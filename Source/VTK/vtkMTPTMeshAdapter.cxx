@@ -28,10 +28,9 @@ vtkMTPTMeshAdapter::~vtkMTPTMeshAdapter() = default;
 
 bool vtkMTPTMeshAdapter::Update(vtkUnstructuredGridBase* input)
 {
-  if (input == this->LastInput && input->GetMTime() == this->InputTime &&
-    this->ErrorMessage.empty())
+  if (input == this->LastInput && input->GetMTime() == this->InputTime)
   {
-    return true;
+    return this->ErrorMessage.empty(); // unchanged: the same verdict, no rescan
   }
   this->LastInput = input;
   this->InputTime = input->GetMTime();

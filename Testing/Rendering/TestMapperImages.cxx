@@ -115,6 +115,26 @@ protected:
     s.perspective = perspective;
     return s;
   }
+  /// The orthographic box with an opaque sphere inside the volume (depth test).
+  Scene SphereScene()
+  {
+    Scene s = BoxScene(false);
+    s.customize = [](vtkVolume*, vtkRenderer* renderer)
+    {
+      vtkNew<vtkSphereSource> sphere;
+      sphere->SetCenter(0.3, 0.2, 0.4);
+      sphere->SetRadius(0.6);
+      sphere->SetThetaResolution(32);
+      sphere->SetPhiResolution(32);
+      vtkNew<vtkPolyDataMapper> mapper;
+      mapper->SetInputConnection(sphere->GetOutputPort());
+      vtkNew<vtkActor> actor;
+      actor->SetMapper(mapper);
+      actor->GetProperty()->SetColor(0.2, 0.9, 0.3);
+      renderer->AddActor(actor);
+    };
+    return s;
+  }
   static vtkSmartPointer<vtkUnstructuredGrid> Box, BluntFin;
   vtkSmartPointer<vtkVolumeProperty> BoxProperty, FinProperty;
 };
@@ -173,22 +193,7 @@ TEST_F(MapperImages, TransformedVolumeMatchesVTK)
 
 TEST_F(MapperImages, OpaqueGeometryOccludesTheVolume)
 {
-  Scene s = BoxScene(false);
-  s.customize = [](vtkVolume*, vtkRenderer* renderer)
-  {
-    vtkNew<vtkSphereSource> sphere;
-    sphere->SetCenter(0.3, 0.2, 0.4);
-    sphere->SetRadius(0.6);
-    sphere->SetThetaResolution(32);
-    sphere->SetPhiResolution(32);
-    vtkNew<vtkPolyDataMapper> mapper;
-    mapper->SetInputConnection(sphere->GetOutputPort());
-    vtkNew<vtkActor> actor;
-    actor->SetMapper(mapper);
-    actor->GetProperty()->SetColor(0.2, 0.9, 0.3);
-    renderer->AddActor(actor);
-  };
-  ExpectCloseToVTK(s, "box-sphere", { 0.015, 0.001 }); // measured 0.0076, 0.01%
+  ExpectCloseToVTK(SphereScene(), "box-sphere", { 0.015, 0.001 }); // measured 0.0076, 0.01%
 }
 
 TEST_F(MapperImages, IdenticalForEveryThreadCountAndOrderMethod)
@@ -225,21 +230,9 @@ TEST_F(MapperImages, CPUCompositorMatchesTheOpenGLPath)
     const char* name;
     Scene scene;
   };
-  Scene sphere = BoxScene(false);
-  sphere.customize = [](vtkVolume*, vtkRenderer* renderer)
-  {
-    vtkNew<vtkSphereSource> source;
-    source->SetCenter(0.3, 0.2, 0.4);
-    source->SetRadius(0.6);
-    vtkNew<vtkPolyDataMapper> mapper;
-    mapper->SetInputConnection(source->GetOutputPort());
-    vtkNew<vtkActor> actor;
-    actor->SetMapper(mapper);
-    renderer->AddActor(actor);
-  };
   const Case cases[] = { { "box-ortho", BoxScene(false) }, { "box-persp", BoxScene(true) },
     { "bluntfin-persp", BluntFinScene(true) }, { "bluntfin-ortho", BluntFinScene(false) },
-    { "box-sphere", sphere } };
+    { "box-sphere", SphereScene() } };
   for (const Case& c : cases)
   {
     auto gl = MakeMapper(Mapper::OPENGL_BACKEND);
