@@ -12,25 +12,6 @@
 namespace mtpt
 {
 
-void TransferFunctionTable::Lookup(float scalar, float rgba[4]) const
-{
-  // Texel-space coordinate of a texture sampled with linear filtering and clamp to edge.
-  const double span = this->high > this->low ? this->high - this->low : 1.0;
-  const auto scale = static_cast<float>((this->size - 1) / span);
-  float t = (scalar - static_cast<float>(this->low)) * scale;
-  const auto last = static_cast<float>(this->size - 1);
-  t = t > 0.0f ? (t < last ? t : last) : 0.0f; // NaN maps to 0
-  const int i = static_cast<int>(t);
-  const int j = i + 1 < this->size ? i + 1 : i;
-  const float f = t - static_cast<float>(i);
-  const float* a = this->table + 4 * i;
-  const float* b = this->table + 4 * j;
-  for (int k = 0; k < 4; ++k)
-  {
-    rgba[k] = a[k] + f * (b[k] - a[k]);
-  }
-}
-
 namespace
 {
 
@@ -272,7 +253,11 @@ void Compositor::Composite(const TetVertex* vertices, const std::uint32_t* indic
   std::size_t count, const CompositeSettings& settings, std::vector<float>& rgba, int threads)
 {
   const int width = std::max(0, settings.width), height = std::max(0, settings.height);
-  rgba.assign(4 * static_cast<std::size_t>(width) * height, 0.0f);
+  const std::size_t values = 4 * static_cast<std::size_t>(width) * height;
+  if (!settings.accumulate || rgba.size() != values)
+  {
+    rgba.assign(values, 0.0f);
+  }
   this->Rasterized = 0;
   if (width == 0 || height == 0 || count == 0 || !settings.transferFunction.table ||
     settings.transferFunction.size < 1)

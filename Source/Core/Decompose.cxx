@@ -426,18 +426,20 @@ void DecomposeAll(const Access& cells, const DecomposeInput& input, const SortKe
 
 template <typename Access>
 void DecomposeAllByRank(const Access& cells, const DecomposeInput& input, const std::uint32_t* rank,
-  TetVertex* vertices, std::uint32_t* indices, ProjectionClass* classes, int threads)
+  std::size_t firstRank, std::size_t count, TetVertex* vertices, std::uint32_t* indices,
+  ProjectionClass* classes, int threads)
 {
   const float* cellScalars = CellScalars(input);
   const bool streaming = CanStream(vertices, indices);
   ParallelSlots(static_cast<std::int64_t>(input.cells.cellCount), threads,
     [&](std::int64_t c)
     {
-      const std::uint32_t k = rank[c];
-      if (k != NotInOrder)
+      // One unsigned comparison: NotInOrder and ranks outside the window both fail.
+      const std::uint64_t k = static_cast<std::uint64_t>(rank[c]) - firstRank;
+      if (rank[c] != NotInOrder && k < count)
       {
-        DecomposeSlot(cells, input, cellScalars, static_cast<std::uint32_t>(c), k, vertices,
-          indices, classes, streaming);
+        DecomposeSlot(cells, input, cellScalars, static_cast<std::uint32_t>(c),
+          static_cast<std::int64_t>(k), vertices, indices, classes, streaming);
       }
     });
 }
@@ -484,12 +486,16 @@ void InvertOrder(
 }
 
 void DecomposeTetrahedraByRank(const DecomposeInput& input, const std::uint32_t* rank,
-  TetVertex* vertices, std::uint32_t* indices, ProjectionClass* classes, int threads)
+  std::size_t firstRank, std::size_t count, TetVertex* vertices, std::uint32_t* indices,
+  ProjectionClass* classes, int threads)
 {
   const int nthreads = detail::ResolveThreads(threads);
   detail::DispatchCells(input.cells, input.pointCount,
     [&](const auto& cells)
-    { DecomposeAllByRank(cells, input, rank, vertices, indices, classes, nthreads); });
+    {
+      DecomposeAllByRank(
+        cells, input, rank, firstRank, count, vertices, indices, classes, nthreads);
+    });
 }
 
 } // namespace mtpt

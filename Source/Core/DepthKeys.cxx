@@ -30,35 +30,48 @@ std::uint32_t EncodeDepth(float depth)
 namespace
 {
 
-template <typename Access>
-void KeysFor(const Access& cells, const ProjectedPoint* points, std::size_t cellCount,
-  bool perspective, SortKey* keys, int threads)
+/// Bits of the clip planes a usable projected point lies beyond (0: inside the frustum).
+inline unsigned OutCode(const ProjectedPoint& p)
 {
-  const auto count = static_cast<std::int64_t>(cellCount);
-#pragma omp parallel for num_threads(threads) schedule(static)
-  for (std::int64_t c = 0; c < count; ++c)
+  return (p.x < -1.0 ? 1u : 0u) | (p.x > 1.0 ? 2u : 0u) | (p.y < -1.0 ? 4u : 0u) |
+    (p.y > 1.0 ? 8u : 0u) | (p.z < -1.0 ? 16u : 0u) | (p.z > 1.0 ? 32u : 0u);
+}
+
+/// The key of `cell`; false if `cullFrustum` and all four points are usable and beyond one
+/// clip plane (the cell lies entirely outside the view volume).
+template <typename Access>
+inline bool CellKey(const Access& cells, const ProjectedPoint* points, std::uint32_t cell,
+  bool perspective, bool cullFrustum, SortKey& key)
+{
+  std::int64_t ids[4];
+  float depth = std::numeric_limits<float>::infinity();
+  if (cells.TetrahedronPoints(cell, ids))
   {
-    std::int64_t ids[4];
-    float depth = std::numeric_limits<float>::infinity();
-    if (cells.TetrahedronPoints(static_cast<std::size_t>(c), ids))
+    double x = 0, y = 0, z = 0;
+    unsigned outside = ~0u;
+    int usable = 0;
+    for (int i = 0; i < 4; ++i)
     {
-      double x = 0, y = 0, z = 0;
-      for (int i = 0; i < 4; ++i)
-      {
-        const ProjectedPoint& p = points[ids[i]];
-        x += p.eyeX;
-        y += p.eyeY;
-        z += p.eyeZ;
-      }
-      x *= 0.25;
-      y *= 0.25;
-      z *= 0.25;
-      // Perspective: squared distance from the eye (at the eye-space origin). Orthographic:
-      // distance along the view axis; the camera looks down -z.
-      depth = static_cast<float>(perspective ? x * x + y * y + z * z : -z);
+      const ProjectedPoint& p = points[ids[i]];
+      x += p.eyeX;
+      y += p.eyeY;
+      z += p.eyeZ;
+      outside &= OutCode(p);
+      usable += p.usable;
     }
-    keys[c] = MakeSortKey(depth, static_cast<std::uint32_t>(c));
+    if (cullFrustum && usable == 4 && outside != 0)
+    {
+      return false;
+    }
+    x *= 0.25;
+    y *= 0.25;
+    z *= 0.25;
+    // Perspective: squared distance from the eye (at the eye-space origin). Orthographic:
+    // distance along the view axis; the camera looks down -z.
+    depth = static_cast<float>(perspective ? x * x + y * y + z * z : -z);
   }
+  key = MakeSortKey(depth, cell);
+  return true;
 }
 
 } // namespace
@@ -67,9 +80,40 @@ void ComputeDepthKeys(const ProjectedPoint* points, std::size_t pointCount, cons
   bool perspective, SortKey* keys, int threads)
 {
   const int nthreads = detail::ResolveThreads(threads);
+  const auto count = static_cast<std::int64_t>(cells.cellCount);
   detail::DispatchCells(cells, pointCount,
     [&](const auto& access)
-    { KeysFor(access, points, cells.cellCount, perspective, keys, nthreads); });
+    {
+#pragma omp parallel for num_threads(nthreads) schedule(static)
+      for (std::int64_t c = 0; c < count; ++c)
+      {
+        CellKey(access, points, static_cast<std::uint32_t>(c), perspective, false, keys[c]);
+      }
+    });
+}
+
+std::size_t ComputeVisibleDepthKeys(const ProjectedPoint* points, std::size_t pointCount,
+  const CellsView& cells, const std::uint32_t* list, std::size_t listCount, bool perspective,
+  bool cullFrustum, SortKey* keys, int threads)
+{
+  const std::size_t n = list ? listCount : cells.cellCount;
+  std::size_t kept = 0;
+  detail::DispatchCells(cells, pointCount,
+    [&](const auto& access)
+    {
+      kept = detail::CompactInOrder(n, detail::ResolveThreads(threads), keys,
+        [&](std::size_t begin, std::size_t end, SortKey* out)
+        {
+          std::size_t written = 0;
+          for (std::size_t i = begin; i < end; ++i)
+          {
+            const auto cell = list ? list[i] : static_cast<std::uint32_t>(i);
+            written += CellKey(access, points, cell, perspective, cullFrustum, out[written]);
+          }
+          return written;
+        });
+    });
+  return kept;
 }
 
 } // namespace mtpt

@@ -3,12 +3,55 @@
 
 #include "detail/Parallel.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 
 namespace mtpt
 {
+
+namespace
+{
+
+using Clock = std::chrono::steady_clock;
+
+/// Grow-only resize: a vector keeps its size across frames, so frames that shrink and
+/// grow again do not value-initialize memory they already had.
+template <typename T>
+void EnsureSize(std::vector<T>& v, std::size_t n)
+{
+  if (v.size() < n)
+  {
+    v.resize(n);
+  }
+}
+
+template <typename T>
+std::size_t Bytes(const std::vector<T>& v)
+{
+  return v.capacity() * sizeof(T);
+}
+
+/// The unit view direction in model space (the third row of the model-view matrix).
+void ViewDirection(const Matrix4& m, double d[3])
+{
+  const double length = std::sqrt(m[8] * m[8] + m[9] * m[9] + m[10] * m[10]);
+  for (int i = 0; i < 3; ++i)
+  {
+    d[i] = length > 0 ? m[8 + i] / length : 0.0;
+  }
+}
+
+} // namespace
+
+bool FramePipeline::Inputs::operator==(const Inputs& o) const
+{
+  return points == o.points && pointCount == o.pointCount && connectivity == o.connectivity &&
+    offsets == o.offsets && cellCount == o.cellCount && scalars == o.scalars &&
+    association == o.association && dataVersion == o.dataVersion;
+}
 
 FramePipeline::FramePipeline()
   : Order(MakeVisibilityOrder(OrderMethod::RadixSort))
@@ -30,56 +73,275 @@ std::size_t FramePipeline::MaxTetrahedra()
   return std::numeric_limits<std::uint32_t>::max() / VerticesPerTetrahedron;
 }
 
+std::size_t FramePipeline::MemoryBytes() const
+{
+  return Bytes(this->ProjectedPoints) + Bytes(this->CellRanges) + Bytes(this->Visible) +
+    Bytes(this->NewVisible) + Bytes(this->SortedKeys) + Bytes(this->Scratch) + Bytes(this->Rank) +
+    Bytes(this->VertexBuffer) + Bytes(this->IndexBuffer) + Bytes(this->Classes) +
+    this->Order->MemoryBytes();
+}
+
+void FramePipeline::Release()
+{
+  for (auto* v : { &this->Visible, &this->NewVisible, &this->Rank, &this->IndexBuffer })
+  {
+    std::vector<std::uint32_t>().swap(*v);
+  }
+  std::vector<ProjectedPoint>().swap(this->ProjectedPoints);
+  std::vector<float>().swap(this->CellRanges);
+  std::vector<SortKey>().swap(this->SortedKeys);
+  std::vector<SortKey>().swap(this->Scratch);
+  std::vector<TetVertex>().swap(this->VertexBuffer);
+  std::vector<ProjectionClass>().swap(this->Classes);
+  this->Order = MakeVisibilityOrder(this->Order->Method(), this->MaxSubArraySize);
+  this->HaveTransform = this->HaveRanges = this->HaveVisible = this->HaveOrder = false;
+  this->HaveDecomposition = false;
+  this->SortedSize = this->BatchCount = 0;
+}
+
 bool FramePipeline::Run(const FrameInput& input, int threads)
 {
-  using Clock = std::chrono::steady_clock;
-  const std::size_t n = input.cells.cellCount;
-  this->LastTimes = StageTimes{};
-  this->Count = 0;
-  if (n > MaxTetrahedra())
+  if (!this->Prepare(input, threads))
   {
     return false;
   }
-  // Grow only: resize() value-initializes new elements once, later frames reuse them.
-  if (this->ProjectedPoints.size() < input.points.count)
+  this->DecomposeBatch(0, this->SortedSize, threads);
+  return true;
+}
+
+bool FramePipeline::Prepare(const FrameInput& input, int threads)
+{
+  const std::size_t n = input.cells.cellCount;
+  this->LastTimes = StageTimes{};
+  this->LastStats = FrameStats{};
+  this->LastStats.cells = n;
+  this->BatchCount = 0;
+  if (n > MaxTetrahedra())
   {
-    this->ProjectedPoints.resize(input.points.count);
+    this->SortedSize = 0;
+    this->HaveOrder = this->HaveDecomposition = false;
+    return false;
   }
-  this->SortedKeys.resize(n);
-  this->Rank.resize(n);
-  this->VertexBuffer.resize(VerticesPerTetrahedron * n);
-  this->IndexBuffer.resize(IndicesPerTetrahedron * n);
+  Inputs data;
+  data.points = input.points.data;
+  data.pointCount = input.points.count;
+  data.connectivity = input.cells.connectivity;
+  data.offsets = input.cells.offsets;
+  data.cellCount = n;
+  data.scalars = input.scalars.values;
+  data.association = input.scalars.association;
+  data.dataVersion = input.dataVersion;
+  const bool dataChanged = !this->Reuse || !(data == this->Data);
+  if (dataChanged)
+  {
+    this->Data = data;
+    this->HaveTransform = this->HaveRanges = this->HaveVisible = this->HaveOrder = false;
+    this->HaveDecomposition = false;
+  }
+
+  const bool viewChanged = !this->HaveTransform || input.modelView != this->TransformModelView ||
+    input.projection != this->TransformProjection;
+  if (viewChanged)
+  {
+    const auto start = Clock::now();
+    EnsureSize(this->ProjectedPoints, input.points.count);
+    ProjectPoints(input.points, input.scalars, input.modelView, input.projection,
+      this->ProjectedPoints.data(), threads);
+    this->LastTimes.transform = detail::SecondsSince(start);
+    this->TransformModelView = input.modelView;
+    this->TransformProjection = input.projection;
+    this->HaveTransform = true;
+    ++this->PointsVersion;
+  }
+  this->LastStats.transformReused = !viewChanged;
+
+  this->UpdateCulling(input, threads, dataChanged);
+  this->UpdateOrder(input, threads, dataChanged, viewChanged);
+
+  DecomposeInput& d = this->Decomposition;
+  d.points = this->ProjectedPoints.data();
+  d.pointCount = input.points.count;
+  d.cells = input.cells;
+  d.scalars = input.scalars;
+  d.viewportWidth = input.viewportWidth;
+  d.viewportHeight = input.viewportHeight;
+  return true;
+}
+
+void FramePipeline::UpdateCulling(const FrameInput& input, int threads, bool dataChanged)
+{
+  const std::size_t n = input.cells.cellCount;
+  const bool cull = input.opacity.table && input.opacity.size > 0;
+  if (!cull)
+  {
+    if (this->CullByOpacity)
+    {
+      this->CullByOpacity = false;
+      ++this->VisibleVersion; // every cell is a candidate again
+    }
+    return;
+  }
+  const auto start = Clock::now();
+  if (!this->HaveRanges || dataChanged)
+  {
+    EnsureSize(this->CellRanges, 2 * n);
+    ComputeCellScalarRanges(
+      input.cells, input.points.count, input.scalars, this->CellRanges.data(), threads);
+    this->HaveRanges = true;
+    this->HaveVisible = false;
+  }
+  const TransferFunctionTable& t = input.opacity;
+  const bool tableChanged = !this->HaveVisible || !this->Reuse ||
+    input.opacityVersion != this->OpacityVersion || t.table != this->OpacityTable.table ||
+    t.size != this->OpacityTable.size || t.low != this->OpacityTable.low ||
+    t.high != this->OpacityTable.high;
+  if (tableChanged)
+  {
+    this->Opacity.SetTable(t);
+    this->NewVisible.resize(n);
+    this->NewVisible.resize(this->Opacity.SelectVisibleCells(
+      this->CellRanges.data(), n, this->NewVisible.data(), threads));
+    // A new table that leaves the same cells visible (a colour change) keeps the order.
+    if (!this->HaveVisible || !this->CullByOpacity || this->NewVisible != this->Visible)
+    {
+      this->Visible.swap(this->NewVisible);
+      ++this->VisibleVersion;
+    }
+    this->HaveVisible = true;
+    this->OpacityVersion = input.opacityVersion;
+    this->OpacityTable = t;
+    this->LastTimes.cull = detail::SecondsSince(start); // ranges included when computed
+  }
+  this->CullByOpacity = true;
+  this->LastStats.opacityCulled = n - this->Visible.size();
+}
+
+void FramePipeline::UpdateOrder(
+  const FrameInput& input, int threads, bool dataChanged, bool viewChanged)
+{
+  const std::size_t n = input.cells.cellCount;
+  const bool valid = this->HaveOrder && this->OrderPointsVersion == this->PointsVersion &&
+    this->OrderVisibleVersion == this->VisibleVersion &&
+    this->OrderPerspective == input.perspective && this->OrderCullFrustum == input.cullFrustum &&
+    this->OrderMethodUsed == this->Order->Method();
+  if (valid)
+  {
+    this->LastStats.orderReused = true;
+    this->LastStats.frustumCulled = this->OrderFrustumCulled;
+    this->LastStats.sorted = this->SortedSize;
+    return;
+  }
 
   auto start = Clock::now();
-  ProjectPoints(input.points, input.scalars, input.modelView, input.projection,
-    this->ProjectedPoints.data(), threads);
-  this->LastTimes.transform = detail::SecondsSince(start);
-
-  start = Clock::now();
-  ComputeDepthKeys(this->ProjectedPoints.data(), input.points.count, input.cells, input.perspective,
-    this->SortedKeys.data(), threads);
+  const std::uint32_t* list = this->CullByOpacity ? this->Visible.data() : nullptr;
+  const std::size_t listCount = this->CullByOpacity ? this->Visible.size() : n;
+  this->SortedKeys.resize(listCount);
+  const std::size_t count =
+    ComputeVisibleDepthKeys(this->ProjectedPoints.data(), input.points.count, input.cells, list,
+      listCount, input.perspective, input.cullFrustum, this->SortedKeys.data(), threads);
+  const std::size_t frustumCulled = listCount - count;
+  this->SortedKeys.resize(count);
   this->LastTimes.keys = detail::SecondsSince(start);
 
   start = Clock::now();
-  this->Order->Sort(this->SortedKeys.data(), n, threads);
+  double direction[3];
+  ViewDirection(input.modelView, direction);
+  const double dot = direction[0] * this->OrderDirection[0] +
+    direction[1] * this->OrderDirection[1] + direction[2] * this->OrderDirection[2];
+  const double angle = std::acos(std::min(1.0, std::max(-1.0, dot)));
+  // The same cells as the previous order (nothing entered or left the view or the visible
+  // set): their keys in the previous order are nearly sorted after a small rotation.
+  const bool samePermutation = this->Reuse && this->HaveOrder && !dataChanged && viewChanged &&
+    this->OrderVisibleVersion == this->VisibleVersion &&
+    this->OrderPerspective == input.perspective && this->OrderFrustumCulled == 0 &&
+    frustumCulled == 0 && count == this->SortedSize && angle < NearlySortedMaxAngle;
+  bool fromPrevious = false;
+  if (samePermutation)
+  {
+    EnsureSize(this->Scratch, count);
+    const auto m = static_cast<std::int64_t>(count);
+#pragma omp parallel for num_threads(detail::ResolveThreads(threads)) schedule(static)
+    for (std::int64_t i = 0; i < m; ++i)
+    {
+      const SortKey key = this->SortedKeys[i];
+      this->Scratch[this->Rank[CellOfKey(key)]] = key;
+    }
+    // Budget: about the cost of a full sort; beyond it the keys moved too far.
+    if (SortNearlySorted(this->Scratch.data(), count, 4 * count, threads))
+    {
+      std::copy(this->Scratch.begin(), this->Scratch.begin() + m, this->SortedKeys.begin());
+      fromPrevious = true;
+    }
+  }
+  if (!fromPrevious)
+  {
+    this->Order->Sort(this->SortedKeys.data(), count, threads);
+  }
   this->LastTimes.order = detail::SecondsSince(start);
 
   start = Clock::now();
-  DecomposeInput decompose;
-  decompose.points = this->ProjectedPoints.data();
-  decompose.pointCount = input.points.count;
-  decompose.cells = input.cells;
-  decompose.scalars = input.scalars;
-  decompose.viewportWidth = input.viewportWidth;
-  decompose.viewportHeight = input.viewportHeight;
-  // Visiting cells in storage order and scattering the slots is several times faster than
-  // gathering cells in visibility order on meshes larger than the cache (Decompose.h).
-  InvertOrder(this->SortedKeys.data(), n, n, this->Rank.data(), threads);
-  DecomposeTetrahedraByRank(decompose, this->Rank.data(), this->VertexBuffer.data(),
-    this->IndexBuffer.data(), nullptr, threads);
-  this->LastTimes.decompose = detail::SecondsSince(start);
-  this->Count = n;
-  return true;
+  EnsureSize(this->Rank, n);
+  InvertOrder(this->SortedKeys.data(), count, n, this->Rank.data(), threads);
+  this->LastTimes.decompose += detail::SecondsSince(start);
+
+  this->SortedSize = count;
+  this->HaveOrder = true;
+  this->OrderPointsVersion = this->PointsVersion;
+  this->OrderVisibleVersion = this->VisibleVersion;
+  this->OrderPerspective = input.perspective;
+  this->OrderCullFrustum = input.cullFrustum;
+  this->OrderMethodUsed = this->Order->Method();
+  this->OrderFrustumCulled = frustumCulled;
+  std::copy(direction, direction + 3, this->OrderDirection);
+  ++this->OrderVersion;
+  this->LastStats.frustumCulled = frustumCulled;
+  this->LastStats.sorted = count;
+  this->LastStats.orderFromPrevious = fromPrevious;
+}
+
+void FramePipeline::DecomposeBatch(std::size_t first, std::size_t count, int threads)
+{
+  first = std::min(first, this->SortedSize);
+  count = std::min(count, this->SortedSize - first);
+  ++this->LastStats.batches;
+  this->BatchCount = count;
+  const DecomposeInput& in = this->Decomposition;
+  if (this->Reuse && this->HaveDecomposition &&
+    this->DecomposedOrderVersion == this->OrderVersion && this->DecomposedFirst == first &&
+    this->DecomposedCount == count && this->DecomposedViewport[0] == in.viewportWidth &&
+    this->DecomposedViewport[1] == in.viewportHeight)
+  {
+    this->LastStats.decompositionReused = true;
+    this->LastStats.pixelCulled += this->DecomposedPixelCulled;
+    this->LastStats.notDrawable += this->DecomposedNotDrawable;
+    return;
+  }
+  const auto start = Clock::now();
+  EnsureSize(this->VertexBuffer, VerticesPerTetrahedron * count);
+  EnsureSize(this->IndexBuffer, IndicesPerTetrahedron * count);
+  EnsureSize(this->Classes, count);
+  DecomposeTetrahedraByRank(in, this->Rank.data(), first, count, this->VertexBuffer.data(),
+    this->IndexBuffer.data(), this->Classes.data(), threads);
+  std::size_t pixelCulled = 0, notDrawable = 0;
+  const auto m = static_cast<std::int64_t>(count);
+#pragma omp parallel for num_threads(detail::ResolveThreads(threads)) schedule(static) \
+  reduction(+ : pixelCulled, notDrawable)
+  for (std::int64_t k = 0; k < m; ++k)
+  {
+    pixelCulled += this->Classes[k] == ProjectionClass::CoversNoPixel;
+    notDrawable += this->Classes[k] == ProjectionClass::NotDrawable;
+  }
+  this->LastTimes.decompose += detail::SecondsSince(start);
+  this->LastStats.pixelCulled += pixelCulled;
+  this->LastStats.notDrawable += notDrawable;
+  this->HaveDecomposition = true;
+  this->DecomposedOrderVersion = this->OrderVersion;
+  this->DecomposedFirst = first;
+  this->DecomposedCount = count;
+  this->DecomposedViewport[0] = in.viewportWidth;
+  this->DecomposedViewport[1] = in.viewportHeight;
+  this->DecomposedPixelCulled = pixelCulled;
+  this->DecomposedNotDrawable = notDrawable;
 }
 
 } // namespace mtpt

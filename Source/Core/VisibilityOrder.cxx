@@ -227,6 +227,12 @@ private:
     return !skip;
   }
 
+  std::size_t MemoryBytes() const override
+  {
+    return this->Scratch.capacity() * sizeof(SortKey) +
+      this->Counts.capacity() * sizeof(std::size_t);
+  }
+
   std::vector<SortKey> Scratch;
   std::vector<std::size_t> Counts;
 };
@@ -244,6 +250,59 @@ std::unique_ptr<VisibilityOrder> MakeVisibilityOrder(
       return std::make_unique<RadixSortOrder>();
   }
   return nullptr;
+}
+
+} // namespace mtpt
+
+namespace mtpt
+{
+
+bool SortNearlySorted(SortKey* keys, std::size_t count, std::size_t moveBudget, int threads)
+{
+  const int nthreads = detail::ResolveThreads(threads);
+  const int blocks = count < SmallInput ? 1 : nthreads;
+  const std::size_t blockBudget = moveBudget / static_cast<std::size_t>(blocks) + 1;
+  int gaveUp = 0;
+  // Insertion sort inside each block: the work is the number of inversions in the block.
+#pragma omp parallel for num_threads(blocks) schedule(static, 1) reduction(| : gaveUp)
+  for (int b = 0; b < blocks; ++b)
+  {
+    const std::size_t begin = count * b / blocks, end = count * (b + 1) / blocks;
+    std::size_t moves = 0;
+    for (std::size_t i = begin + 1; i < end && moves <= blockBudget; ++i)
+    {
+      const SortKey key = keys[i];
+      std::size_t j = i;
+      while (j > begin && keys[j - 1] > key)
+      {
+        keys[j] = keys[j - 1];
+        --j;
+      }
+      moves += i - j;
+      keys[j] = key;
+    }
+    gaveUp |= moves > blockBudget ? 1 : 0;
+  }
+  if (gaveUp)
+  {
+    return false;
+  }
+  // Merge the sorted blocks pairwise: log2(blocks) linear passes.
+  for (int width = 1; width < blocks; width *= 2)
+  {
+#pragma omp parallel for num_threads(nthreads) schedule(static, 1)
+    for (int b = 0; b < blocks - width; b += 2 * width)
+    {
+      const std::size_t begin = count * b / blocks;
+      const std::size_t middle = count * (b + width) / blocks;
+      const std::size_t end = count * std::min(b + 2 * width, blocks) / blocks;
+      if (keys[middle - 1] > keys[middle]) // already in order across the seam otherwise
+      {
+        std::inplace_merge(keys + begin, keys + middle, keys + end);
+      }
+    }
+  }
+  return true;
 }
 
 } // namespace mtpt

@@ -102,6 +102,26 @@ public:
   bool FramebufferFailed = false;
   int FramebufferSize[2] = { 0, 0 };
 
+  // What the pipeline's reusable results were computed from: a change of any of these
+  // bumps DataVersion (FrameInput::dataVersion).
+  struct DataKey
+  {
+    vtkUnstructuredGridBase* input = nullptr;
+    vtkMTimeType inputTime = 0;
+    vtkDataArray* scalars = nullptr;
+    vtkMTimeType scalarTime = 0;
+    int component = 0, cellFlag = 0;
+    bool operator!=(const DataKey& o) const
+    {
+      return input != o.input || inputTime != o.inputTime || scalars != o.scalars ||
+        scalarTime != o.scalarTime || component != o.component || cellFlag != o.cellFlag;
+    }
+  };
+  DataKey LastData;
+  std::uint64_t DataVersion = 0;
+  // The OpenGL buffers hold the pipeline's whole (single-batch) decomposition.
+  bool BuffersCurrent = false;
+
   // Timers of the last frame.
   double UploadSeconds = 0, DrawSeconds = 0, CompositeSeconds = 0;
   int LastBackend = OPENGL_BACKEND;
@@ -163,6 +183,10 @@ double vtkMultiThreadedProjectedTetrahedraMapper::GetDepthKeySeconds()
 {
   return this->Internal->Pipeline.Times().keys;
 }
+double vtkMultiThreadedProjectedTetrahedraMapper::GetCullSeconds()
+{
+  return this->Internal->Pipeline.Times().cull;
+}
 double vtkMultiThreadedProjectedTetrahedraMapper::GetOrderSeconds()
 {
   return this->Internal->Pipeline.Times().order;
@@ -211,6 +235,48 @@ vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfTetrahedra()
 {
   return this->Internal->Tetrahedra;
 }
+vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfOpacityCulledCells()
+{
+  return static_cast<vtkIdType>(this->Internal->Pipeline.Stats().opacityCulled);
+}
+vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfFrustumCulledCells()
+{
+  return static_cast<vtkIdType>(this->Internal->Pipeline.Stats().frustumCulled);
+}
+vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfPixelCulledCells()
+{
+  return static_cast<vtkIdType>(this->Internal->Pipeline.Stats().pixelCulled);
+}
+int vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfBatches()
+{
+  return static_cast<int>(this->Internal->Pipeline.Stats().batches);
+}
+int vtkMultiThreadedProjectedTetrahedraMapper::GetLastFrameReuse()
+{
+  const mtpt::FrameStats& stats = this->Internal->Pipeline.Stats();
+  return (stats.transformReused ? REUSED_TRANSFORM : 0) | (stats.orderReused ? REUSED_ORDER : 0) |
+    (stats.orderFromPrevious ? ORDER_FROM_PREVIOUS : 0) |
+    (stats.decompositionReused ? REUSED_DECOMPOSITION : 0);
+}
+vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetMemoryBytes()
+{
+  return static_cast<vtkIdType>(this->Internal->Pipeline.MemoryBytes());
+}
+void vtkMultiThreadedProjectedTetrahedraMapper::SetBatchSize(vtkIdType size)
+{
+  if (size < 0)
+  {
+    vtkWarningMacro(<< "SetBatchSize(" << size
+                    << "): the batch size must be 0 (one batch) or positive; keeping "
+                    << this->BatchSize);
+    return;
+  }
+  if (size != this->BatchSize)
+  {
+    this->BatchSize = size;
+    this->Modified();
+  }
+}
 
 bool vtkMultiThreadedProjectedTetrahedraMapper::IsSupported(vtkRenderWindow* window)
 {
@@ -233,6 +299,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::ReleaseGraphicsResources(vtkWind
     }
   }
   in.Quad.reset();
+  in.BuffersCurrent = false;
   in.SoftwareRenderer = -1;
   in.FramebufferAllocated = false;
   in.FramebufferFailed = false;
@@ -335,6 +402,20 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
                        "are not drawn");
   }
 
+  Internals::DataKey data;
+  data.input = input;
+  data.inputTime = input->GetMTime();
+  data.scalars = scalars;
+  data.scalarTime = scalars->GetMTime();
+  data.component = component;
+  data.cellFlag = cellFlag;
+  if (data != in.LastData)
+  {
+    in.LastData = data;
+    ++in.DataVersion;
+  }
+  this->UpdateTransferFunctionTable(property, range);
+
   mtpt::FrameInput frame;
   frame.points = in.Adapter.Points();
   frame.cells = in.Adapter.Cells();
@@ -347,6 +428,11 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
   frame.projection =
     ToMatrix4(camera->GetProjectionTransformMatrix(renderer->GetTiledAspectRatio(), -1.0, 1.0));
   frame.perspective = camera->GetParallelProjection() == 0;
+  // Cells the opacity function hides are culled (exact: see mtpt/Culling.h).
+  frame.opacity = { in.Table.data(), TransferFunctionTableSize, in.TableRange[0],
+    in.TableRange[1] };
+  frame.dataVersion = in.DataVersion;
+  frame.opacityVersion = in.TableBuildTime.GetMTime();
 
   int backend = this->Backend;
   if (backend == AUTOMATIC_BACKEND)
@@ -366,54 +452,46 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
   {
     glGetIntegerv(GL_SAMPLE_BUFFERS, &sampleBuffers);
   }
-  if (sampleBuffers == 0)
+  if (sampleBuffers == 0 && this->CullInvisibleCells)
   {
     int x0, y0;
     renderer->GetTiledSizeAndOrigin(&frame.viewportWidth, &frame.viewportHeight, &x0, &y0);
+  }
+  if (!this->CullInvisibleCells)
+  {
+    frame.opacity = mtpt::TransferFunctionTable{};
+    frame.cullFrustum = false;
   }
 
   in.Pipeline.SetOrderMethod(this->OrderMethod == PARTITION_SORT ? mtpt::OrderMethod::PartitionSort
                                                                  : mtpt::OrderMethod::RadixSort,
     static_cast<std::size_t>(this->MaxSubArraySize));
-  if (!in.Pipeline.Run(frame, this->NumberOfThreads))
+  in.Pipeline.SetReuse(this->ReuseResults);
+  if (!in.Pipeline.Prepare(frame, this->NumberOfThreads))
   {
     vtkErrorMacro(<< "the input has " << input->GetNumberOfCells()
                   << " cells; this mapper draws at most " << mtpt::FramePipeline::MaxTetrahedra());
     return;
   }
-  const std::size_t count = in.Pipeline.TetrahedronCount();
-  in.Tetrahedra = static_cast<vtkIdType>(count);
-
-  this->UpdateTransferFunctionTable(property, range);
+  in.Tetrahedra = static_cast<vtkIdType>(in.Pipeline.SortedCount());
+  if (in.Tetrahedra == 0)
+  {
+    return; // everything culled: transparent or out of view
+  }
   if (backend == CPU_BACKEND)
   {
     this->CompositeOnCPU(renderer, volume, window);
-    return;
   }
-
-  // Upload: one vertex and one index buffer per frame.
-  auto start = std::chrono::steady_clock::now();
-  const auto& vertices = in.Pipeline.Vertices();
-  const auto& indices = in.Pipeline.Indices();
-  in.VertexBuffer->SetStride(static_cast<unsigned int>(sizeof(mtpt::TetVertex)));
-  in.VertexBuffer->Upload(reinterpret_cast<const float*>(vertices.data()), vertices.size() * 6,
-    vtkOpenGLBufferObject::ArrayBuffer);
-  in.Triangles.IBO->Upload(
-    indices.data(), indices.size(), vtkOpenGLBufferObject::ElementArrayBuffer);
-  in.Triangles.IBO->IndexCount = indices.size();
-  if (this->SynchronizedTiming)
+  else
   {
-    glFinish();
+    this->DrawTriangles(renderer, volume, window);
   }
-  in.UploadSeconds = SecondsSince(start);
+}
 
-  start = std::chrono::steady_clock::now();
-  this->DrawTriangles(renderer, volume, window);
-  if (this->SynchronizedTiming)
-  {
-    glFinish();
-  }
-  in.DrawSeconds = SecondsSince(start);
+std::size_t vtkMultiThreadedProjectedTetrahedraMapper::BatchTetrahedra() const
+{
+  const std::size_t sorted = this->Internal->Pipeline.SortedCount();
+  return this->BatchSize > 0 ? std::min(sorted, static_cast<std::size_t>(this->BatchSize)) : sorted;
 }
 
 double vtkMultiThreadedProjectedTetrahedraMapper::UnitDistance(vtkVolume* volume)
@@ -447,9 +525,22 @@ void vtkMultiThreadedProjectedTetrahedraMapper::CompositeOnCPU(
     in.TableRange[1] };
   settings.unitDistance = UnitDistance(volume);
   settings.opaqueDepth = in.Depth.data();
-  in.Compositor.Composite(in.Pipeline.Vertices().data(), in.Pipeline.Indices().data(),
-    in.Pipeline.TetrahedronCount(), settings, in.Image, this->NumberOfThreads);
-  in.CompositeSeconds = SecondsSince(start);
+  // Batch after batch, back to front, into one image. Decomposition and compositing both
+  // use every thread, so they run one after the other.
+  const std::size_t total = in.Pipeline.SortedCount(), batch = this->BatchTetrahedra();
+  double composite = 0;
+  std::size_t first = 0;
+  do
+  {
+    in.Pipeline.DecomposeBatch(first, batch, this->NumberOfThreads);
+    start = std::chrono::steady_clock::now();
+    in.Compositor.Composite(in.Pipeline.Vertices().data(), in.Pipeline.Indices().data(),
+      in.Pipeline.TetrahedronCount(), settings, in.Image, this->NumberOfThreads);
+    composite += SecondsSince(start);
+    settings.accumulate = true;
+    first += batch;
+  } while (first < total);
+  in.CompositeSeconds = composite;
 
   start = std::chrono::steady_clock::now();
   in.ImageTexture->SetContext(window);
@@ -525,22 +616,6 @@ void vtkMultiThreadedProjectedTetrahedraMapper::DrawTriangles(
   {
     window->GetShaderCache()->ReadyShaderProgram(program);
   }
-  in.VertexBuffer->Bind();
-  in.Triangles.VAO->Bind();
-  if (in.Triangles.ShaderSourceTime > in.Triangles.AttributeUpdateTime)
-  {
-    const auto stride = sizeof(mtpt::TetVertex);
-    if (!in.Triangles.VAO->AddAttributeArray(
-          program, in.VertexBuffer, "vertexNDC", 0, stride, VTK_FLOAT, 3, false) ||
-      !in.Triangles.VAO->AddAttributeArray(
-        program, in.VertexBuffer, "scalarFrontBack", 12, stride, VTK_FLOAT, 2, false) ||
-      !in.Triangles.VAO->AddAttributeArray(
-        program, in.VertexBuffer, "thickness", 20, stride, VTK_FLOAT, 1, false))
-    {
-      vtkErrorMacro(<< "could not set the vertex attributes");
-    }
-    in.Triangles.AttributeUpdateTime.Modified();
-  }
 
   if (in.TransferFunctionUploadTime < in.TableBuildTime || in.TransferFunction->GetHandle() == 0)
   {
@@ -598,19 +673,69 @@ void vtkMultiThreadedProjectedTetrahedraMapper::DrawTriangles(
   state->vtkglBlendFuncSeparate(
     GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
 
-  in.Triangles.IBO->Bind();
-  // GLsizei is 32-bit: draw in chunks of whole tetrahedra below that limit.
-  const std::size_t total = in.Triangles.IBO->IndexCount;
-  const std::size_t chunk = (static_cast<std::size_t>(INT_MAX) / 12) * 12;
-  for (std::size_t first = 0; first < total; first += chunk)
+  // Batch after batch: decompose, upload, draw. Draw calls return before the GPU is done,
+  // so the next batch's decomposition overlaps the previous batch's drawing.
+  const std::size_t total = in.Pipeline.SortedCount(), batch = this->BatchTetrahedra();
+  const bool single = batch >= total;
+  std::size_t first = 0;
+  do
   {
-    const std::size_t size = std::min(chunk, total - first);
-    glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(size), GL_UNSIGNED_INT,
-      reinterpret_cast<const void*>(first * sizeof(std::uint32_t)));
-  }
-  in.Triangles.IBO->Release();
-  in.Triangles.VAO->Release();
-  in.VertexBuffer->Release();
+    in.Pipeline.DecomposeBatch(first, batch, this->NumberOfThreads);
+    const std::size_t count = in.Pipeline.TetrahedronCount();
+    auto start = std::chrono::steady_clock::now();
+    if (!(single && in.BuffersCurrent && in.Pipeline.Stats().decompositionReused))
+    {
+      in.VertexBuffer->SetStride(static_cast<unsigned int>(sizeof(mtpt::TetVertex)));
+      in.VertexBuffer->Upload(reinterpret_cast<const float*>(in.Pipeline.Vertices().data()),
+        count * mtpt::VerticesPerTetrahedron * 6, vtkOpenGLBufferObject::ArrayBuffer);
+      in.Triangles.IBO->Upload(in.Pipeline.Indices().data(), count * mtpt::IndicesPerTetrahedron,
+        vtkOpenGLBufferObject::ElementArrayBuffer);
+      in.Triangles.IBO->IndexCount = count * mtpt::IndicesPerTetrahedron;
+      if (this->SynchronizedTiming)
+      {
+        glFinish();
+      }
+    }
+    in.BuffersCurrent = single;
+    in.UploadSeconds += SecondsSince(start);
+
+    start = std::chrono::steady_clock::now();
+    in.VertexBuffer->Bind();
+    in.Triangles.VAO->Bind();
+    if (in.Triangles.ShaderSourceTime > in.Triangles.AttributeUpdateTime)
+    {
+      const auto stride = sizeof(mtpt::TetVertex);
+      if (!in.Triangles.VAO->AddAttributeArray(
+            program, in.VertexBuffer, "vertexNDC", 0, stride, VTK_FLOAT, 3, false) ||
+        !in.Triangles.VAO->AddAttributeArray(
+          program, in.VertexBuffer, "scalarFrontBack", 12, stride, VTK_FLOAT, 2, false) ||
+        !in.Triangles.VAO->AddAttributeArray(
+          program, in.VertexBuffer, "thickness", 20, stride, VTK_FLOAT, 1, false))
+      {
+        vtkErrorMacro(<< "could not set the vertex attributes");
+      }
+      in.Triangles.AttributeUpdateTime.Modified();
+    }
+    in.Triangles.IBO->Bind();
+    // GLsizei is 32-bit: draw in chunks of whole tetrahedra below that limit.
+    const std::size_t indices = in.Triangles.IBO->IndexCount;
+    const std::size_t chunk = (static_cast<std::size_t>(INT_MAX) / 12) * 12;
+    for (std::size_t offset = 0; offset < indices; offset += chunk)
+    {
+      const std::size_t size = std::min(chunk, indices - offset);
+      glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(size), GL_UNSIGNED_INT,
+        reinterpret_cast<const void*>(offset * sizeof(std::uint32_t)));
+    }
+    in.Triangles.IBO->Release();
+    in.Triangles.VAO->Release();
+    in.VertexBuffer->Release();
+    if (this->SynchronizedTiming)
+    {
+      glFinish();
+    }
+    in.DrawSeconds += SecondsSince(start);
+    first += batch;
+  } while (first < total);
   in.TransferFunction->Deactivate();
 
   if (floatTarget)
@@ -735,9 +860,17 @@ void vtkMultiThreadedProjectedTetrahedraMapper::PrintSelf(ostream& os, vtkIndent
   os << indent << "MaxSubArraySize: " << this->MaxSubArraySize << "\n";
   os << indent << "UseFloatingPointFrameBuffer: " << this->UseFloatingPointFrameBuffer << "\n";
   os << indent << "SynchronizedTiming: " << this->SynchronizedTiming << "\n";
+  os << indent << "BatchSize: " << this->BatchSize << (this->BatchSize == 0 ? " (one batch)" : "")
+     << "\n";
+  os << indent << "ReuseResults: " << this->ReuseResults << "\n";
+  os << indent << "CullInvisibleCells: " << this->CullInvisibleCells << "\n";
+  const mtpt::FrameStats& stats = this->Internal->Pipeline.Stats();
+  os << indent << "Last frame culled: " << stats.opacityCulled << " transparent, "
+     << stats.frustumCulled << " outside the view, " << stats.pixelCulled << " covering no pixel; "
+     << stats.batches << " batches; " << this->GetMemoryBytes() << " bytes of buffers\n";
   os << indent << "Last frame: " << this->Internal->Tetrahedra << " tetrahedra; transform "
-     << this->GetTransformSeconds() << " s, depth keys " << this->GetDepthKeySeconds()
-     << " s, order " << this->GetOrderSeconds() << " s, decompose " << this->GetDecomposeSeconds()
-     << " s, upload " << this->GetUploadSeconds() << " s, draw " << this->GetDrawSeconds()
-     << " s\n";
+     << this->GetTransformSeconds() << " s, cull " << this->GetCullSeconds() << " s, depth keys "
+     << this->GetDepthKeySeconds() << " s, order " << this->GetOrderSeconds() << " s, decompose "
+     << this->GetDecomposeSeconds() << " s, upload " << this->GetUploadSeconds() << " s, draw "
+     << this->GetDrawSeconds() << " s\n";
 }

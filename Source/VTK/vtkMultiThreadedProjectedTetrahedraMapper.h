@@ -32,9 +32,22 @@
  *   and back scalars of the thick vertex, from a 4096-entry float table over the data range;
  * - perspective views sort by distance from the eye, not along the view direction.
  *
- * Cells whose projection covers no pixel centre (sub-pixel cells in a small image, cells
- * off screen) are culled before decomposition: they would produce no fragment, so the image
- * is unchanged. Multisampled OpenGL targets sample elsewhere too; there nothing is culled.
+ * Per-frame work follows what the view shows, never changing the image:
+ * - culling: cells whose opacity is zero over their whole scalar range (recomputed only
+ *   when the opacity function or the data change) and cells entirely outside the view
+ *   volume are left out before the sort; cells whose projection covers no pixel centre
+ *   (sub-pixel cells in a small image) are culled before decomposition (not for
+ *   multisampled OpenGL targets, which sample elsewhere too). The counts of each are
+ *   available after every Render;
+ * - reuse (ReuseResults, on by default): an unchanged view, volume matrix and input redraw
+ *   without any CPU stage or buffer upload; a colour-only change of the transfer functions
+ *   redoes nothing either; an opacity change redoes culling, sort and decomposition but not
+ *   the transform; after a small rotation the cells are re-sorted from the previous order
+ *   when that is cheaper than a full sort. Reuse relies on VTK's modification times: data
+ *   changed in place must be marked Modified(), as for every VTK filter;
+ * - bounded memory: BatchSize tetrahedra are decomposed, uploaded and drawn at a time,
+ *   so the vertex and index buffers hold one batch (168 bytes per tetrahedron) instead of
+ *   the whole mesh.
  *
  * Limits: cells must be tetrahedra (apply vtkDataSetTriangleFilter first); cells with a
  * point behind the eye plane are not drawn (as in VTK's PT); at most
@@ -52,7 +65,8 @@
 #include "vtkRenderingMTPTModule.h" // for export macro
 #include "vtkUnstructuredGridVolumeMapper.h"
 
-#include <memory> // for std::unique_ptr
+#include <cstddef> // for std::size_t
+#include <memory>  // for std::unique_ptr
 
 class vtkOpenGLRenderWindow;
 class vtkRenderWindow;
@@ -142,6 +156,8 @@ public:
   ///@{
   /// Seconds spent by the last Render in each stage (0 before the first).
   double GetTransformSeconds();
+  /// Opacity culling: cell scalar ranges and the visible-cell list (0 when reused).
+  double GetCullSeconds();
   double GetDepthKeySeconds();
   double GetOrderSeconds();
   double GetDecomposeSeconds();
@@ -151,12 +167,65 @@ public:
   double GetDrawSeconds();
   /// CPU backend: compositing on the CPU (0 with the OpenGL backend).
   double GetCompositeSeconds();
-  /// transform + depth keys + order + decompose
+  /// transform + cull + depth keys + order + decompose
   double GetCPUStageSeconds();
   ///@}
 
-  /// Tetrahedra sorted and decomposed by the last Render.
+  ///@{
+  /**
+   * Tetrahedra decomposed per batch (default 1,048,576: 168 MB of vertex and index
+   * buffers). 0 decomposes and draws the whole mesh at once. Negative values are rejected
+   * with a warning. With several batches an unchanged view still sorts nothing again, but
+   * decomposes and uploads each batch again.
+   */
+  void SetBatchSize(vtkIdType size);
+  vtkGetMacro(BatchSize, vtkIdType);
+  ///@}
+
+  ///@{
+  /**
+   * Cull cells that cannot change the image (default on): fully transparent, outside the
+   * view volume, covering no pixel centre. Off draws every cell, for verification and
+   * for measuring what culling saves; the image is the same.
+   */
+  vtkSetMacro(CullInvisibleCells, bool);
+  vtkGetMacro(CullInvisibleCells, bool);
+  vtkBooleanMacro(CullInvisibleCells, bool);
+  ///@}
+
+  ///@{
+  /// Reuse stage results across frames when their inputs did not change (default on).
+  vtkSetMacro(ReuseResults, bool);
+  vtkGetMacro(ReuseResults, bool);
+  vtkBooleanMacro(ReuseResults, bool);
+  ///@}
+
+  /// Tetrahedra sorted and decomposed by the last Render (after culling).
   vtkIdType GetNumberOfTetrahedra();
+
+  ///@{
+  /// Cells the last Render culled: fully transparent, outside the view volume, covering no
+  /// pixel centre (these were sorted, then skipped by the decomposition).
+  vtkIdType GetNumberOfOpacityCulledCells();
+  vtkIdType GetNumberOfFrustumCulledCells();
+  vtkIdType GetNumberOfPixelCulledCells();
+  ///@}
+
+  /// Batches the last Render decomposed and drew.
+  int GetNumberOfBatches();
+
+  /// What the last Render reused: a bitwise OR of the ReuseFlags.
+  enum ReuseFlags
+  {
+    REUSED_TRANSFORM = 1,    ///< projected points of the previous frame
+    REUSED_ORDER = 2,        ///< no key computed and nothing sorted
+    ORDER_FROM_PREVIOUS = 4, ///< sorted starting from the previous order
+    REUSED_DECOMPOSITION = 8 ///< no tetrahedron decomposed (and, in OpenGL, no upload)
+  };
+  int GetLastFrameReuse();
+
+  /// Bytes held by the mapper's CPU buffers (points, keys, order, one batch's buffers).
+  vtkIdType GetMemoryBytes();
 
   /// Whether the mapper can render into this window (an OpenGL2 window).
   static bool IsSupported(vtkRenderWindow* window);
@@ -174,6 +243,9 @@ protected:
   vtkIdType MaxSubArraySize = 32768;
   bool UseFloatingPointFrameBuffer = true;
   bool SynchronizedTiming = false;
+  vtkIdType BatchSize = 1 << 20;
+  bool ReuseResults = true;
+  bool CullInvisibleCells = true;
 
 private:
   vtkMultiThreadedProjectedTetrahedraMapper(
@@ -185,6 +257,7 @@ private:
   bool PrepareFramebuffer(vtkOpenGLRenderWindow* window, int width, int height);
   void UpdateTransferFunctionTable(vtkVolumeProperty* property, const double range[2]);
   static double UnitDistance(vtkVolume* volume);
+  std::size_t BatchTetrahedra() const;
 
   class Internals;
   std::unique_ptr<Internals> Internal;

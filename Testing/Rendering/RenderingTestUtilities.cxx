@@ -168,10 +168,11 @@ vtkSmartPointer<vtkImageData> Render(
   return image;
 }
 
-vtkSmartPointer<vtkImageData> Grab(vtkRenderWindow* window)
+vtkSmartPointer<vtkImageData> Grab(vtkRenderWindow* window, bool rerender)
 {
   vtkNew<vtkWindowToImageFilter> grab;
   grab->SetInput(window);
+  grab->SetShouldRerender(rerender);
   grab->SetInputBufferTypeToRGB();
   grab->ReadFrontBufferOff();
   grab->Update();

@@ -4,7 +4,12 @@
 #ifndef mtpt_detail_Parallel_h
 #define mtpt_detail_Parallel_h
 
+#include <omp.h>
+
 #include <chrono>
+#include <cstddef>
+#include <cstring>
+#include <vector>
 
 namespace mtpt
 {
@@ -18,6 +23,41 @@ int ResolveThreads(int requested);
 inline double SecondsSince(std::chrono::steady_clock::time_point start)
 {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+/**
+ * Stream compaction in input order: [0, n) is cut into one contiguous block per thread;
+ * body(begin, end, out) writes the items it keeps from [begin, end) to out[0..) and returns
+ * their number, with `out` = items + begin, so blocks never overlap. The blocks are then
+ * closed up in order. The result is the kept items in input order, for any thread count.
+ * Returns the number kept.
+ */
+template <typename T, typename Body>
+std::size_t CompactInOrder(std::size_t n, int threads, T* items, Body&& body)
+{
+  const int nthreads = threads > 0 ? threads : 1;
+  std::vector<std::size_t> kept(static_cast<std::size_t>(nthreads), 0);
+#pragma omp parallel num_threads(nthreads)
+  {
+    const auto t = static_cast<std::size_t>(omp_get_thread_num());
+    const std::size_t blocks = static_cast<std::size_t>(omp_get_num_threads());
+    for (std::size_t b = t; b < static_cast<std::size_t>(nthreads); b += blocks)
+    {
+      const std::size_t begin = n * b / nthreads, end = n * (b + 1) / nthreads;
+      kept[b] = body(begin, end, items + begin);
+    }
+  }
+  std::size_t total = 0;
+  for (int b = 0; b < nthreads; ++b)
+  {
+    const std::size_t begin = n * b / nthreads;
+    if (begin != total && kept[b] > 0)
+    {
+      std::memmove(items + total, items + begin, kept[b] * sizeof(T));
+    }
+    total += kept[b];
+  }
+  return total;
 }
 
 } // namespace detail

@@ -30,6 +30,7 @@
 #define mtpt_Compositor_h
 
 #include "mtpt/Decompose.h"
+#include "mtpt/TransferFunctionTable.h"
 
 #include <cstddef>
 #include <cstdint>
@@ -37,21 +38,6 @@
 
 namespace mtpt
 {
-
-/**
- * A transfer function sampled over a scalar range: `table` holds `size` RGBA entries,
- * entry i at scalar low + i * (high - low) / (size - 1), read with linear interpolation and
- * clamped at both ends (the GL path's texture with linear filtering and clamp to edge).
- */
-struct TransferFunctionTable
-{
-  const float* table = nullptr; ///< 4 * size floats
-  int size = 0;
-  double low = 0, high = 1;
-
-  /// RGBA at `scalar`.
-  void Lookup(float scalar, float rgba[4]) const;
-};
 
 struct CompositeSettings
 {
@@ -61,11 +47,15 @@ struct CompositeSettings
   /// Optional window depth of opaque geometry in [0, 1], width * height floats, row 0 at
   /// the bottom. Null: no occlusion.
   const float* opaqueDepth = nullptr;
+  /// Blend over the image already in `rgba` (same size) instead of clearing it: a frame
+  /// drawn in batches composites batch after batch, back to front.
+  bool accumulate = false;
 };
 
 /**
  * Composites slots [0, count) of the decomposition buffers into `rgba` (4 * width *
- * height floats, premultiplied, row 0 at the bottom), which it resizes and clears.
+ * height floats, premultiplied, row 0 at the bottom), which it resizes and clears unless
+ * settings.accumulate is set and it already has that size.
  *
  * Thread safety: reentrant. Determinism: every pixel is blended by one thread in slot
  * order, so the image is bit-identical for any thread count.

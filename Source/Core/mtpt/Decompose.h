@@ -154,12 +154,17 @@ void InvertOrder(
  * sequential and the point records are reused while cached; only the slot writes scatter,
  * and writes do not stall the way dependent gathers do. On meshes larger than the cache
  * this is several times faster than gathering in visibility order (see the benchmark).
- * `count` is the number of slots (cells with a rank).
+ *
+ * Only ranks in the window [firstRank, firstRank + count) are decomposed, rank r into slot
+ * r - firstRank of `vertices` (5 * count records) and `indices` (12 * count, numbered from
+ * 0): a frame drawn in batches decomposes one window at a time into the same buffers.
+ * The whole order is firstRank 0 and count = the number of ranked cells.
  *
  * Thread safety and determinism: as DecomposeTetrahedra; each slot has exactly one writer.
  */
 void DecomposeTetrahedraByRank(const DecomposeInput& input, const std::uint32_t* rank,
-  TetVertex* vertices, std::uint32_t* indices, ProjectionClass* classes, int threads);
+  std::size_t firstRank, std::size_t count, TetVertex* vertices, std::uint32_t* indices,
+  ProjectionClass* classes, int threads);
 
 } // namespace mtpt
 

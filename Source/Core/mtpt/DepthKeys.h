@@ -19,6 +19,7 @@
 #include "mtpt/MeshView.h"
 #include "mtpt/Transform.h"
 
+#include <cstddef>
 #include <cstdint>
 
 namespace mtpt
@@ -57,6 +58,19 @@ inline std::uint32_t CellOfKey(SortKey key)
  */
 void ComputeDepthKeys(const ProjectedPoint* points, std::size_t pointCount, const CellsView& cells,
   bool perspective, SortKey* keys, int threads);
+
+/**
+ * The keys of the cells in `list` (listCount ascending cell ids; null: every cell), written
+ * compactly in list order, leaving out with `cullFrustum` the cells whose four points are
+ * usable and all beyond the same clip plane (NDC x, y or z outside [-1, 1]): such a cell
+ * lies outside the view volume and cannot produce a fragment. Returns the number of keys
+ * written (at most listCount). Keys are those of ComputeDepthKeys.
+ *
+ * Thread safety: reentrant. Determinism: identical for any thread count.
+ */
+std::size_t ComputeVisibleDepthKeys(const ProjectedPoint* points, std::size_t pointCount,
+  const CellsView& cells, const std::uint32_t* list, std::size_t listCount, bool perspective,
+  bool cullFrustum, SortKey* keys, int threads);
 
 } // namespace mtpt
 

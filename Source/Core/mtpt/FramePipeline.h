@@ -1,27 +1,63 @@
 // SPDX-License-Identifier: BSD-3-Clause
 /**
  * @file FramePipeline.h
- * @brief The CPU stages of one frame in sequence (transform, keys, order, decompose),
- * owning their buffers and timing each stage.
+ * @brief The CPU stages of one frame in sequence (transform, culling, keys, order,
+ * decompose), owning their buffers, timing each stage, counting what it culls, and reusing
+ * the results of stages whose inputs did not change.
+ *
+ * Work follows what the scene needs (DESIGN.md section 5):
+ * - culling before the sort: cells the opacity transfer function makes fully transparent
+ *   (Culling.h; recomputed only when the data or the opacity table change) and cells
+ *   entirely outside the view volume (DepthKeys.h); after the sort, the decomposition
+ *   culls cells that cover no pixel centre (Decompose.h);
+ * - reuse (SetReuse): an unchanged view, model matrix and data skip every stage; a change
+ *   of colour only (the same opacity-visible cells) skips every stage too; a change of
+ *   the opacity table redoes culling, keys, order and decomposition but not the
+ *   transform; a small rotation sorts this frame's keys from the previous order
+ *   (SortNearlySorted) when the same cells are drawn, and falls back to the full sort when
+ *   that would cost more;
+ * - bounded memory: the decomposition runs in windows of the order (DecomposeBatch), so the
+ *   vertex and index buffers hold one batch instead of the whole mesh.
+ * Culling and reuse never change the image: every culled cell would produce no fragment,
+ * and every reused result equals what the stage would compute again.
  */
 #ifndef mtpt_FramePipeline_h
 #define mtpt_FramePipeline_h
 
+#include "mtpt/Culling.h"
 #include "mtpt/Decompose.h"
 #include "mtpt/VisibilityOrder.h"
 
+#include <cstdint>
 #include <memory>
 #include <vector>
 
 namespace mtpt
 {
 
-/// Wall-clock seconds of each CPU stage of the last frame. `decompose` includes inverting
-/// the order (DecomposeTetrahedraByRank).
+/// Wall-clock seconds of each CPU stage of the last frame. `cull` is the opacity culling
+/// (cell scalar ranges and the visible-cell list); `decompose` includes inverting the order
+/// and sums over the frame's batches.
 struct StageTimes
 {
-  double transform = 0, keys = 0, order = 0, decompose = 0;
-  double Total() const { return transform + keys + order + decompose; }
+  double transform = 0, cull = 0, keys = 0, order = 0, decompose = 0;
+  double Total() const { return transform + cull + keys + order + decompose; }
+};
+
+/// What the last frame did: cell counts at each culling step and what it reused.
+struct FrameStats
+{
+  std::size_t cells = 0;            ///< cells in the mesh
+  std::size_t opacityCulled = 0;    ///< transparent over their whole scalar range
+  std::size_t frustumCulled = 0;    ///< entirely outside the view volume
+  std::size_t sorted = 0;           ///< cells sorted and given a slot
+  std::size_t pixelCulled = 0;      ///< slots covering no pixel centre (decomposition)
+  std::size_t notDrawable = 0;      ///< slots that cannot be drawn (bad cells, behind the eye)
+  std::size_t batches = 0;          ///< decomposition windows run this frame
+  bool transformReused = false;     ///< the projected points of the previous frame served
+  bool orderReused = false;         ///< no key was computed and nothing sorted
+  bool orderFromPrevious = false;   ///< sorted from the previous order (nearly sorted)
+  bool decompositionReused = false; ///< the buffers of the previous frame served
 };
 
 /// What a frame needs to know about the mesh and the view.
@@ -36,11 +72,20 @@ struct FrameInput
   /// Viewport in pixels; when set, cells covering no pixel centre are culled (see
   /// DecomposeInput). Leave 0 for multisampled targets.
   int viewportWidth = 0, viewportHeight = 0;
+  /// Opacity culling: when `opacity.table` is set, cells whose opacity is zero over their
+  /// scalar range under this table are skipped (exact for both backends, Culling.h).
+  TransferFunctionTable opacity;
+  /// Skip cells entirely outside the view volume before sorting.
+  bool cullFrustum = true;
+  /// Change counters, read only with reuse on (FramePipeline::SetReuse): change
+  /// `dataVersion` whenever the content of the points, cells or scalars changes, and
+  /// `opacityVersion` whenever the content of the opacity table changes.
+  std::uint64_t dataVersion = 0, opacityVersion = 0;
 };
 
 /**
- * Runs the four CPU stages and keeps their results until the next Run. Buffers grow to
- * the largest mesh seen and are reused, so steady-state frames allocate nothing.
+ * Runs the CPU stages and keeps their results until the next frame. Buffers grow to the
+ * largest mesh (or batch) seen and are reused, so steady-state frames allocate nothing.
  * Thread safety: one object per thread of control; the stages use OpenMP inside.
  */
 class FramePipeline
@@ -51,30 +96,112 @@ public:
   void SetOrderMethod(OrderMethod method, std::size_t maxSubArraySize = DefaultMaxSubArraySize);
   OrderMethod GetOrderMethod() const { return Order->Method(); }
 
-  /// Runs all stages on `threads` OpenMP threads (<= 0: all available).
-  /// Returns false (and leaves empty buffers) if the mesh is too large for 32-bit indices.
+  /**
+   * Reuse results across frames (default off). With reuse on, the caller promises that the
+   * arrays behind FrameInput change content only together with a change of
+   * FrameInput::dataVersion (or of their address or size), and the opacity table only
+   * together with FrameInput::opacityVersion.
+   */
+  void SetReuse(bool reuse) { this->Reuse = reuse; }
+  bool GetReuse() const { return this->Reuse; }
+
+  /**
+   * Stages 1-3 and the order's inverse: transform, culling, keys, order. Returns false
+   * (and sorts nothing) if the mesh is too large for 32-bit indices. Then decompose with
+   * DecomposeBatch, or use Run for the whole order at once.
+   */
+  bool Prepare(const FrameInput& input, int threads);
+
+  /**
+   * Decomposes the order's window [first, first + count) (clamped to SortedCount()) into
+   * Vertices() and Indices(), slot 0 being rank `first`. Call after Prepare, for the same
+   * input, in any order of windows.
+   */
+  void DecomposeBatch(std::size_t first, std::size_t count, int threads);
+
+  /// Prepare, then decompose the whole order in one batch.
   bool Run(const FrameInput& input, int threads);
 
   const StageTimes& Times() const { return LastTimes; }
-  std::size_t TetrahedronCount() const { return Count; }
+  const FrameStats& Stats() const { return LastStats; }
+  /// Cells in the order (after culling): the slots of the whole frame.
+  std::size_t SortedCount() const { return SortedSize; }
+  /// Slots in the buffers: the last batch decomposed.
+  std::size_t TetrahedronCount() const { return BatchCount; }
   const std::vector<ProjectedPoint>& Points() const { return ProjectedPoints; }
+  /// The order: SortedCount() keys, back to front.
   const std::vector<SortKey>& Keys() const { return SortedKeys; }
   const std::vector<TetVertex>& Vertices() const { return VertexBuffer; }
   const std::vector<std::uint32_t>& Indices() const { return IndexBuffer; }
 
+  /// Bytes held by the pipeline's buffers (capacity, not size).
+  std::size_t MemoryBytes() const;
+  /// Frees every buffer and forgets what could be reused.
+  void Release();
+
   /// Largest tetrahedron count whose fixed-stride buffers fit 32-bit indices.
   static std::size_t MaxTetrahedra();
 
+  /// A nearly-sorted re-sort is tried only after a rotation of the view direction below
+  /// this many radians (larger ones move too many cells to beat the full sort).
+  static constexpr double NearlySortedMaxAngle = 0.01;
+
 private:
+  bool SameTransform(const FrameInput& input) const;
+  void UpdateCulling(const FrameInput& input, int threads, bool dataChanged);
+  void UpdateOrder(const FrameInput& input, int threads, bool dataChanged, bool viewChanged);
+
   std::unique_ptr<VisibilityOrder> Order;
   std::size_t MaxSubArraySize = DefaultMaxSubArraySize;
+  bool Reuse = false;
+
   std::vector<ProjectedPoint> ProjectedPoints;
+  std::vector<float> CellRanges;      ///< opacity culling: 2 per cell
+  std::vector<std::uint32_t> Visible; ///< cells the opacity table leaves visible
+  std::vector<std::uint32_t> NewVisible;
+  OpacityCulling Opacity;
   std::vector<SortKey> SortedKeys;
+  std::vector<SortKey> Scratch; ///< nearly-sorted attempt
   std::vector<std::uint32_t> Rank;
   std::vector<TetVertex> VertexBuffer;
   std::vector<std::uint32_t> IndexBuffer;
-  std::size_t Count = 0;
+  std::vector<ProjectionClass> Classes;
+  DecomposeInput Decomposition; ///< of the frame being prepared
+  std::size_t SortedSize = 0, BatchCount = 0;
   StageTimes LastTimes;
+  FrameStats LastStats;
+
+  // What the kept results were computed from (valid only with the matching flag).
+  struct Inputs
+  {
+    const void* points = nullptr;
+    std::size_t pointCount = 0;
+    const void* connectivity = nullptr;
+    const void* offsets = nullptr;
+    std::size_t cellCount = 0;
+    const float* scalars = nullptr;
+    ScalarsView::Association association = ScalarsView::Association::Points;
+    std::uint64_t dataVersion = 0;
+    bool operator==(const Inputs& o) const;
+  };
+  Inputs Data;
+  bool HaveTransform = false, HaveRanges = false, HaveVisible = false, HaveOrder = false;
+  bool HaveDecomposition = false;
+  Matrix4 TransformModelView{}, TransformProjection{};
+  std::uint64_t OpacityVersion = 0;
+  TransferFunctionTable OpacityTable;
+  bool CullByOpacity = false;
+  // Versions of the stage results, bumped when a stage recomputes something different.
+  std::uint64_t PointsVersion = 0, VisibleVersion = 0, OrderVersion = 0;
+  std::uint64_t OrderPointsVersion = 0, OrderVisibleVersion = 0;
+  bool OrderPerspective = false, OrderCullFrustum = false;
+  OrderMethod OrderMethodUsed = OrderMethod::RadixSort;
+  std::size_t OrderFrustumCulled = 0, OrderOpacityCulled = 0;
+  double OrderDirection[3] = { 0, 0, 0 };
+  std::uint64_t DecomposedOrderVersion = 0;
+  std::size_t DecomposedFirst = 0, DecomposedCount = 0;
+  int DecomposedViewport[2] = { 0, 0 };
+  std::size_t DecomposedPixelCulled = 0, DecomposedNotDrawable = 0;
 };
 
 } // namespace mtpt

@@ -48,6 +48,8 @@ public:
   virtual OrderMethod Method() const = 0;
   /// Sorts keys[0, count) ascending on `threads` OpenMP threads (<= 0: all available).
   virtual void Sort(SortKey* keys, std::size_t count, int threads) = 0;
+  /// Bytes of scratch memory the object holds.
+  virtual std::size_t MemoryBytes() const { return 0; }
 };
 
 /// Default sub-array threshold MAX of the partition sort.
@@ -57,6 +59,17 @@ constexpr std::size_t DefaultMaxSubArraySize = 1u << 15;
 /// least 16) and ignored by the others.
 std::unique_ptr<VisibilityOrder> MakeVisibilityOrder(
   OrderMethod method, std::size_t maxSubArraySize = DefaultMaxSubArraySize);
+
+/**
+ * Sorts keys that are already nearly in order, as this frame's keys are in the previous
+ * frame's order after a small change of view: an insertion sort inside one block per
+ * thread (work: the number of inversions) and pairwise merges of the blocks. Gives up once
+ * about `moveBudget` element moves are spent and returns false; the keys are then a
+ * permutation of the input in no particular order and must be sorted another way.
+ * On success the result is the unique ascending order, as from every VisibilityOrder.
+ * Thread safety: reentrant.
+ */
+bool SortNearlySorted(SortKey* keys, std::size_t count, std::size_t moveBudget, int threads);
 
 } // namespace mtpt
 

@@ -1,0 +1,66 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file Culling.h
+ * @brief Cells a frame can skip before it sorts: those the opacity transfer function makes
+ * fully transparent (DESIGN.md section 5, "model only what a scene needs").
+ *
+ * Exactness: both backends shade a fragment from transfer-function values looked up at
+ * scalars interpolated inside its cell, so they lie in the cell's scalar range [min, max].
+ * A look-up reads the two table entries around its scalar (TransferFunctionTable). If every
+ * entry that a scalar in [min, max] can read (with one entry of margin on each side for
+ * rounding) has opacity 0, every fragment of the cell has opacity 0 and adds nothing to
+ * the image: culling it changes no pixel.
+ */
+#ifndef mtpt_Culling_h
+#define mtpt_Culling_h
+
+#include "mtpt/MeshView.h"
+#include "mtpt/TransferFunctionTable.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace mtpt
+{
+
+/**
+ * The scalar range of every cell: ranges[2c] = minimum and ranges[2c + 1] = maximum of its
+ * four point scalars (its own value for cell scalars). NaN for a cell that is not a
+ * tetrahedron, names a point id outside [0, pointCount), or has a non-finite scalar: such a
+ * cell is never drawn. Without scalars (null values) every range is [0, 0].
+ * Thread safety: reentrant; `threads` OpenMP threads (<= 0: all).
+ */
+void ComputeCellScalarRanges(const CellsView& cells, std::size_t pointCount,
+  const ScalarsView& scalars, float* ranges, int threads);
+
+/**
+ * Which scalar intervals an opacity transfer function leaves fully transparent, from the
+ * table both backends shade with (see the file comment for why the test is exact).
+ */
+class OpacityCulling
+{
+public:
+  /// Reads the opacity channel of `table` (copied: the table may change afterwards).
+  void SetTable(const TransferFunctionTable& table);
+
+  /// True if a scalar in [low, high] can read a non-zero opacity. False for NaN bounds.
+  bool Visible(float low, float high) const;
+
+  /**
+   * Writes the ids of the cells with a visible range (ComputeCellScalarRanges) to `cells`
+   * in ascending order and returns their number. `cells` needs cellCount entries.
+   * Determinism: identical for any thread count.
+   */
+  std::size_t SelectVisibleCells(
+    const float* ranges, std::size_t cellCount, std::uint32_t* cells, int threads) const;
+
+private:
+  std::vector<std::uint32_t> NonZeroBefore; ///< entries before i with opacity != 0
+  int Size = 0;
+  float Low = 0, Scale = 0;
+};
+
+} // namespace mtpt
+
+#endif

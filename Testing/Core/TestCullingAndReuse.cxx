@@ -1,0 +1,375 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Culling (opacity, frustum), reuse of stage results across frames, nearly-sorted re-sorts
+// and batched decomposition: each must leave the image exactly as the full frame draws it.
+#include "TestHelpers.h"
+
+#include "mtpt/Compositor.h"
+#include "mtpt/Culling.h"
+#include "mtpt/FramePipeline.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace
+{
+
+using mtpt::TetVertex;
+using mtpt::test::JitteredGrid;
+using mtpt::test::LookAt;
+using mtpt::test::TetMesh;
+
+/// Opacity 0 below `edge` and a ramp above it, colour varying everywhere.
+std::vector<float> EdgeTable(int size, float edge)
+{
+  std::vector<float> table;
+  for (int i = 0; i < size; ++i)
+  {
+    const float t = static_cast<float>(i) / (size - 1);
+    table.insert(table.end(), { t, 0.4f, 1 - t, t <= edge ? 0.0f : 4.0f * (t - edge) });
+  }
+  return table;
+}
+
+mtpt::FrameInput Frame(const TetMesh& mesh, double azimuth, bool perspective)
+{
+  mtpt::FrameInput input;
+  input.points = mesh.Points();
+  input.cells = mesh.Cells();
+  input.scalars = { mesh.scalars.data(), mtpt::ScalarsView::Association::Points };
+  const double r = 4.0;
+  input.modelView =
+    LookAt({ r * std::sin(azimuth), 1.2, r * std::cos(azimuth) }, { 0, 0, 0 }, { 0, 1, 0 });
+  input.projection =
+    perspective ? mtpt::test::Perspective(45, 1.0, 1, 10) : mtpt::test::Ortho(-2, 2, -2, 2, 1, 10);
+  input.perspective = perspective;
+  input.viewportWidth = input.viewportHeight = 48;
+  return input;
+}
+
+/// The pipeline's current frame composited with `table` over [-2, 3], in batches of
+/// `batch` slots (0: one batch).
+std::vector<float> Composite(mtpt::FramePipeline& pipeline, const mtpt::FrameInput& input,
+  const std::vector<float>& table, std::size_t batch = 0)
+{
+  mtpt::CompositeSettings settings;
+  settings.width = input.viewportWidth;
+  settings.height = input.viewportHeight;
+  settings.transferFunction = { table.data(), static_cast<int>(table.size() / 4), -2.0, 3.0 };
+  settings.unitDistance = 0.3;
+  mtpt::Compositor compositor;
+  std::vector<float> image;
+  const std::size_t total = pipeline.SortedCount();
+  const std::size_t step = batch ? batch : std::max<std::size_t>(total, 1);
+  for (std::size_t first = 0; first < total || first == 0; first += step)
+  {
+    pipeline.DecomposeBatch(first, step, 2);
+    compositor.Composite(pipeline.Vertices().data(), pipeline.Indices().data(),
+      pipeline.TetrahedronCount(), settings, image, 2);
+    settings.accumulate = true;
+    if (total == 0)
+    {
+      break;
+    }
+  }
+  return image;
+}
+
+bool SameImage(const std::vector<float>& a, const std::vector<float>& b)
+{
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+TEST(Culling, CellScalarRangesOfPointAndCellScalars)
+{
+  TetMesh mesh;
+  mesh.points = { 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1 };
+  mesh.scalars = { 0.5f, -1.0f, 2.0f, 0.25f, std::numeric_limits<float>::quiet_NaN() };
+  mesh.AddTetrahedron(0, 1, 2, 3);
+  mesh.AddTetrahedron(1, 2, 3, 4); // a NaN scalar
+  mesh.AddTetrahedron(0, 1, 2, 9); // id out of range
+  std::vector<float> ranges(6);
+  mtpt::ComputeCellScalarRanges(mesh.Cells(), 5,
+    { mesh.scalars.data(), mtpt::ScalarsView::Association::Points }, ranges.data(), 2);
+  EXPECT_EQ(ranges[0], -1.0f);
+  EXPECT_EQ(ranges[1], 2.0f);
+  for (int i = 2; i < 6; ++i)
+  {
+    EXPECT_TRUE(std::isnan(ranges[i])) << i;
+  }
+  const std::vector<float> cellScalars = { 7.0f, -3.0f, 1.0f };
+  mtpt::ComputeCellScalarRanges(mesh.Cells(), 5,
+    { cellScalars.data(), mtpt::ScalarsView::Association::Cells }, ranges.data(), 3);
+  EXPECT_EQ(ranges[0], 7.0f);
+  EXPECT_EQ(ranges[1], 7.0f);
+  EXPECT_EQ(ranges[2], -3.0f);
+  EXPECT_TRUE(std::isnan(ranges[4])); // the bad cell stays undrawable
+}
+
+TEST(Culling, OpacityCullingNeverHidesAVisibleScalar)
+{
+  // Random tables with long zero runs; for random intervals, "not visible" must mean that
+  // every scalar in the interval looks up opacity exactly 0 (dense check), and intervals
+  // well inside a non-zero run must be visible.
+  std::mt19937 random(7);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  for (int trial = 0; trial < 20; ++trial)
+  {
+    const int size = 16 + trial * 7;
+    std::vector<float> table(4 * size, 0.0f);
+    for (int i = 0; i < size; ++i)
+    {
+      table[4 * i + 3] = (i / 5) % 3 == 1 ? unit(random) + 0.01f : 0.0f;
+    }
+    const mtpt::TransferFunctionTable tf{ table.data(), size, -1.0, 2.0 };
+    mtpt::OpacityCulling culling;
+    culling.SetTable(tf);
+    int hidden = 0, shown = 0;
+    for (int q = 0; q < 400; ++q)
+    {
+      float a = -1.5f + 4.0f * unit(random), b = a + 0.3f * unit(random);
+      if (culling.Visible(a, b))
+      {
+        ++shown;
+        continue;
+      }
+      ++hidden;
+      for (int k = 0; k <= 200; ++k)
+      {
+        float rgba[4];
+        tf.Lookup(a + (b - a) * k / 200.0f, rgba);
+        ASSERT_EQ(rgba[3], 0.0f) << "culled [" << a << ", " << b << "] reads opacity at " << k;
+      }
+    }
+    EXPECT_GT(hidden, 0);
+    EXPECT_GT(shown, 0);
+  }
+  // Exact expectations on a step: opacity 0 for scalars up to 0.5 of the range.
+  const std::vector<float> table = EdgeTable(101, 0.5f);
+  mtpt::OpacityCulling culling;
+  culling.SetTable({ table.data(), 101, 0.0, 1.0 });
+  EXPECT_FALSE(culling.Visible(0.0f, 0.3f));
+  EXPECT_FALSE(culling.Visible(-5.0f, 0.47f));
+  EXPECT_TRUE(culling.Visible(0.2f, 0.7f));
+  EXPECT_TRUE(culling.Visible(0.9f, 5.0f));
+  EXPECT_FALSE(culling.Visible(std::numeric_limits<float>::quiet_NaN(), 1.0f));
+}
+
+TEST(FramePipeline, OpacityAndFrustumCullingLeaveTheImageUnchanged)
+{
+  const TetMesh mesh = JitteredGrid(12, 3);               // 10,368 tetrahedra
+  const std::vector<float> table = EdgeTable(256, 0.62f); // hides most of the scalar range
+  for (bool perspective : { false, true })
+  {
+    SCOPED_TRACE(perspective ? "perspective" : "orthographic");
+    mtpt::FrameInput input = Frame(mesh, 0.4, perspective);
+    input.projection = perspective ? mtpt::test::Perspective(25, 1.0, 1, 10)
+                                   : mtpt::test::Ortho(-1.2, 0.8, -1, 1, 1, 10); // crops
+    input.cullFrustum = false;
+    mtpt::FramePipeline all;
+    ASSERT_TRUE(all.Prepare(input, 2));
+    EXPECT_EQ(all.SortedCount(), mesh.CellCount());
+    const std::vector<float> reference = Composite(all, input, table);
+
+    input.cullFrustum = true;
+    input.opacity = { table.data(), 256, -2.0, 3.0 };
+    mtpt::FramePipeline culled;
+    ASSERT_TRUE(culled.Prepare(input, 2));
+    const mtpt::FrameStats& stats = culled.Stats();
+    // Expected opacity culls, counted independently: cells whose four scalars lie where
+    // the table (and one entry of margin) is zero.
+    std::size_t expectedOpacity = 0;
+    for (std::size_t c = 0; c < mesh.CellCount(); ++c)
+    {
+      float high = -1e30f;
+      for (int i = 0; i < 4; ++i)
+      {
+        high = std::max(high, mesh.scalars[mesh.connectivity[4 * c + i]]);
+      }
+      const int entry = static_cast<int>((high + 2.0f) * (255.0f / 5.0f)); // floor
+      expectedOpacity += entry + 2 <= static_cast<int>(0.62f * 255.0f) ? 1 : 0;
+    }
+    EXPECT_EQ(stats.opacityCulled, expectedOpacity);
+    EXPECT_GT(stats.opacityCulled, mesh.CellCount() / 2);
+    EXPECT_GT(stats.frustumCulled, 0u);
+    EXPECT_EQ(stats.opacityCulled + stats.frustumCulled + stats.sorted, mesh.CellCount());
+    const std::vector<float> image = Composite(culled, input, table);
+    EXPECT_TRUE(SameImage(reference, image));
+    float alpha = 0;
+    for (std::size_t i = 3; i < image.size(); i += 4)
+    {
+      alpha = std::max(alpha, image[i]);
+    }
+    EXPECT_GT(alpha, 0.2f); // the visible part is drawn
+  }
+}
+
+TEST(FramePipeline, ReuseRecomputesOnlyWhatChanged)
+{
+  const TetMesh mesh = JitteredGrid(10, 4);
+  std::vector<float> table = EdgeTable(128, 0.5f);
+  mtpt::FrameInput input = Frame(mesh, 0.3, true);
+  input.opacity = { table.data(), 128, -2.0, 3.0 };
+  input.dataVersion = 1;
+  input.opacityVersion = 1;
+  mtpt::FramePipeline pipeline;
+  pipeline.SetReuse(true);
+  ASSERT_TRUE(pipeline.Run(input, 2));
+  const std::vector<mtpt::SortKey> keys = pipeline.Keys();
+  const std::vector<float> first = Composite(pipeline, input, table);
+
+  // Unchanged: nothing recomputed, same buffers.
+  ASSERT_TRUE(pipeline.Run(input, 2));
+  EXPECT_TRUE(pipeline.Stats().transformReused);
+  EXPECT_TRUE(pipeline.Stats().orderReused);
+  EXPECT_TRUE(pipeline.Stats().decompositionReused);
+  EXPECT_EQ(pipeline.Times().Total(), 0.0);
+  EXPECT_TRUE(SameImage(first, Composite(pipeline, input, table)));
+
+  // A colour change that keeps every opacity: the same visible cells, the same order.
+  for (int i = 0; i < 128; ++i)
+  {
+    table[4 * i + 1] = 0.9f;
+  }
+  input.opacityVersion = 2;
+  ASSERT_TRUE(pipeline.Run(input, 2));
+  EXPECT_TRUE(pipeline.Stats().transformReused);
+  EXPECT_TRUE(pipeline.Stats().orderReused);
+  EXPECT_TRUE(pipeline.Stats().decompositionReused);
+
+  // An opacity change: culling, keys, order and decomposition again, not the transform;
+  // the result equals a fresh pipeline's.
+  table = EdgeTable(128, 0.3f);
+  input.opacity.table = table.data();
+  input.opacityVersion = 3;
+  ASSERT_TRUE(pipeline.Run(input, 2));
+  EXPECT_TRUE(pipeline.Stats().transformReused);
+  EXPECT_FALSE(pipeline.Stats().orderReused);
+  EXPECT_GT(pipeline.SortedCount(), keys.size());
+  mtpt::FramePipeline fresh;
+  ASSERT_TRUE(fresh.Run(input, 2));
+  EXPECT_EQ(pipeline.Keys(), fresh.Keys());
+  EXPECT_TRUE(SameImage(Composite(fresh, input, table), Composite(pipeline, input, table)));
+
+  // New data (a version change with the same arrays): everything again.
+  input.dataVersion = 2;
+  ASSERT_TRUE(pipeline.Run(input, 2));
+  EXPECT_FALSE(pipeline.Stats().transformReused);
+  EXPECT_FALSE(pipeline.Stats().orderReused);
+  EXPECT_FALSE(pipeline.Stats().decompositionReused);
+
+  // Without reuse nothing is ever skipped.
+  mtpt::FramePipeline plain;
+  ASSERT_TRUE(plain.Run(input, 2));
+  ASSERT_TRUE(plain.Run(input, 2));
+  EXPECT_FALSE(plain.Stats().transformReused || plain.Stats().orderReused ||
+    plain.Stats().decompositionReused);
+}
+
+TEST(FramePipeline, SmallRotationsSortFromThePreviousOrderWithTheSameResult)
+{
+  const TetMesh mesh = JitteredGrid(12, 9);
+  for (bool perspective : { false, true })
+  {
+    mtpt::FramePipeline pipeline;
+    pipeline.SetReuse(true);
+    double azimuth = 0.2;
+    mtpt::FrameInput input = Frame(mesh, azimuth, perspective);
+    input.projection = perspective ? mtpt::test::Perspective(70, 1.0, 1, 10)
+                                   : mtpt::test::Ortho(-3, 3, -3, 3, 1, 10); // all in view
+    ASSERT_TRUE(pipeline.Prepare(input, 2));
+    int fromPrevious = 0;
+    for (double step : { 1e-5, 1e-4, 1e-3, 0.005, 0.05, 1e-4 })
+    {
+      azimuth += step;
+      const mtpt::Matrix4 projection = input.projection;
+      input = Frame(mesh, azimuth, perspective);
+      input.projection = projection;
+      ASSERT_TRUE(pipeline.Prepare(input, 2));
+      fromPrevious += pipeline.Stats().orderFromPrevious;
+      if (step > mtpt::FramePipeline::NearlySortedMaxAngle)
+      {
+        EXPECT_FALSE(pipeline.Stats().orderFromPrevious);
+      }
+      mtpt::FramePipeline fresh;
+      ASSERT_TRUE(fresh.Prepare(input, 2));
+      ASSERT_EQ(pipeline.Keys(), fresh.Keys()) << "step " << step;
+    }
+    EXPECT_GE(fromPrevious, 3); // the smallest steps took the nearly-sorted path
+  }
+}
+
+TEST(VisibilityOrder, SortNearlySortedGivesTheUniqueOrderOrGivesUp)
+{
+  std::mt19937_64 random(3);
+  for (std::size_t n : { 10u, 5000u, 100000u })
+  {
+    std::vector<mtpt::SortKey> keys(n);
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      keys[i] = mtpt::MakeSortKey(static_cast<float>(i / 3), static_cast<std::uint32_t>(i));
+    }
+    std::sort(keys.begin(), keys.end());
+    const std::vector<mtpt::SortKey> sorted = keys;
+    // Local swaps: nearly sorted.
+    for (std::size_t i = 0; i + 5 < n; i += 7)
+    {
+      std::swap(keys[i], keys[i + random() % 5]);
+    }
+    for (int threads : { 1, 2, 3 })
+    {
+      std::vector<mtpt::SortKey> work = keys;
+      ASSERT_TRUE(mtpt::SortNearlySorted(work.data(), n, 4 * n, threads));
+      EXPECT_EQ(work, sorted) << n << " keys, " << threads << " threads";
+    }
+    // Reversed: far from sorted, the budget runs out.
+    std::vector<mtpt::SortKey> reversed(sorted.rbegin(), sorted.rend());
+    EXPECT_FALSE(mtpt::SortNearlySorted(reversed.data(), n, n, 2));
+  }
+}
+
+TEST(FramePipeline, BatchesReproduceTheWholeFrame)
+{
+  const TetMesh mesh = JitteredGrid(11, 2); // 7,986 tetrahedra
+  const std::vector<float> table = EdgeTable(64, 0.2f);
+  mtpt::FrameInput input = Frame(mesh, 0.7, true);
+  mtpt::FramePipeline whole;
+  ASSERT_TRUE(whole.Prepare(input, 2));
+  const std::vector<float> reference = Composite(whole, input, table);
+  const std::vector<TetVertex> vertices(
+    whole.Vertices().begin(), whole.Vertices().begin() + 5 * whole.SortedCount());
+  const std::vector<std::uint32_t> indices(
+    whole.Indices().begin(), whole.Indices().begin() + 12 * whole.SortedCount());
+  for (std::size_t batch : { 1000u, 3333u, 7985u })
+  {
+    mtpt::FramePipeline pipeline;
+    ASSERT_TRUE(pipeline.Prepare(input, 3));
+    EXPECT_TRUE(SameImage(reference, Composite(pipeline, input, table, batch))) << batch;
+    EXPECT_GE(pipeline.Stats().batches, whole.SortedCount() / batch);
+    // Each batch's buffers are the whole frame's slice, indices renumbered from 0.
+    for (std::size_t first = 0; first < pipeline.SortedCount(); first += batch)
+    {
+      pipeline.DecomposeBatch(first, batch, 2);
+      const std::size_t count = pipeline.TetrahedronCount();
+      ASSERT_EQ(count, std::min(batch, pipeline.SortedCount() - first));
+      ASSERT_EQ(0,
+        std::memcmp(
+          pipeline.Vertices().data(), vertices.data() + 5 * first, 5 * count * sizeof(TetVertex)));
+      for (std::size_t i = 0; i < 12 * count; ++i)
+      {
+        ASSERT_EQ(pipeline.Indices()[i] + 5 * first, indices[12 * first + i]);
+      }
+    }
+    if (batch == 1000) // memory follows the batch, not the mesh
+    {
+      EXPECT_LT(pipeline.MemoryBytes(), whole.MemoryBytes() - 100 * 7 * 168);
+    }
+  }
+}
+
+} // namespace
