@@ -66,33 +66,6 @@ std::vector<std::string> Split(const std::string& s)
   return out;
 }
 
-vtkSmartPointer<vtkUnstructuredGrid> ToVTK(const TetMesh& mesh)
-{
-  auto grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
-  vtkNew<vtkFloatArray> xyz;
-  xyz->SetNumberOfComponents(3);
-  xyz->SetArray(const_cast<float*>(mesh.points.data()), static_cast<vtkIdType>(mesh.points.size()),
-    1); // the mesh outlives the grid
-  vtkNew<vtkPoints> points;
-  points->SetData(xyz);
-  grid->SetPoints(points);
-  vtkNew<vtkIdTypeArray> offsets, connectivity;
-  offsets->SetArray(const_cast<vtkIdType*>(reinterpret_cast<const vtkIdType*>(mesh.offsets.data())),
-    static_cast<vtkIdType>(mesh.offsets.size()), 1);
-  connectivity->SetArray(
-    const_cast<vtkIdType*>(reinterpret_cast<const vtkIdType*>(mesh.connectivity.data())),
-    static_cast<vtkIdType>(mesh.connectivity.size()), 1);
-  vtkNew<vtkCellArray> cells;
-  cells->SetData(offsets, connectivity);
-  grid->SetCells(VTK_TETRA, cells);
-  vtkNew<vtkFloatArray> scalars;
-  scalars->SetName("scalars");
-  scalars->SetArray(
-    const_cast<float*>(mesh.scalars.data()), static_cast<vtkIdType>(mesh.scalars.size()), 1);
-  grid->GetPointData()->SetScalars(scalars);
-  return grid;
-}
-
 struct Result
 {
   double ms = 0;
@@ -302,7 +275,7 @@ int main(int argc, char** argv)
   std::vector<std::string> stageRows;
   for (const TetMesh& mesh : meshes)
   {
-    auto grid = ToVTK(mesh);
+    auto grid = mtpt::bench::ToUnstructuredGrid(mesh);
     double range[2];
     grid->GetPointData()->GetScalars()->GetRange(range);
     for (int size : o.sizes)

@@ -10,6 +10,7 @@
 #include <vtkDataSetReader.h>
 #include <vtkDataSetTriangleFilter.h>
 #include <vtkFloatArray.h>
+#include <vtkIdTypeArray.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
@@ -289,6 +290,33 @@ const std::vector<DataSetEntry>& SharedDataSets()
     { "ironProt", "ironProt/ironProt.vtk", "" },
   };
   return entries;
+}
+
+vtkSmartPointer<vtkUnstructuredGrid> ToUnstructuredGrid(const TetMesh& mesh)
+{
+  auto grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  vtkNew<vtkFloatArray> xyz;
+  xyz->SetNumberOfComponents(3);
+  xyz->SetArray(const_cast<float*>(mesh.points.data()), static_cast<vtkIdType>(mesh.points.size()),
+    1); // the mesh outlives the grid
+  vtkNew<vtkPoints> points;
+  points->SetData(xyz);
+  grid->SetPoints(points);
+  vtkNew<vtkIdTypeArray> offsets, connectivity;
+  offsets->SetArray(const_cast<vtkIdType*>(reinterpret_cast<const vtkIdType*>(mesh.offsets.data())),
+    static_cast<vtkIdType>(mesh.offsets.size()), 1);
+  connectivity->SetArray(
+    const_cast<vtkIdType*>(reinterpret_cast<const vtkIdType*>(mesh.connectivity.data())),
+    static_cast<vtkIdType>(mesh.connectivity.size()), 1);
+  vtkNew<vtkCellArray> cells;
+  cells->SetData(offsets, connectivity);
+  grid->SetCells(VTK_TETRA, cells);
+  vtkNew<vtkFloatArray> scalars;
+  scalars->SetName("scalars");
+  scalars->SetArray(
+    const_cast<float*>(mesh.scalars.data()), static_cast<vtkIdType>(mesh.scalars.size()), 1);
+  grid->GetPointData()->SetScalars(scalars);
+  return grid;
 }
 
 } // namespace bench

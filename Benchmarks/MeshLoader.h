@@ -10,6 +10,9 @@
 
 #include "TetrahedralGrid.h"
 
+#include <vtkSmartPointer.h>
+#include <vtkUnstructuredGrid.h>
+
 #include <string>
 #include <vector>
 
@@ -40,6 +43,10 @@ struct DataSetEntry
   const char* relativePath;
   const char* scalarName; ///< empty: the active scalars
 };
+
+/// A vtkUnstructuredGrid of tetrahedra that uses the mesh's arrays in place (the mesh must
+/// outlive it), with the scalars as active point scalars "scalars".
+vtkSmartPointer<vtkUnstructuredGrid> ToUnstructuredGrid(const TetMesh& mesh);
 
 /// The real meshes in ../shared/data (see its README.md), smallest first.
 const std::vector<DataSetEntry>& SharedDataSets();
