@@ -8,6 +8,8 @@ packages=(
   libgtest-dev googletest                 # unit tests
   libvtk9-dev                             # VTK 9.1: mapper, loaders for real meshes
   xvfb xauth                              # headless OpenGL (Mesa llvmpipe) for image tests
+  paraview paraview-dev openmpi-bin       # ParaView 5.11 plugin (its own VTK 9.2), MPI pvbatch
+  clang libomp-dev libclang-rt-14-dev     # ThreadSanitizer with an OpenMP runtime it can see, libFuzzer
 )
 
 missing=()

@@ -42,8 +42,13 @@ inline bool SetUp(const TetVertex* vertices, const std::uint32_t* indices, std::
   for (int k = 0; k < 3; ++k)
   {
     const TetVertex& v = vertices[tri[k]];
-    s.x[k] = (static_cast<double>(v.x) + 1.0) * 0.5 * width;
-    s.y[k] = (static_cast<double>(v.y) + 1.0) * 0.5 * height;
+    // Snapped to the rasterizer's sub-pixel grid first, so that the pixel range below is
+    // the one of the triangle actually rasterized (a centre just outside the unsnapped
+    // triangle may be inside the snapped one, and its neighbour then owns no such pixel).
+    s.x[k] = std::nearbyint((static_cast<double>(v.x) + 1.0) * 0.5 * width * SubpixelScale) /
+      SubpixelScale;
+    s.y[k] = std::nearbyint((static_cast<double>(v.y) + 1.0) * 0.5 * height * SubpixelScale) /
+      SubpixelScale;
     minX = std::min(minX, s.x[k]);
     maxX = std::max(maxX, s.x[k]);
     minY = std::min(minY, s.y[k]);
@@ -88,9 +93,12 @@ inline Edge MakeEdge(std::int64_t ax, std::int64_t ay, std::int64_t bx, std::int
 /// it): coverage by the top-left rule on 8-bit sub-pixel fixed point, the shaders' fragment
 /// math, GL_LEQUAL against the opaque depth, "over" blending. True if it covered a pixel.
 bool RasterizeTriangle(const TetVertex* vertices, const std::uint32_t* tri, const ScreenTriangle& s,
-  int width, const float* opaqueDepth, const TransferFunctionTable& tf, float inverseUnit,
-  float* rgba)
+  int width, const CompositeSettings& settings, float inverseUnit, float* rgba)
 {
+  const float* opaqueDepth = settings.opaqueDepth;
+  const TransferFunctionTable& tf = settings.transferFunction;
+  const PreIntegrationTable* preIntegration =
+    settings.shading == Shading::PreIntegrated ? settings.preIntegration : nullptr;
   for (int k = 0; k < 3; ++k)
   {
     if (!(std::fabs(s.x[k]) < FixedPointLimit && std::fabs(s.y[k]) < FixedPointLimit))
@@ -126,7 +134,9 @@ bool RasterizeTriangle(const TetVertex* vertices, const std::uint32_t* tri, cons
   constexpr std::int64_t Half = Step / 2;
 
   bool classified = false;
-  float attributes[3][6]; // per vertex: r, g, b, attenuation, length, NDC z
+  // Per vertex: r, g, b, attenuation (pre-integrated: front scalar, back scalar, unused,
+  // unused), then segment length and NDC z.
+  float attributes[3][6] = {};
   bool any = false;
   for (int y = s.ymin; y <= s.ymax; ++y)
   {
@@ -156,12 +166,21 @@ bool RasterizeTriangle(const TetVertex* vertices, const std::uint32_t* tri, cons
         for (int k = 0; k < 3; ++k)
         {
           const TetVertex& v = vertices[tri[order[k]]];
-          float front[4], back[4];
-          tf.Lookup(v.scalarFront, front);
-          tf.Lookup(v.scalarBack, back);
-          for (int c = 0; c < 4; ++c)
+          if (preIntegration)
           {
-            attributes[k][c] = 0.5f * (front[c] + back[c]);
+            attributes[k][0] = v.scalarFront;
+            attributes[k][1] = v.scalarBack;
+            attributes[k][2] = attributes[k][3] = 0.0f;
+          }
+          else
+          {
+            float front[4], back[4];
+            tf.Lookup(v.scalarFront, front);
+            tf.Lookup(v.scalarBack, back);
+            for (int c = 0; c < 4; ++c)
+            {
+              attributes[k][c] = 0.5f * (front[c] + back[c]);
+            }
           }
           attributes[k][4] = v.thickness;
           attributes[k][5] = v.z;
@@ -185,7 +204,16 @@ bool RasterizeTriangle(const TetVertex* vertices, const std::uint32_t* tri, cons
       {
         continue;
       }
-      const float opacity = 1.0f - std::exp(-f[3] * f[4] * inverseUnit);
+      if (preIntegration)
+      {
+        // f[0..3] become the segment's colour and opacity.
+        preIntegration->Segment(tf, f[0], f[1], f[4], inverseUnit, f);
+      }
+      else
+      {
+        f[3] = 1.0f - std::exp(-f[3] * f[4] * inverseUnit);
+      }
+      const float opacity = f[3];
       if (!(opacity > 0.0f))
       {
         continue;
@@ -227,14 +255,17 @@ inline void SlotPixels(
     minY = std::min(minY, slot[k].y);
     maxY = std::max(maxY, slot[k].y);
   }
-  // Conservative (half a 1/1000 pixel of slack): SetUp decides exactly. The clamps keep
+  // Conservative (1/128 pixel of slack, more than sub-pixel snapping moves a vertex): SetUp
+  // decides exactly. The clamps keep
   // the conversions to int defined for huge or infinite values; NaN gives an empty range.
   const float lx = (minX + 1.0f) * 0.5f * width - 0.5f, hx = (maxX + 1.0f) * 0.5f * width - 0.5f;
   const float ly = (minY + 1.0f) * 0.5f * height - 0.5f, hy = (maxY + 1.0f) * 0.5f * height - 0.5f;
   auto low = [](float v, int size)
-  { return v > 0.0f ? (v < size ? static_cast<int>(std::ceil(v - 1e-3f)) : size) : 0; };
-  auto high = [](float v, int size) {
-    return v < size - 1.0f ? (v > -1.0f ? static_cast<int>(std::floor(v + 1e-3f)) : -1) : size - 1;
+  { return v > 0.0f ? (v < size ? static_cast<int>(std::ceil(v - 1.0f / 128)) : size) : 0; };
+  auto high = [](float v, int size)
+  {
+    return v < size - 1.0f ? (v > -1.0f ? static_cast<int>(std::floor(v + 1.0f / 128)) : -1)
+                           : size - 1;
   };
   x0 = low(lx, width);
   x1 = high(hx, width);
@@ -313,7 +344,13 @@ void Compositor::Composite(const TetVertex* vertices, const std::uint32_t* indic
   // Each band: every slot in order, whole tetrahedra rejected by their bounding box, the
   // rest rasterized triangle by triangle into this band's rows only.
   const float inverseUnit = static_cast<float>(1.0 / settings.unitDistance);
-  const TransferFunctionTable& tf = settings.transferFunction;
+  if (settings.shading == Shading::PreIntegrated &&
+    (!settings.preIntegration ||
+      settings.preIntegration->integrals.size() <
+        4 * static_cast<std::size_t>(settings.transferFunction.size)))
+  {
+    return; // no integral functions for this table: nothing can be shaded
+  }
   std::size_t rasterized = 0;
 #pragma omp parallel for num_threads(nthreads) schedule(static, 1) reduction(+ : rasterized)
   for (int band = 0; band < bands; ++band)
@@ -342,7 +379,7 @@ void Compositor::Composite(const TetVertex* vertices, const std::uint32_t* indic
         s.ymin = std::max(s.ymin, rowBegin);
         s.ymax = std::min(s.ymax, rowEnd);
         rasterized += RasterizeTriangle(vertices, indices + 12 * (t / 4) + 3 * (t % 4), s, width,
-                        settings.opaqueDepth, tf, inverseUnit, rgba.data())
+                        settings, inverseUnit, rgba.data())
           ? 1
           : 0;
       }

@@ -83,6 +83,7 @@ public:
   vtkOpenGLHelper Triangles;
   vtkNew<vtkTextureObject> TransferFunction;
   vtkTimeStamp TransferFunctionUploadTime;
+  vtkNew<vtkTextureObject> IntegralsHigh, IntegralsLow; // pre-integrated shading
   vtkNew<vtkTextureObject> ImageTexture;
   std::unique_ptr<vtkOpenGLQuadHelper> Quad;
   int SoftwareRenderer = -1; // of LastWindow: -1 unknown, 0 no, 1 yes
@@ -93,6 +94,7 @@ public:
   vtkMTimeType TablePropertyTime = 0;
   vtkVolumeProperty* TableProperty = nullptr;
   double TableRange[2] = { 0, 0 };
+  mtpt::PreIntegrationTable PreIntegration; // integral functions of Table
 
   // CPU backend.
   mtpt::Compositor Compositor;
@@ -173,6 +175,11 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetNumberOfThreads(int threads)
 const char* vtkMultiThreadedProjectedTetrahedraMapper::GetOrderMethodAsString()
 {
   return this->OrderMethod == PARTITION_SORT ? "PartitionSort" : "RadixSort";
+}
+
+const char* vtkMultiThreadedProjectedTetrahedraMapper::GetShadingModeAsString()
+{
+  return this->ShadingMode == PRE_INTEGRATED_SHADING ? "PreIntegrated" : "VTKCompatible";
 }
 
 double vtkMultiThreadedProjectedTetrahedraMapper::GetTransformSeconds()
@@ -291,6 +298,8 @@ void vtkMultiThreadedProjectedTetrahedraMapper::ReleaseGraphicsResources(vtkWind
   if (window)
   {
     in.TransferFunction->ReleaseGraphicsResources(window);
+    in.IntegralsHigh->ReleaseGraphicsResources(window);
+    in.IntegralsLow->ReleaseGraphicsResources(window);
     in.ImageTexture->ReleaseGraphicsResources(window);
     in.Framebuffer->ReleaseGraphicsResources(window);
     if (in.Quad)
@@ -525,6 +534,11 @@ void vtkMultiThreadedProjectedTetrahedraMapper::CompositeOnCPU(
     in.TableRange[1] };
   settings.unitDistance = UnitDistance(volume);
   settings.opaqueDepth = in.Depth.data();
+  if (this->ShadingMode == PRE_INTEGRATED_SHADING)
+  {
+    settings.shading = mtpt::Shading::PreIntegrated;
+    settings.preIntegration = &in.PreIntegration;
+  }
   // Batch after batch, back to front, into one image. Decomposition and compositing both
   // use every thread, so they run one after the other.
   const std::size_t total = in.Pipeline.SortedCount(), batch = this->BatchTetrahedra();
@@ -626,16 +640,47 @@ void vtkMultiThreadedProjectedTetrahedraMapper::DrawTriangles(
     in.TransferFunction->SetMagnificationFilter(vtkTextureObject::Linear);
     in.TransferFunction->Create2DFromRaw(
       TransferFunctionTableSize, 1, 4, VTK_FLOAT, in.Table.data());
+    // The prefix integrals as float high + low parts (pre-integrated shading).
+    const std::vector<double>& integrals = in.PreIntegration.integrals;
+    std::vector<float> high(integrals.size()), low(integrals.size());
+    for (std::size_t i = 0; i < integrals.size(); ++i)
+    {
+      high[i] = static_cast<float>(integrals[i]);
+      low[i] = static_cast<float>(integrals[i] - high[i]);
+    }
+    for (vtkTextureObject* texture : { in.IntegralsHigh.Get(), in.IntegralsLow.Get() })
+    {
+      texture->SetContext(window);
+      texture->SetWrapS(vtkTextureObject::ClampToEdge);
+      texture->SetWrapT(vtkTextureObject::ClampToEdge);
+      texture->SetMinificationFilter(vtkTextureObject::Nearest);
+      texture->SetMagnificationFilter(vtkTextureObject::Nearest);
+    }
+    in.IntegralsHigh->Create2DFromRaw(TransferFunctionTableSize, 1, 4, VTK_FLOAT, high.data());
+    in.IntegralsLow->Create2DFromRaw(TransferFunctionTableSize, 1, 4, VTK_FLOAT, low.data());
     in.TransferFunctionUploadTime.Modified();
   }
   in.TransferFunction->Activate();
   program->SetUniformi("transferFunction", in.TransferFunction->GetTextureUnit());
+  const bool preIntegrated = this->ShadingMode == PRE_INTEGRATED_SHADING;
+  program->SetUniformi("shadingMode", preIntegrated ? 1 : 0);
+  program->SetUniformi("tableSize", TransferFunctionTableSize);
+  if (preIntegrated)
+  {
+    in.IntegralsHigh->Activate();
+    in.IntegralsLow->Activate();
+    program->SetUniformi("integralsHigh", in.IntegralsHigh->GetTextureUnit());
+    program->SetUniformi("integralsLow", in.IntegralsLow->GetTextureUnit());
+  }
   const double low = in.TableRange[0], high = in.TableRange[1];
   // Texel centres: scalar `low` at 0.5/N, `high` at (N-0.5)/N.
   const double n = TransferFunctionTableSize;
   const double scale = (n - 1.0) / n / (high - low);
   program->SetUniformf("scalarScale", static_cast<float>(scale));
   program->SetUniformf("scalarShift", static_cast<float>(0.5 / n - low * scale));
+  const double entryScale = (n - 1.0) / (high - low);
+  program->SetUniformf("entryScale", static_cast<float>(entryScale));
+  program->SetUniformf("entryShift", static_cast<float>(-low * entryScale));
   program->SetUniformf("inverseUnitDistance", static_cast<float>(1.0 / UnitDistance(volume)));
 
   int width = 0, height = 0, x0 = 0, y0 = 0;
@@ -737,6 +782,11 @@ void vtkMultiThreadedProjectedTetrahedraMapper::DrawTriangles(
     first += batch;
   } while (first < total);
   in.TransferFunction->Deactivate();
+  if (preIntegrated)
+  {
+    in.IntegralsHigh->Deactivate();
+    in.IntegralsLow->Deactivate();
+  }
 
   if (floatTarget)
   {
@@ -839,6 +889,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::UpdateTransferFunctionTable(
     in.Table[4 * i + 2] = rgb[3 * i + 2];
     in.Table[4 * i + 3] = opacity[i];
   }
+  in.PreIntegration.Build({ in.Table.data(), n, low, high });
   in.TablePropertyTime = property->GetMTime();
   in.TableProperty = property;
   in.TableRange[0] = low;
@@ -857,6 +908,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::PrintSelf(ostream& os, vtkIndent
      << " (last frame: " << (this->Internal->LastBackend == CPU_BACKEND ? "CPU" : "OpenGL")
      << ")\n";
   os << indent << "OrderMethod: " << this->GetOrderMethodAsString() << "\n";
+  os << indent << "ShadingMode: " << this->GetShadingModeAsString() << "\n";
   os << indent << "MaxSubArraySize: " << this->MaxSubArraySize << "\n";
   os << indent << "UseFloatingPointFrameBuffer: " << this->UseFloatingPointFrameBuffer << "\n";
   os << indent << "SynchronizedTiming: " << this->SynchronizedTiming << "\n";

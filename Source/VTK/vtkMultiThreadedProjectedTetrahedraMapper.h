@@ -129,6 +129,32 @@ public:
   const char* GetOrderMethodAsString();
   ///@}
 
+  enum ShadingModes
+  {
+    /// As vtkProjectedTetrahedraMapper: colour and attenuation classified at the vertices
+    /// (the mean of front and back at the thick vertex) and interpolated, with VTK's
+    /// alpha/beta slip fixed and float colours (default).
+    VTK_COMPATIBLE_SHADING = 0,
+    /// The front scalar, back scalar and segment length are interpolated and each fragment
+    /// is shaded by pre-integration over them (integral functions of the transfer
+    /// functions, exact optical depth): features of the transfer functions between vertex
+    /// values are not missed. See mtpt::PreIntegrationTable. About 1.3x the compositing
+    /// cost of VTK-compatible shading.
+    PRE_INTEGRATED_SHADING = 1
+  };
+
+  ///@{
+  /**
+   * How fragments are classified: VTK_COMPATIBLE_SHADING (default) or
+   * PRE_INTEGRATED_SHADING. Both backends give the same image for either mode.
+   */
+  vtkSetClampMacro(ShadingMode, int, VTK_COMPATIBLE_SHADING, PRE_INTEGRATED_SHADING);
+  vtkGetMacro(ShadingMode, int);
+  void SetShadingModeToVTKCompatible() { this->SetShadingMode(VTK_COMPATIBLE_SHADING); }
+  void SetShadingModeToPreIntegrated() { this->SetShadingMode(PRE_INTEGRATED_SHADING); }
+  const char* GetShadingModeAsString();
+  ///@}
+
   ///@{
   /// Sub-array threshold MAX of the partition sort (default 32768, at least 16).
   vtkSetClampMacro(MaxSubArraySize, vtkIdType, 16, VTK_ID_MAX);
@@ -240,6 +266,7 @@ protected:
   int Backend = AUTOMATIC_BACKEND;
   int NumberOfThreads = 0;
   int OrderMethod = RADIX_SORT;
+  int ShadingMode = VTK_COMPATIBLE_SHADING;
   vtkIdType MaxSubArraySize = 32768;
   bool UseFloatingPointFrameBuffer = true;
   bool SynchronizedTiming = false;

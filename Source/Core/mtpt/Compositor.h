@@ -12,10 +12,14 @@
  * - Coverage: a pixel belongs to a triangle if its centre is inside, or on an edge that is
  *   a top or a left edge (the top-left rule of Direct3D and of Mesa's rasterizers), so a
  *   pixel on an edge shared by two triangles is covered exactly once.
- * - Shading, exactly as the GL path's shaders: each vertex is classified as the mean of
- *   the transfer function at its front and back scalars (colour rgb, attenuation a);
- *   colour, attenuation and segment length are interpolated linearly in screen space;
- *   fragment opacity = 1 - exp(-a * length / unitDistance).
+ * - Shading, exactly as the GL path's shaders, in one of two modes (Shading):
+ *   VTK-compatible: each vertex is classified as the mean of the transfer function at its
+ *   front and back scalars (colour rgb, attenuation a); colour, attenuation and segment
+ *   length are interpolated linearly in screen space; fragment opacity =
+ *   1 - exp(-a * length / unitDistance).
+ *   Pre-integrated: the front scalar, back scalar and segment length are interpolated
+ *   linearly in screen space and each fragment is shaded by PreIntegrationTable::Segment,
+ *   so transfer-function features between the vertex scalars are not missed.
  * - Threads: the image is cut into one band of rows per thread, balanced by the number of
  *   tetrahedra starting in each row; each thread streams through all slots in order,
  *   rejects whole tetrahedra by their bounding box, and rasterizes into its own rows.
@@ -39,10 +43,20 @@
 namespace mtpt
 {
 
+/// How fragments are classified (see the file comment).
+enum class Shading
+{
+  VTKCompatible,
+  PreIntegrated
+};
+
 struct CompositeSettings
 {
   int width = 0, height = 0;
   TransferFunctionTable transferFunction;
+  Shading shading = Shading::VTKCompatible;
+  /// Integral functions of `transferFunction`, required for Shading::PreIntegrated.
+  const PreIntegrationTable* preIntegration = nullptr;
   double unitDistance = 1.0;
   /// Optional window depth of opaque geometry in [0, 1], width * height floats, row 0 at
   /// the bottom. Null: no occlusion.

@@ -2,10 +2,13 @@
 /**
  * @file TransferFunctionTable.h
  * @brief Colour and opacity transfer functions sampled into one RGBA table, read as the
- * OpenGL path's texture reads them. Shared by the compositor and opacity culling.
+ * OpenGL path's texture reads them, and the table's integral functions for pre-integrated
+ * shading. Shared by the compositor, the OpenGL shaders (same formulas) and opacity culling.
  */
 #ifndef mtpt_TransferFunctionTable_h
 #define mtpt_TransferFunctionTable_h
+
+#include <vector>
 
 namespace mtpt
 {
@@ -14,6 +17,7 @@ namespace mtpt
  * A transfer function sampled over a scalar range: `table` holds `size` RGBA entries,
  * entry i at scalar low + i * (high - low) / (size - 1), read with linear interpolation and
  * clamped at both ends (the GL path's texture with linear filtering and clamp to edge).
+ * Alpha is the attenuation per ScalarOpacityUnitDistance (VTK's scalar opacity).
  */
 struct TransferFunctionTable
 {
@@ -23,7 +27,48 @@ struct TransferFunctionTable
 
   /// RGBA at `scalar`.
   void Lookup(float scalar, float rgba[4]) const;
+
+  /// `scalar` in entry units: 0 at `low`, size - 1 at `high`, clamped (NaN gives 0).
+  double EntryCoordinate(double scalar) const;
 };
+
+/**
+ * Pre-integrated shading (DESIGN.md section 3): the colour and opacity of a ray segment
+ * along which the scalar runs linearly from `front` to `back`, computed from the integral
+ * functions of the table (Engel, Kraus and Ertl, "High-quality pre-integrated volume
+ * rendering using hardware-accelerated pixel shading", 2001) instead of from the two end
+ * values. With the table's attenuation tau(u) and colour c(u) linear between entries, the
+ * integral functions
+ *   T(u) = integral_0^u tau,   E(u) = integral_0^u c tau
+ * are exact piecewise cubics, stored at the entries (prefix sums) and completed inside an
+ * entry in closed form. A segment's optical depth is then exact for any transfer function
+ * the table holds, however narrow its features: a peak between the two end scalars is
+ * counted in full. The segment is composited front to back in up to
+ * MaxPreIntegrationSteps equal scalar steps (one per PreIntegrationStepEntries entries),
+ * each with its exact optical depth and its attenuation-weighted mean colour; only the
+ * order of emission inside one step is approximated.
+ */
+struct PreIntegrationTable
+{
+  /// 4 * size prefix sums (T, E_r, E_g, E_b) at the entries, entry units.
+  std::vector<double> integrals;
+
+  /// Builds the prefix sums of `tf` (recompute whenever the table changes).
+  void Build(const TransferFunctionTable& tf);
+
+  /**
+   * Colour (not premultiplied) and opacity of a segment of eye-space length `length`
+   * from scalar `front` to `back`, with `inverseUnit` = 1 / ScalarOpacityUnitDistance.
+   * The OpenGL fragment shader evaluates the same formulas.
+   */
+  void Segment(const TransferFunctionTable& tf, float front, float back, float length,
+    float inverseUnit, float rgba[4]) const;
+};
+
+/// At most this many compositing steps per segment (pre-integrated shading).
+constexpr int MaxPreIntegrationSteps = 8;
+/// One compositing step per this many table entries crossed (pre-integrated shading).
+constexpr double PreIntegrationStepEntries = 32.0;
 
 } // namespace mtpt
 

@@ -1,20 +1,137 @@
 //VTK::System::Dec
 //VTK::Output::Dec
 // SPDX-License-Identifier: BSD-3-Clause
-// MTPT fragment shader: emission-absorption over the interpolated segment length.
+// MTPT fragment shader: emission-absorption over the interpolated ray segment. The
+// pre-integrated branch evaluates mtpt::PreIntegrationTable::Segment
+// (Source/Core/TransferFunctionTable.cxx) with the same formulas: keep the two in step.
 in vec4 classified;
-in float segmentLength;
+in vec3 preIntegration; // front and back scalar (table entry units), segment length
 
 uniform float inverseUnitDistance; // 1 / ScalarOpacityUnitDistance
+uniform int shadingMode;           // 0: VTK-compatible, 1: pre-integrated
+uniform int tableSize;
+uniform sampler2D transferFunction;
+// Prefix integrals (T, E_r, E_g, E_b) at the table entries, as a float sum high + low so
+// that differences of nearby entries keep their precision.
+uniform sampler2D integralsHigh;
+uniform sampler2D integralsLow;
+
+// 1 - exp(-d) without cancellation for small d.
+float Opacity(float d)
+{
+  return d < 1e-3 ? d * (1.0 - d * (0.5 - d / 6.0)) : 1.0 - exp(-d);
+}
+
+vec4 Entry(int i)
+{
+  return texelFetch(transferFunction, ivec2(i, 0), 0);
+}
+
+void Split(float u, out int i, out float f)
+{
+  i = min(int(u), max(tableSize - 2, 0));
+  f = u - float(i);
+}
+
+vec4 EntryAt(float u)
+{
+  int i;
+  float f;
+  Split(u, i, f);
+  return mix(Entry(i), Entry(min(i + 1, tableSize - 1)), f);
+}
+
+// Integrals of tau and c tau from the start of interval i to fraction f.
+void Partial(int i, float f, out float t, out vec3 e)
+{
+  vec4 a = Entry(i);
+  vec4 d = Entry(min(i + 1, tableSize - 1)) - a;
+  t = f * (a.a + 0.5 * f * d.a);
+  e = f * (a.rgb * a.a + 0.5 * f * (a.rgb * d.a + d.rgb * a.a) + f * f * d.rgb * d.a / 3.0);
+}
+
+// Means of tau and c tau over the entry interval [u0, u1].
+void SpanMeans(float u0, float u1, out float tau, out vec3 e)
+{
+  int i0, i1;
+  float f0, f1;
+  Split(u0, i0, f0);
+  Split(u1, i1, f1);
+  if (i0 == i1)
+  {
+    vec4 a = Entry(i0);
+    vec4 d = Entry(min(i0 + 1, tableSize - 1)) - a;
+    float s1 = 0.5 * (f0 + f1);
+    float s2 = (f0 * f0 + f0 * f1 + f1 * f1) / 3.0;
+    tau = a.a + s1 * d.a;
+    e = a.rgb * a.a + s1 * (a.rgb * d.a + d.rgb * a.a) + s2 * d.rgb * d.a;
+    return;
+  }
+  float t0, t1;
+  vec3 e0, e1;
+  Partial(i0, f0, t0, e0);
+  Partial(i1, f1, t1, e1);
+  vec4 sums = (texelFetch(integralsHigh, ivec2(i1, 0), 0) - texelFetch(integralsHigh, ivec2(i0, 0), 0)) +
+    (texelFetch(integralsLow, ivec2(i1, 0), 0) - texelFetch(integralsLow, ivec2(i0, 0), 0));
+  float inverse = 1.0 / (u1 - u0);
+  tau = (sums.x + t1 - t0) * inverse;
+  e = (sums.yzw + e1 - e0) * inverse;
+}
+
+vec4 PreIntegrated(float ua, float ub, float len)
+{
+  if (!(len > 0.0))
+  {
+    return vec4(0.0);
+  }
+  float depth = len * inverseUnitDistance;
+  float tau;
+  vec3 e;
+  SpanMeans(ua, ub, tau, e);
+  float wanted = max(abs(ub - ua) / 32.0, tau * depth);
+  int steps = int(min(8.0, max(1.0, ceil(wanted))));
+  vec3 colour = vec3(0.0);
+  float alpha = 0.0;
+  for (int s = 0; s < steps; ++s)
+  {
+    float u0 = ua + (ub - ua) * float(s) / float(steps);
+    float u1 = ua + (ub - ua) * float(s + 1) / float(steps);
+    if (steps > 1)
+    {
+      SpanMeans(u0, u1, tau, e);
+    }
+    if (!(tau > 0.0))
+    {
+      continue;
+    }
+    float d = tau * depth / float(steps);
+    float a = Opacity(d);
+    float h = d < 1e-3 ? 0.5 - d / 12.0 : 1.0 / d - 1.0 / (exp(d) - 1.0);
+    vec3 c0 = EntryAt(u0).rgb;
+    vec3 c1 = EntryAt(u1).rgb;
+    colour += (1.0 - alpha) * a * (e / tau + (c0 - c1) * (0.5 - h));
+    alpha += (1.0 - alpha) * a;
+  }
+  return alpha > 0.0 ? vec4(colour / alpha, alpha) : vec4(0.0);
+}
 
 void main()
 {
-  // The exponential is taken per fragment: interpolating it per vertex would not match
-  // (the opacity of a segment is not linear in its length).
-  float opacity = 1.0 - exp(-classified.a * segmentLength * inverseUnitDistance);
-  if (opacity <= 0.0)
+  vec4 fragment;
+  if (shadingMode == 0)
+  {
+    // The exponential is taken per fragment: interpolating it per vertex would not match
+    // (the opacity of a segment is not linear in its length).
+    fragment =
+      vec4(classified.rgb, 1.0 - exp(-classified.a * preIntegration.z * inverseUnitDistance));
+  }
+  else
+  {
+    fragment = PreIntegrated(preIntegration.x, preIntegration.y, preIntegration.z);
+  }
+  if (fragment.a <= 0.0)
   {
     discard;
   }
-  gl_FragData[0] = vec4(classified.rgb, opacity);
+  gl_FragData[0] = fragment;
 }

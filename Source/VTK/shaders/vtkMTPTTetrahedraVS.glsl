@@ -8,21 +8,37 @@ in vec2 scalarFrontBack;
 in float thickness;
 
 // Colour (rgb) and scalar opacity (a) of the transfer functions, sampled over the scalar
-// range: texture coordinate = scalar * scalarScale + scalarShift.
+// range: texture coordinate = scalar * scalarScale + scalarShift; table entry coordinate
+// (0 at the first entry, tableSize - 1 at the last) = scalar * entryScale + entryShift.
 uniform sampler2D transferFunction;
 uniform float scalarScale;
 uniform float scalarShift;
+uniform float entryScale;
+uniform float entryShift;
+uniform int tableSize;
+uniform int shadingMode; // 0: VTK-compatible, 1: pre-integrated
 
 out vec4 classified;
-out float segmentLength;
+out vec3 preIntegration;
 
 void main()
 {
-  // Vertex classification as VTK's PT, with float colours: at the thick vertex the
-  // colour and attenuation are the mean of the front and back values.
-  vec4 front = texture(transferFunction, vec2(scalarFrontBack.x * scalarScale + scalarShift, 0.5));
-  vec4 back = texture(transferFunction, vec2(scalarFrontBack.y * scalarScale + scalarShift, 0.5));
-  classified = 0.5 * (front + back);
-  segmentLength = thickness;
+  if (shadingMode == 0)
+  {
+    // Vertex classification as VTK's PT, with float colours: at the thick vertex the
+    // colour and attenuation are the mean of the front and back values.
+    vec4 front =
+      texture(transferFunction, vec2(scalarFrontBack.x * scalarScale + scalarShift, 0.5));
+    vec4 back = texture(transferFunction, vec2(scalarFrontBack.y * scalarScale + scalarShift, 0.5));
+    classified = 0.5 * (front + back);
+    preIntegration = vec3(0.0, 0.0, thickness);
+  }
+  else
+  {
+    // Pre-integrated: the scalars travel to the fragment shader (in table entry units).
+    classified = vec4(0.0);
+    float last = float(tableSize - 1);
+    preIntegration = vec3(clamp(scalarFrontBack * entryScale + entryShift, 0.0, last), thickness);
+  }
   gl_Position = vec4(vertexNDC, 1.0);
 }
