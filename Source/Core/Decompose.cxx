@@ -343,6 +343,22 @@ inline bool CoversPixelCentre(const ProjectedPoint* const c[4], int width, int h
   return x0 <= x1 && y0 <= y1;
 }
 
+/// The tetrahedron `corners` into slot-local records with global index base `base`,
+/// culled when it covers no pixel centre of the viewport.
+inline ProjectionClass DecomposeCorners(const DecomposeInput& input,
+  const ProjectedPoint* const corners[4], const float scalars[4], std::uint32_t base,
+  TetVertex slotVertices[5], std::uint32_t slotIndices[12])
+{
+  const bool cull = input.viewportWidth > 0 && input.viewportHeight > 0 && AllUsable(corners) &&
+    !CoversPixelCentre(corners, input.viewportWidth, input.viewportHeight);
+  if (cull)
+  {
+    WriteDegenerateSlot(slotVertices, slotIndices, base);
+    return ProjectionClass::CoversNoPixel;
+  }
+  return Decompose(corners, scalars, slotVertices, slotIndices, base).kind;
+}
+
 /// Slot k, holding `cell`.
 template <typename Access>
 inline void DecomposeSlot(const Access& cells, const DecomposeInput& input,
@@ -363,17 +379,7 @@ inline void DecomposeSlot(const Access& cells, const DecomposeInput& input,
     {
       scalars[i] = cellScalars ? cellScalars[cell] : corners[i]->scalar;
     }
-    const bool cull = input.viewportWidth > 0 && input.viewportHeight > 0 && AllUsable(corners) &&
-      !CoversPixelCentre(corners, input.viewportWidth, input.viewportHeight);
-    if (cull)
-    {
-      WriteDegenerateSlot(slotVertices, slotIndices, base);
-      kind = ProjectionClass::CoversNoPixel;
-    }
-    else
-    {
-      kind = Decompose(corners, scalars, slotVertices, slotIndices, base).kind;
-    }
+    kind = DecomposeCorners(input, corners, scalars, base, slotVertices, slotIndices);
   }
   else
   {
@@ -450,6 +456,14 @@ Projection DecomposeTetrahedron(const ProjectedPoint* const corners[4], const fl
   TetVertex vertices[5], std::uint32_t indices[12])
 {
   return Decompose(corners, scalars, vertices, indices, 0);
+}
+
+ProjectionClass DecomposeIntoSlot(const DecomposeInput& input,
+  const ProjectedPoint* const corners[4], const float scalars[4], std::size_t k,
+  TetVertex* vertices, std::uint32_t* indices)
+{
+  return DecomposeCorners(
+    input, corners, scalars, static_cast<std::uint32_t>(5 * k), vertices + 5 * k, indices + 12 * k);
 }
 
 void DecomposeTetrahedra(const DecomposeInput& input, const SortKey* order, std::size_t count,

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "mtpt/FramePipeline.h"
 
+#include "detail/MeshAccess.h"
 #include "detail/Parallel.h"
 
 #include <algorithm>
@@ -78,6 +79,7 @@ std::size_t FramePipeline::MemoryBytes() const
   return Bytes(this->ProjectedPoints) + Bytes(this->CellRanges) + Bytes(this->Visible) +
     Bytes(this->NewVisible) + Bytes(this->SortedKeys) + Bytes(this->Scratch) + Bytes(this->Rank) +
     Bytes(this->VertexBuffer) + Bytes(this->IndexBuffer) + Bytes(this->Classes) +
+    Bytes(this->Pieces) + Bytes(this->PieceKeys) + Bytes(this->Crossing) +
     this->Order->MemoryBytes();
 }
 
@@ -93,6 +95,9 @@ void FramePipeline::Release()
   std::vector<SortKey>().swap(this->Scratch);
   std::vector<TetVertex>().swap(this->VertexBuffer);
   std::vector<ProjectionClass>().swap(this->Classes);
+  std::vector<NearPiece>().swap(this->Pieces);
+  std::vector<SortKey>().swap(this->PieceKeys);
+  std::vector<std::uint8_t>().swap(this->Crossing);
   this->Order = MakeVisibilityOrder(this->Order->Method(), this->MaxSubArraySize);
   this->HaveTransform = this->HaveRanges = this->HaveVisible = this->HaveOrder = false;
   this->HaveDecomposition = false;
@@ -228,6 +233,8 @@ void FramePipeline::UpdateOrder(
   {
     this->LastStats.orderReused = true;
     this->LastStats.frustumCulled = this->OrderFrustumCulled;
+    this->LastStats.nearClipped = this->OrderNearClipped;
+    this->LastStats.nearPieces = this->Pieces.size();
     this->LastStats.sorted = this->SortedSize;
     return;
   }
@@ -236,11 +243,13 @@ void FramePipeline::UpdateOrder(
   const std::uint32_t* list = this->CullByOpacity ? this->Visible.data() : nullptr;
   const std::size_t listCount = this->CullByOpacity ? this->Visible.size() : n;
   this->SortedKeys.resize(listCount);
-  const std::size_t count =
+  std::size_t count =
     ComputeVisibleDepthKeys(this->ProjectedPoints.data(), input.points.count, input.cells, list,
       listCount, input.perspective, input.cullFrustum, this->SortedKeys.data(), threads);
   const std::size_t frustumCulled = listCount - count;
   this->SortedKeys.resize(count);
+  const std::size_t nearClipped = this->ClipNearPlane(input, threads);
+  count = this->SortedKeys.size();
   this->LastTimes.keys = detail::SecondsSince(start);
 
   start = Clock::now();
@@ -254,7 +263,8 @@ void FramePipeline::UpdateOrder(
   const bool samePermutation = this->Reuse && this->HaveOrder && !dataChanged && viewChanged &&
     this->OrderVisibleVersion == this->VisibleVersion &&
     this->OrderPerspective == input.perspective && this->OrderFrustumCulled == 0 &&
-    frustumCulled == 0 && count == this->SortedSize && angle < NearlySortedMaxAngle;
+    frustumCulled == 0 && nearClipped == 0 && this->OrderNearClipped == 0 &&
+    count == this->SortedSize && angle < NearlySortedMaxAngle;
   bool fromPrevious = false;
   if (samePermutation)
   {
@@ -277,11 +287,22 @@ void FramePipeline::UpdateOrder(
   {
     this->Order->Sort(this->SortedKeys.data(), count, threads);
   }
+  if (!this->PieceKeys.empty())
+  {
+    // The pieces of cells cut by the near plane, sorted and merged into the order.
+    std::sort(this->PieceKeys.begin(), this->PieceKeys.end());
+    this->Scratch.resize(count + this->PieceKeys.size());
+    std::merge(this->SortedKeys.begin(), this->SortedKeys.begin() + count, this->PieceKeys.begin(),
+      this->PieceKeys.end(), this->Scratch.begin());
+    this->SortedKeys.swap(this->Scratch);
+    count = this->SortedKeys.size();
+  }
   this->LastTimes.order = detail::SecondsSince(start);
 
   start = Clock::now();
-  EnsureSize(this->Rank, n);
-  InvertOrder(this->SortedKeys.data(), count, n, this->Rank.data(), threads);
+  const std::size_t ranked = n + this->Pieces.size();
+  EnsureSize(this->Rank, ranked);
+  InvertOrder(this->SortedKeys.data(), count, ranked, this->Rank.data(), threads);
   this->LastTimes.decompose += detail::SecondsSince(start);
 
   this->SortedSize = count;
@@ -292,11 +313,113 @@ void FramePipeline::UpdateOrder(
   this->OrderCullFrustum = input.cullFrustum;
   this->OrderMethodUsed = this->Order->Method();
   this->OrderFrustumCulled = frustumCulled;
+  this->OrderNearClipped = nearClipped;
   std::copy(direction, direction + 3, this->OrderDirection);
   ++this->OrderVersion;
   this->LastStats.frustumCulled = frustumCulled;
+  this->LastStats.nearClipped = nearClipped;
+  this->LastStats.nearPieces = this->Pieces.size();
   this->LastStats.sorted = count;
   this->LastStats.orderFromPrevious = fromPrevious;
+}
+
+std::size_t FramePipeline::ClipNearPlane(const FrameInput& input, int threads)
+{
+  this->Pieces.clear();
+  this->PieceKeys.clear();
+  const NearPlane plane(input.projection);
+  const ProjectedPoint* points = this->ProjectedPoints.data();
+  const auto pointCount = static_cast<std::int64_t>(input.points.count);
+  const int nthreads = detail::ResolveThreads(threads);
+  // Most frames have no point in front of the plane: one pass over the points decides.
+  int any = 0;
+#pragma omp parallel for num_threads(nthreads) schedule(static) reduction(| : any)
+  for (std::int64_t i = 0; i < pointCount; ++i)
+  {
+    any |= HasFiniteEyeCoordinates(points[i]) && plane.Distance(points[i]) < 0.0 ? 1 : 0;
+  }
+  if (!any)
+  {
+    return 0;
+  }
+  const std::size_t n = input.cells.cellCount;
+  const float* cellScalars =
+    input.scalars.association == ScalarsView::Association::Cells ? input.scalars.values : nullptr;
+  const auto count = static_cast<std::int64_t>(this->SortedKeys.size());
+  EnsureSize(this->Crossing, this->SortedKeys.size());
+  // 0: keep, 1: crosses the plane (cut), 2: wholly in front of it (dropped).
+  detail::DispatchCells(input.cells, input.points.count,
+    [&](const auto& cells)
+    {
+#pragma omp parallel for num_threads(nthreads) schedule(static)
+      for (std::int64_t k = 0; k < count; ++k)
+      {
+        const std::uint32_t cell = CellOfKey(this->SortedKeys[k]);
+        std::int64_t ids[4];
+        std::uint8_t verdict = 0;
+        if (cells.TetrahedronPoints(cell, ids) &&
+          (!cellScalars || std::isfinite(cellScalars[cell])))
+        {
+          int front = 0, finite = 0;
+          for (int i = 0; i < 4; ++i)
+          {
+            const ProjectedPoint& p = points[ids[i]];
+            const bool ok = HasFiniteEyeCoordinates(p);
+            finite += ok ? 1 : 0;
+            front += ok && plane.Distance(p) < 0.0 ? 1 : 0;
+          }
+          verdict = finite < 4 || front == 0 ? 0 : (front == 4 ? 2 : 1);
+        }
+        this->Crossing[k] = verdict;
+      }
+    });
+  // In order (deterministic piece ids): keep the others' keys, cut the crossing cells.
+  std::size_t kept = 0, clipped = 0;
+  detail::DispatchCells(input.cells, input.points.count,
+    [&](const auto& cells)
+    {
+      for (std::int64_t k = 0; k < count; ++k)
+      {
+        const SortKey key = this->SortedKeys[k];
+        if (this->Crossing[k] == 0 || n + this->Pieces.size() + 3 > MaxTetrahedra())
+        {
+          this->SortedKeys[kept++] = key;
+          continue;
+        }
+        if (this->Crossing[k] == 2)
+        {
+          continue;
+        }
+        const std::uint32_t cell = CellOfKey(key);
+        std::int64_t ids[4] = { 0, 0, 0, 0 };
+        cells.TetrahedronPoints(cell, ids); // succeeded when the verdict was made
+        const ProjectedPoint* corners[4] = { points + ids[0], points + ids[1], points + ids[2],
+          points + ids[3] };
+        float scalars[4];
+        for (int i = 0; i < 4; ++i)
+        {
+          scalars[i] = cellScalars ? cellScalars[cell] : corners[i]->scalar;
+        }
+        const std::size_t before = this->Pieces.size();
+        CutTetrahedron(corners, scalars, plane, input.projection, this->Pieces);
+        ++clipped;
+        for (std::size_t j = before; j < this->Pieces.size(); ++j)
+        {
+          // The same key as a cell's (DepthKeys.h): its centroid's depth.
+          double x = 0, y = 0, z = 0;
+          for (const ProjectedPoint& p : this->Pieces[j].corners)
+          {
+            x += 0.25 * p.eyeX;
+            y += 0.25 * p.eyeY;
+            z += 0.25 * p.eyeZ;
+          }
+          const auto depth = static_cast<float>(input.perspective ? x * x + y * y + z * z : -z);
+          this->PieceKeys.push_back(MakeSortKey(depth, static_cast<std::uint32_t>(n + j)));
+        }
+      }
+    });
+  this->SortedKeys.resize(kept);
+  return clipped;
 }
 
 void FramePipeline::DecomposeBatch(std::size_t first, std::size_t count, int threads)
@@ -322,6 +445,23 @@ void FramePipeline::DecomposeBatch(std::size_t first, std::size_t count, int thr
   EnsureSize(this->Classes, count);
   DecomposeTetrahedraByRank(in, this->Rank.data(), first, count, this->VertexBuffer.data(),
     this->IndexBuffer.data(), this->Classes.data(), threads);
+  // Pieces of cells cut by the near plane: ranks after the cells'.
+  const auto pieces = static_cast<std::int64_t>(this->Pieces.size());
+#pragma omp parallel for num_threads(detail::ResolveThreads(threads))                              \
+  schedule(static) if (pieces > 1024)
+  for (std::int64_t j = 0; j < pieces; ++j)
+  {
+    const std::uint32_t r = this->Rank[in.cells.cellCount + j];
+    const std::uint64_t k = static_cast<std::uint64_t>(r) - first;
+    if (r != NotInOrder && k < count)
+    {
+      const NearPiece& piece = this->Pieces[j];
+      const ProjectedPoint* corners[4] = { &piece.corners[0], &piece.corners[1], &piece.corners[2],
+        &piece.corners[3] };
+      this->Classes[k] = DecomposeIntoSlot(
+        in, corners, piece.scalars, k, this->VertexBuffer.data(), this->IndexBuffer.data());
+    }
+  }
   std::size_t pixelCulled = 0, notDrawable = 0;
   const auto m = static_cast<std::int64_t>(count);
 #pragma omp parallel for num_threads(detail::ResolveThreads(threads)) schedule(static) \

@@ -254,6 +254,14 @@ vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfPixelCulledCells
 {
   return static_cast<vtkIdType>(this->Internal->Pipeline.Stats().pixelCulled);
 }
+vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfNearClippedCells()
+{
+  return static_cast<vtkIdType>(this->Internal->Pipeline.Stats().nearClipped);
+}
+vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfNearClipPieces()
+{
+  return static_cast<vtkIdType>(this->Internal->Pipeline.Stats().nearPieces);
+}
 int vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfBatches()
 {
   return static_cast<int>(this->Internal->Pipeline.Stats().batches);

@@ -237,6 +237,16 @@ public:
   vtkIdType GetNumberOfPixelCulledCells();
   ///@}
 
+  ///@{
+  /**
+   * Cells the last Render cut by the camera's near plane, and the tetrahedra drawn in their
+   * place (their visible parts; counted in GetNumberOfTetrahedra). vtkProjectedTetrahedraMapper
+   * drops such cells whole, which leaves holes when the camera is near or inside the mesh.
+   */
+  vtkIdType GetNumberOfNearClippedCells();
+  vtkIdType GetNumberOfNearClipPieces();
+  ///@}
+
   /// Batches the last Render decomposed and drew.
   int GetNumberOfBatches();
 

@@ -137,6 +137,16 @@ struct DecomposeInput
 void DecomposeTetrahedra(const DecomposeInput& input, const SortKey* order, std::size_t count,
   TetVertex* vertices, std::uint32_t* indices, ProjectionClass* classes, int threads);
 
+/**
+ * Decomposes one tetrahedron given by its projected corners (a piece of a cell cut by the
+ * near plane, NearPlane.h) into slot k of `vertices` and `indices` (global indices 5k +
+ * local), with the culling of DecomposeTetrahedra. Returns its class.
+ * Thread safety: writes only slot k.
+ */
+ProjectionClass DecomposeIntoSlot(const DecomposeInput& input,
+  const ProjectedPoint* const corners[4], const float scalars[4], std::size_t k,
+  TetVertex* vertices, std::uint32_t* indices);
+
 /// Rank of a cell that is not in the order (InvertOrder).
 constexpr std::uint32_t NotInOrder = 0xffffffffu;
 

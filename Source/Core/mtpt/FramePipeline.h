@@ -6,6 +6,8 @@
  * the results of stages whose inputs did not change.
  *
  * Work follows what the scene needs (DESIGN.md section 5):
+ * - cells crossing the near plane are cut by it and their visible part drawn as extra
+ *   tetrahedra with their own keys (NearPlane.h); cells wholly in front of it are dropped;
  * - culling before the sort: cells the opacity transfer function makes fully transparent
  *   (Culling.h; recomputed only when the data or the opacity table change) and cells
  *   entirely outside the view volume (DepthKeys.h); after the sort, the decomposition
@@ -26,6 +28,7 @@
 
 #include "mtpt/Culling.h"
 #include "mtpt/Decompose.h"
+#include "mtpt/NearPlane.h"
 #include "mtpt/VisibilityOrder.h"
 
 #include <cstdint>
@@ -53,6 +56,8 @@ struct FrameStats
   std::size_t sorted = 0;           ///< cells sorted and given a slot
   std::size_t pixelCulled = 0;      ///< slots covering no pixel centre (decomposition)
   std::size_t notDrawable = 0;      ///< slots that cannot be drawn (bad cells, behind the eye)
+  std::size_t nearClipped = 0;      ///< cells cut by the near plane (NearPlane.h)
+  std::size_t nearPieces = 0;       ///< tetrahedra drawn in their place (in `sorted`)
   std::size_t batches = 0;          ///< decomposition windows run this frame
   bool transformReused = false;     ///< the projected points of the previous frame served
   bool orderReused = false;         ///< no key was computed and nothing sorted
@@ -150,6 +155,7 @@ private:
   bool SameTransform(const FrameInput& input) const;
   void UpdateCulling(const FrameInput& input, int threads, bool dataChanged);
   void UpdateOrder(const FrameInput& input, int threads, bool dataChanged, bool viewChanged);
+  std::size_t ClipNearPlane(const FrameInput& input, int threads);
 
   std::unique_ptr<VisibilityOrder> Order;
   std::size_t MaxSubArraySize = DefaultMaxSubArraySize;
@@ -166,7 +172,10 @@ private:
   std::vector<TetVertex> VertexBuffer;
   std::vector<std::uint32_t> IndexBuffer;
   std::vector<ProjectionClass> Classes;
-  DecomposeInput Decomposition; ///< of the frame being prepared
+  std::vector<NearPiece> Pieces; ///< piece j has cell id cellCount + j in the order
+  std::vector<SortKey> PieceKeys;
+  std::vector<std::uint8_t> Crossing; ///< per key of the order being built
+  DecomposeInput Decomposition;       ///< of the frame being prepared
   std::size_t SortedSize = 0, BatchCount = 0;
   StageTimes LastTimes;
   FrameStats LastStats;
@@ -196,7 +205,7 @@ private:
   std::uint64_t OrderPointsVersion = 0, OrderVisibleVersion = 0;
   bool OrderPerspective = false, OrderCullFrustum = false;
   OrderMethod OrderMethodUsed = OrderMethod::RadixSort;
-  std::size_t OrderFrustumCulled = 0, OrderOpacityCulled = 0;
+  std::size_t OrderFrustumCulled = 0, OrderOpacityCulled = 0, OrderNearClipped = 0;
   double OrderDirection[3] = { 0, 0, 0 };
   std::uint64_t DecomposedOrderVersion = 0;
   std::size_t DecomposedFirst = 0, DecomposedCount = 0;
