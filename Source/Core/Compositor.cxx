@@ -137,6 +137,12 @@ bool RasterizeTriangle(const TetVertex* vertices, const std::uint32_t* tri, cons
   // Per vertex: r, g, b, attenuation (pre-integrated: front scalar, back scalar, unused,
   // unused), then segment length and NDC z.
   float attributes[3][6] = {};
+  // Perspective-exact pre-integration: per vertex 1 / w of front and back, and the eye
+  // ray direction's x and y per unit depth.
+  const PerspectiveInterpolation& view = settings.interpolation;
+  const bool exact = preIntegration && view.perspective;
+  double frontW[3] = { 1, 1, 1 }, backW[3] = { 1, 1, 1 }, rayX[3] = { 0, 0, 0 },
+         rayY[3] = { 0, 0, 0 };
   bool any = false;
   for (int y = s.ymin; y <= s.ymax; ++y)
   {
@@ -184,6 +190,15 @@ bool RasterizeTriangle(const TetVertex* vertices, const std::uint32_t* tri, cons
           }
           attributes[k][4] = v.thickness;
           attributes[k][5] = v.z;
+          if (exact)
+          {
+            rayX[k] = (v.x + view.shiftX) * view.scaleX;
+            rayY[k] = (v.y + view.shiftY) * view.scaleY;
+            const double ray = std::sqrt(1.0 + rayX[k] * rayX[k] + rayY[k] * rayY[k]);
+            const double w = 1.0 / (view.inverseWScale * v.z + view.inverseWOffset);
+            frontW[k] = 1.0 / w;
+            backW[k] = 1.0 / (w + v.thickness / ray);
+          }
         }
         classified = true;
       }
@@ -194,6 +209,23 @@ bool RasterizeTriangle(const TetVertex* vertices, const std::uint32_t* tri, cons
       {
         f[c] =
           static_cast<float>(l0 * attributes[0][c] + l1 * attributes[1][c] + l2 * attributes[2][c]);
+      }
+      if (exact)
+      {
+        const double front = l0 * frontW[0] + l1 * frontW[1] + l2 * frontW[2];
+        const double back = l0 * backW[0] + l1 * backW[1] + l2 * backW[2];
+        const double dx = l0 * rayX[0] + l1 * rayX[1] + l2 * rayX[2];
+        const double dy = l0 * rayY[0] + l1 * rayY[1] + l2 * rayY[2];
+        f[0] = static_cast<float>(
+          (l0 * frontW[0] * attributes[0][0] + l1 * frontW[1] * attributes[1][0] +
+            l2 * frontW[2] * attributes[2][0]) /
+          front);
+        f[1] =
+          static_cast<float>((l0 * backW[0] * attributes[0][1] + l1 * backW[1] * attributes[1][1] +
+                               l2 * backW[2] * attributes[2][1]) /
+            back);
+        f[4] = static_cast<float>(
+          std::max(0.0, 1.0 / back - 1.0 / front) * std::sqrt(1.0 + dx * dx + dy * dy));
       }
       if (f[5] < -1.0f || f[5] > 1.0f)
       {
@@ -279,6 +311,29 @@ inline void SlotPixels(
 }
 
 } // namespace
+
+PerspectiveInterpolation PerspectiveInterpolation::FromProjection(const Matrix4& p)
+{
+  PerspectiveInterpolation v;
+  // A perspective frustum: clip w = p14 ez with p14 < 0 (the eye depth D = -ez times
+  // -p14), clip z = p10 ez + p11, clip x and y free of translation terms.
+  if (p[8] != 0.0 || p[9] != 0.0 || p[12] != 0.0 || p[13] != 0.0 || !(p[14] < 0.0) ||
+    p[15] != 0.0 || !(p[0] != 0.0) || !(p[5] != 0.0) || p[1] != 0.0 || p[4] != 0.0 || p[3] != 0.0 ||
+    p[7] != 0.0 || !(std::fabs(p[11]) > 0.0))
+  {
+    return v;
+  }
+  v.perspective = true;
+  // z_ndc = p10 / p14 - p11 / (p14 D), so 1 / D = (p10 - p14 z_ndc) / p11.
+  v.inverseWScale = -p[14] / p[11];
+  v.inverseWOffset = p[10] / p[11];
+  // x_ndc = p0 ex / (-p14 D) + p2 / p14, so ex / D = (x_ndc - p2 / p14) (-p14 / p0).
+  v.scaleX = -p[14] / p[0];
+  v.shiftX = -p[2] / p[14];
+  v.scaleY = -p[14] / p[5];
+  v.shiftY = -p[6] / p[14];
+  return v;
+}
 
 void Compositor::Composite(const TetVertex* vertices, const std::uint32_t* indices,
   std::size_t count, const CompositeSettings& settings, std::vector<float>& rgba, int threads)

@@ -94,7 +94,8 @@ public:
   vtkMTimeType TablePropertyTime = 0;
   vtkVolumeProperty* TableProperty = nullptr;
   double TableRange[2] = { 0, 0 };
-  mtpt::PreIntegrationTable PreIntegration; // integral functions of Table
+  mtpt::PreIntegrationTable PreIntegration;     // integral functions of Table
+  mtpt::PerspectiveInterpolation Interpolation; // of the current frame's projection
 
   // CPU backend.
   mtpt::Compositor Compositor;
@@ -445,6 +446,9 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
   frame.projection =
     ToMatrix4(camera->GetProjectionTransformMatrix(renderer->GetTiledAspectRatio(), -1.0, 1.0));
   frame.perspective = camera->GetParallelProjection() == 0;
+  this->Internal->Interpolation = frame.perspective
+    ? mtpt::PerspectiveInterpolation::FromProjection(frame.projection)
+    : mtpt::PerspectiveInterpolation{};
   // Cells the opacity function hides are culled (exact: see mtpt/Culling.h).
   frame.opacity = { in.Table.data(), TransferFunctionTableSize, in.TableRange[0],
     in.TableRange[1] };
@@ -546,6 +550,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::CompositeOnCPU(
   {
     settings.shading = mtpt::Shading::PreIntegrated;
     settings.preIntegration = &in.PreIntegration;
+    settings.interpolation = in.Interpolation;
   }
   // Batch after batch, back to front, into one image. Decomposition and compositing both
   // use every thread, so they run one after the other.
@@ -689,6 +694,14 @@ void vtkMultiThreadedProjectedTetrahedraMapper::DrawTriangles(
   const double entryScale = (n - 1.0) / (high - low);
   program->SetUniformf("entryScale", static_cast<float>(entryScale));
   program->SetUniformf("entryShift", static_cast<float>(-low * entryScale));
+  const mtpt::PerspectiveInterpolation& view = in.Interpolation;
+  program->SetUniformi("perspectiveExact", preIntegrated && view.perspective ? 1 : 0);
+  program->SetUniformf("inverseDepthScale", static_cast<float>(view.inverseWScale));
+  program->SetUniformf("inverseDepthOffset", static_cast<float>(view.inverseWOffset));
+  const float rayScale[2] = { static_cast<float>(view.scaleX), static_cast<float>(view.scaleY) };
+  const float rayShift[2] = { static_cast<float>(view.shiftX), static_cast<float>(view.shiftY) };
+  program->SetUniform2f("rayScale", rayScale);
+  program->SetUniform2f("rayShift", rayShift);
   program->SetUniformf("inverseUnitDistance", static_cast<float>(1.0 / UnitDistance(volume)));
 
   int width = 0, height = 0, x0 = 0, y0 = 0;

@@ -18,8 +18,9 @@
  *   length are interpolated linearly in screen space; fragment opacity =
  *   1 - exp(-a * length / unitDistance).
  *   Pre-integrated: the front scalar, back scalar and segment length are interpolated
- *   linearly in screen space and each fragment is shaded by PreIntegrationTable::Segment,
- *   so transfer-function features between the vertex scalars are not missed.
+ *   (in perspective views exactly, see PerspectiveInterpolation) and each fragment is
+ *   shaded by PreIntegrationTable::Segment, so transfer-function features between the
+ *   vertex scalars are not missed.
  * - Threads: the image is cut into one band of rows per thread, balanced by the number of
  *   tetrahedra starting in each row; each thread streams through all slots in order,
  *   rejects whole tetrahedra by their bounding box, and rasterizes into its own rows.
@@ -34,6 +35,7 @@
 #define mtpt_Compositor_h
 
 #include "mtpt/Decompose.h"
+#include "mtpt/MeshView.h"
 #include "mtpt/TransferFunctionTable.h"
 
 #include <cstddef>
@@ -50,6 +52,28 @@ enum class Shading
   PreIntegrated
 };
 
+/**
+ * What perspective-exact interpolation needs of the projection (pre-integrated shading).
+ * In a perspective view each triangle of the decomposition has one planar front face and
+ * one planar back face (its silhouette vertices have front = back), so 1 / w (w = clip w,
+ * the eye depth) of each is affine in screen space, and so is the eye-space ray direction
+ * d = ((x_ndc + shiftX) * scaleX, (y_ndc + shiftY) * scaleY, -1) per unit of depth. Per
+ * fragment the segment length is (w_back - w_front) |d| and the front and back scalars are
+ * interpolated perspective-correctly over their faces: exact up to rounding, where
+ * interpolating the vertex lengths linearly in screen space (VTK's PT) is off by up to a
+ * few per cent near the eye. Orthographic views need none of it (all linear).
+ */
+struct PerspectiveInterpolation
+{
+  bool perspective = false;
+  double inverseWScale = 0.0, inverseWOffset = 1.0; ///< 1 / w = scale * z_ndc + offset
+  double scaleX = 0.0, shiftX = 0.0, scaleY = 0.0, shiftY = 0.0;
+
+  /// From an OpenGL-style projection (row-major). A matrix whose last two rows depend on
+  /// eye x or y (none that VTK builds) gives the orthographic (linear) default.
+  static PerspectiveInterpolation FromProjection(const Matrix4& projection);
+};
+
 struct CompositeSettings
 {
   int width = 0, height = 0;
@@ -64,6 +88,8 @@ struct CompositeSettings
   /// Blend over the image already in `rgba` (same size) instead of clearing it: a frame
   /// drawn in batches composites batch after batch, back to front.
   bool accumulate = false;
+  /// Pre-integrated shading in perspective views: see PerspectiveInterpolation.
+  PerspectiveInterpolation interpolation;
 };
 
 /**

@@ -6,6 +6,9 @@
 // (Source/Core/TransferFunctionTable.cxx) with the same formulas: keep the two in step.
 in vec4 classified;
 in vec3 preIntegration; // front and back scalar (table entry units), segment length
+in vec4 exactFrontBack;  // perspective-exact: see the vertex shader
+in vec2 exactRay;
+uniform int perspectiveExact;
 
 uniform float inverseUnitDistance; // 1 / ScalarOpacityUnitDistance
 uniform int shadingMode;           // 0: VTK-compatible, 1: pre-integrated
@@ -127,7 +130,18 @@ void main()
   }
   else
   {
-    fragment = PreIntegrated(preIntegration.x, preIntegration.y, preIntegration.z);
+    if (perspectiveExact == 1)
+    {
+      // Front and back faces are planes: their 1 / depth is affine in screen space.
+      float length = max(0.0, 1.0 / exactFrontBack.w - 1.0 / exactFrontBack.y) *
+        sqrt(1.0 + dot(exactRay, exactRay));
+      fragment = PreIntegrated(
+        exactFrontBack.x / exactFrontBack.y, exactFrontBack.z / exactFrontBack.w, length);
+    }
+    else
+    {
+      fragment = PreIntegrated(preIntegration.x, preIntegration.y, preIntegration.z);
+    }
   }
   if (fragment.a <= 0.0)
   {

@@ -17,9 +17,21 @@ uniform float entryScale;
 uniform float entryShift;
 uniform int tableSize;
 uniform int shadingMode; // 0: VTK-compatible, 1: pre-integrated
+// Perspective-exact pre-integration (mtpt::PerspectiveInterpolation): 1 / eye depth =
+// inverseDepthScale * z_ndc + inverseDepthOffset; eye ray per unit depth =
+// ((ndc.xy + rayShift) * rayScale, -1).
+uniform int perspectiveExact;
+uniform float inverseDepthScale;
+uniform float inverseDepthOffset;
+uniform vec2 rayScale;
+uniform vec2 rayShift;
 
 out vec4 classified;
 out vec3 preIntegration;
+// Perspective-exact only: (front scalar / front depth, 1 / front depth, back scalar / back
+// depth, 1 / back depth) and the eye ray; all affine in screen space over a triangle.
+out vec4 exactFrontBack;
+out vec2 exactRay;
 
 void main()
 {
@@ -39,6 +51,16 @@ void main()
     classified = vec4(0.0);
     float last = float(tableSize - 1);
     preIntegration = vec3(clamp(scalarFrontBack * entryScale + entryShift, 0.0, last), thickness);
+  }
+  exactFrontBack = vec4(0.0);
+  exactRay = vec2(0.0);
+  if (perspectiveExact == 1)
+  {
+    exactRay = (vertexNDC.xy + rayShift) * rayScale;
+    float depth = 1.0 / (inverseDepthScale * vertexNDC.z + inverseDepthOffset);
+    float front = 1.0 / depth;
+    float back = 1.0 / (depth + thickness / sqrt(1.0 + dot(exactRay, exactRay)));
+    exactFrontBack = vec4(preIntegration.x * front, front, preIntegration.y * back, back);
   }
   gl_Position = vec4(vertexNDC, 1.0);
 }
