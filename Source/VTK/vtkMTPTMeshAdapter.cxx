@@ -85,7 +85,8 @@ bool vtkMTPTMeshAdapter::Update(vtkUnstructuredGridBase* input)
     cells = this->CellCopy;
   }
 
-  // Every cell must be a tetrahedron (a later version tetrahedralizes other cells).
+  // Every cell must be a tetrahedron (the mapper splits other cells first: see
+  // vtkMTPTTetrahedralizer; this guards the core against anything else).
   vtkIdType nonTetrahedra = 0, firstBad = -1;
   int firstBadType = VTK_EMPTY_CELL;
   const unsigned char* types =
@@ -137,13 +138,25 @@ bool vtkMTPTMeshAdapter::Update(vtkUnstructuredGridBase* input)
   {
     outOfRange += (id < 0 || id >= pointIds) ? 1 : 0;
   }
+  // Points with a NaN or infinite coordinate: the core skips the cells using them.
+  vtkIdType nonFinitePoints = 0;
+  for (const auto point : vtk::DataArrayTupleRange<3>(coordinates))
+  {
+    nonFinitePoints +=
+      std::isfinite(point[0]) && std::isfinite(point[1]) && std::isfinite(point[2]) ? 0 : 1;
+  }
+  std::ostringstream message;
   if (outOfRange > 0)
   {
-    std::ostringstream message;
     message << outOfRange << " connectivity entries name points outside [0, " << pointIds
             << "); the cells using them are not drawn";
-    this->WarningMessage = message.str();
   }
+  if (nonFinitePoints > 0)
+  {
+    message << (outOfRange > 0 ? "; " : "") << nonFinitePoints << " of " << pointIds
+            << " points have NaN or infinite coordinates; the cells using them are not drawn";
+  }
+  this->WarningMessage = message.str();
   return true;
 }
 
@@ -159,11 +172,13 @@ const float* vtkMTPTMeshAdapter::Scalars(
   {
     component = components - 1;
   }
+  // Values changed in place with only the grid marked Modified() count as a change too.
   if (array != this->ScalarArray || array->GetMTime() != this->ScalarTime ||
-    component != this->ScalarComponent)
+    component != this->ScalarComponent || this->InputTime != this->ScalarInputTime)
   {
     this->ScalarArray = array;
     this->ScalarTime = array->GetMTime();
+    this->ScalarInputTime = this->InputTime;
     this->ScalarComponent = component;
     const vtkIdType tuples = array->GetNumberOfTuples();
     this->ScalarValues.resize(static_cast<std::size_t>(tuples));

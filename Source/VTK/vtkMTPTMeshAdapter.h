@@ -42,7 +42,7 @@ public:
    */
   bool Update(vtkUnstructuredGridBase* input);
   const std::string& Error() const { return this->ErrorMessage; }
-  /// A problem that does not stop rendering (ids out of range); empty if none.
+  /// A problem that does not stop rendering (ids out of range, NaN points); empty if none.
   const std::string& Warning() const { return this->WarningMessage; }
 
   PointsView Points() const { return this->PointData; }
@@ -51,7 +51,8 @@ public:
   /**
    * One float scalar per tuple of `array`: its `component`, or its magnitude when
    * component < 0 (single-component arrays: the value). Cached; returns the values and
-   * sets the finite range and the number of non-finite values.
+   * sets the finite range and the number of non-finite values. Recomputed when the array,
+   * its MTime, the component or the MTime of the input of the last Update() changes.
    */
   const float* Scalars(vtkDataArray* array, int component, double range[2], vtkIdType& nonFinite);
 
@@ -71,6 +72,7 @@ private:
   std::vector<float> ScalarValues;
   vtkDataArray* ScalarArray = nullptr;
   vtkMTimeType ScalarTime = 0;
+  vtkMTimeType ScalarInputTime = 0; // InputTime when the values were computed
   int ScalarComponent = -2;
   double ScalarRange[2] = { 0, 0 };
   vtkIdType ScalarNonFinite = 0;

@@ -3,15 +3,19 @@
 
 #include "vtkMTPTCompositeFS.h"
 #include "vtkMTPTMeshAdapter.h"
+#include "vtkMTPTTetrahedralizer.h"
 #include "vtkMTPTTetrahedraFS.h"
 #include "vtkMTPTTetrahedraVS.h"
 
 #include "mtpt/Compositor.h"
 #include "mtpt/FramePipeline.h"
 
+#include "vtkBoundingBox.h"
 #include "vtkCamera.h"
 #include "vtkColorTransferFunction.h"
 #include "vtkDataArray.h"
+#include "vtkDataArrayRange.h"
+#include "vtkMath.h"
 #include "vtkMatrix4x4.h"
 #include "vtkObjectFactory.h"
 #include "vtkOpenGLBufferObject.h"
@@ -26,6 +30,7 @@
 #include "vtkOpenGLVertexArrayObject.h"
 #include "vtkOpenGLVertexBufferObject.h"
 #include "vtkPiecewiseFunction.h"
+#include "vtkPoints.h"
 #include "vtkRenderer.h"
 #include "vtkShaderProgram.h"
 #include "vtkTextureObject.h"
@@ -40,6 +45,8 @@
 #include <climits>
 #include <cmath>
 #include <cstring>
+#include <map>
+#include <sstream>
 #include <vector>
 
 vtkStandardNewMacro(vtkMultiThreadedProjectedTetrahedraMapper);
@@ -73,6 +80,7 @@ mtpt::Matrix4 ToMatrix4(vtkMatrix4x4* m)
 class vtkMultiThreadedProjectedTetrahedraMapper::Internals
 {
 public:
+  mtpt::vtkMTPTTetrahedralizer Tetrahedralizer;
   mtpt::vtkMTPTMeshAdapter Adapter;
   mtpt::FramePipeline Pipeline;
 
@@ -125,23 +133,33 @@ public:
   // The OpenGL buffers hold the pipeline's whole (single-batch) decomposition.
   bool BuffersCurrent = false;
 
+  // What GetBounds() last computed from.
+  vtkUnstructuredGridBase* BoundsInput = nullptr;
+  vtkMTimeType BoundsTime = 0;
+
   // Timers of the last frame.
   double UploadSeconds = 0, DrawSeconds = 0, CompositeSeconds = 0;
   int LastBackend = OPENGL_BACKEND;
   vtkIdType Tetrahedra = 0;
 
-  // Messages are reported once per change of what caused them, not every frame.
-  vtkMTimeType ReportedInputTime = 0;
+  // Messages are reported once per change of what caused them, not every frame: each
+  // message once per modification time of the input it is about (several messages about
+  // one input each appear once, not in turn every frame).
   vtkMTimeType BlendWarningTime = 0;
-  std::string ReportedMessage;
+  std::map<std::string, vtkMTimeType> Reported;
   bool Report(vtkUnstructuredGridBase* input, const std::string& message)
   {
-    if (input->GetMTime() == this->ReportedInputTime && message == this->ReportedMessage)
+    const vtkMTimeType time = input->GetMTime();
+    const auto found = this->Reported.find(message);
+    if (found != this->Reported.end() && found->second == time)
     {
       return false;
     }
-    this->ReportedInputTime = input->GetMTime();
-    this->ReportedMessage = message;
+    if (this->Reported.size() >= 64)
+    {
+      this->Reported.clear(); // messages carry counts: keep the memory bounded
+    }
+    this->Reported[message] = time;
     return true;
   }
 };
@@ -263,6 +281,10 @@ vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfNearClipPieces()
 {
   return static_cast<vtkIdType>(this->Internal->Pipeline.Stats().nearPieces);
 }
+vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfTetrahedralizations()
+{
+  return this->Internal->Tetrahedralizer.GetNumberOfTetrahedralizations();
+}
 int vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfBatches()
 {
   return static_cast<int>(this->Internal->Pipeline.Stats().batches);
@@ -292,6 +314,53 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetBatchSize(vtkIdType size)
     this->BatchSize = size;
     this->Modified();
   }
+}
+
+double* vtkMultiThreadedProjectedTetrahedraMapper::GetBounds()
+{
+  vtkUnstructuredGridBase* input = this->GetInput();
+  if (!input)
+  {
+    vtkMath::UninitializeBounds(this->Bounds);
+    return this->Bounds;
+  }
+  this->Update();
+  input = this->GetInput();
+  Internals& in = *this->Internal;
+  if (input == in.BoundsInput && input->GetMTime() == in.BoundsTime)
+  {
+    return this->Bounds;
+  }
+  in.BoundsInput = input;
+  in.BoundsTime = input->GetMTime();
+  vtkBoundingBox box;
+  vtkPoints* points = input->GetPoints();
+  if (points)
+  {
+    for (const auto p : vtk::DataArrayTupleRange<3>(points->GetData()))
+    {
+      const double x = p[0], y = p[1], z = p[2];
+      if (std::isfinite(x) && std::isfinite(y) && std::isfinite(z))
+      {
+        box.AddPoint(x, y, z);
+      }
+    }
+  }
+  if (box.IsValid())
+  {
+    box.GetBounds(this->Bounds);
+  }
+  else
+  {
+    vtkMath::UninitializeBounds(this->Bounds);
+  }
+  return this->Bounds;
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::GetBounds(double bounds[6])
+{
+  const double* own = this->GetBounds();
+  std::copy(own, own + 6, bounds);
 }
 
 bool vtkMultiThreadedProjectedTetrahedraMapper::IsSupported(vtkRenderWindow* window)
@@ -363,6 +432,22 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
     in.BlendWarningTime = this->GetMTime(); // once per change of the mapper's settings
     vtkWarningMacro(<< "only composite blending is supported; drawing with it");
   }
+  // Hexahedra, wedges, pyramids... are split into tetrahedra once per input change; from
+  // here on `input` is the grid of tetrahedra that is drawn.
+  vtkUnstructuredGridBase* tetrahedra = in.Tetrahedralizer.Update(input);
+  if (!in.Tetrahedralizer.Warning().empty() && in.Report(input, in.Tetrahedralizer.Warning()))
+  {
+    vtkWarningMacro(<< in.Tetrahedralizer.Warning());
+  }
+  if (tetrahedra->GetNumberOfCells() == 0)
+  {
+    if (in.Report(input, "no 3D cells"))
+    {
+      vtkWarningMacro(<< "the input has no 3D cells: nothing to draw");
+    }
+    return;
+  }
+  input = tetrahedra;
   if (!in.Adapter.Update(input))
   {
     if (in.Report(input, in.Adapter.Error()))
@@ -382,10 +467,27 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
     input, this->ScalarMode, this->ArrayAccessMode, this->ArrayId, this->ArrayName, cellFlag);
   if (!scalars)
   {
-    if (in.Report(input, "no scalars"))
+    // Name the selection that found nothing (a misspelt array name is the usual cause).
+    std::ostringstream selection;
+    const bool pointField = this->ScalarMode == VTK_SCALAR_MODE_USE_POINT_FIELD_DATA;
+    if (pointField || this->ScalarMode == VTK_SCALAR_MODE_USE_CELL_FIELD_DATA)
     {
-      vtkErrorMacro(<< "the input has no scalars to map: give it point or cell scalars, or "
-                       "select an array with SelectScalarArray() and SetScalarMode()");
+      selection << " (selected: the " << (pointField ? "point" : "cell") << " array ";
+      if (this->ArrayAccessMode == VTK_GET_ARRAY_BY_NAME)
+      {
+        selection << "named '" << this->ArrayName << "'";
+      }
+      else
+      {
+        selection << "number " << this->ArrayId;
+      }
+      selection << ", which the input does not have)";
+    }
+    if (in.Report(input, "no scalars" + selection.str()))
+    {
+      vtkErrorMacro(<< "the input has no scalars to map" << selection.str()
+                    << ": give it point or cell scalars, or select an existing array with "
+                       "SelectScalarArray() and SetScalarMode()");
     }
     return;
   }
@@ -433,6 +535,17 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
     ++in.DataVersion;
   }
   this->UpdateTransferFunctionTable(property, range);
+
+  int viewportSize[2] = { 0, 0 }, viewportOrigin[2] = { 0, 0 };
+  renderer->GetTiledSizeAndOrigin(
+    &viewportSize[0], &viewportSize[1], &viewportOrigin[0], &viewportOrigin[1]);
+  if (viewportSize[0] <= 0 || viewportSize[1] <= 0)
+  {
+    // No pixel to draw (a zero-area viewport or tile): no work, and no message, as VTK's
+    // own mappers. Its aspect ratio would not even give a usable projection.
+    vtkDebugMacro(<< "the viewport has no pixels: nothing to draw");
+    return;
+  }
 
   mtpt::FrameInput frame;
   frame.points = in.Adapter.Points();

@@ -49,8 +49,12 @@
  *   so the vertex and index buffers hold one batch (168 bytes per tetrahedron) instead of
  *   the whole mesh.
  *
- * Limits: cells must be tetrahedra (apply vtkDataSetTriangleFilter first); cells with a
- * point behind the eye plane are not drawn (as in VTK's PT); at most
+ * Cells other than tetrahedra (hexahedra, voxels, wedges, pyramids, polyhedra, higher-order
+ * cells, mixed grids) are split into tetrahedra with vtkDataSetTriangleFilter once per input
+ * change (point data passed, cell data copied to each piece); vertices, lines and polygons
+ * are ignored with one warning.
+ *
+ * Limits: cells with a point behind the eye plane are not drawn (as in VTK's PT); at most
  * 858,993,459 tetrahedra (32-bit indices, 5 vertices each); composite blending only.
  *
  * After each Render the seconds spent in each stage are available from the Get...Seconds
@@ -247,6 +251,14 @@ public:
   vtkIdType GetNumberOfNearClipPieces();
   ///@}
 
+  /**
+   * How many times the mapper has split its input into tetrahedra. Grids with other cells
+   * (hexahedra, voxels, wedges, pyramids, polyhedra, higher-order or mixed) are split by
+   * vtkDataSetTriangleFilter once per change of the input (its MTime), not every frame;
+   * grids of tetrahedra only are used as they are and do not count.
+   */
+  vtkIdType GetNumberOfTetrahedralizations();
+
   /// Batches the last Render decomposed and drew.
   int GetNumberOfBatches();
 
@@ -267,6 +279,17 @@ public:
   static bool IsSupported(vtkRenderWindow* window);
 
   void Render(vtkRenderer* renderer, vtkVolume* volume) override;
+
+  ///@{
+  /**
+   * Bounds of the input's finite points. Points with a NaN or infinite coordinate are not
+   * drawn (the cells using them are skipped, with a warning), and the bounds VTK computes
+   * for such a grid are uninitialized or infinite, which would hide the volume or break the
+   * renderer's camera reset and clipping range. Computed once per input change.
+   */
+  double* GetBounds() VTK_SIZEHINT(6) override;
+  void GetBounds(double bounds[6]) override;
+  ///@}
   void ReleaseGraphicsResources(vtkWindow* window) override;
 
 protected:
