@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The project's test command: installs what is missing, builds (Release) and runs every
-# test with ctest. Usage: scripts/test.sh [build-dir]   (default: build)
+# test with ctest, then builds and tests the ParaView plugin (scripts/plugin.sh) unless
+# MTPT_SKIP_PLUGIN=1. Usage: scripts/test.sh [build-dir]   (default: build)
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${1:-$here/build}"
@@ -10,11 +11,17 @@ build="${1:-$here/build}"
 jobs="$(nproc)"
 cmake -S "$here" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release
 cmake --build "$build" --parallel "$jobs"
-cd "$build"
 # Render-window tests share one X server (Mesa llvmpipe) when there is no display; see
 # Testing/xvfb-launch.sh for why -noreset.
+run_ctest=(ctest --test-dir "$build" --output-on-failure --parallel "$jobs" --timeout 900)
 if [ -z "${DISPLAY:-}" ]; then
-  exec xvfb-run -a -s "-screen 0 1024x768x24 -noreset" \
-    ctest --output-on-failure --parallel "$jobs" --timeout 900
+  xvfb-run -a -s "-screen 0 1024x768x24 -noreset" "${run_ctest[@]}"
+else
+  "${run_ctest[@]}"
 fi
-ctest --output-on-failure --parallel "$jobs" --timeout 900
+
+# The ParaView plugin, after the tests pass: its own build tree (<build-dir>-plugin) and its
+# own headless tests (pvpython, pvbatch, 2-rank MPI pvbatch). MTPT_SKIP_PLUGIN=1 skips it.
+if [ "${MTPT_SKIP_PLUGIN:-0}" != 1 ]; then
+  "$here/scripts/plugin.sh" "${build%/}-plugin"
+fi

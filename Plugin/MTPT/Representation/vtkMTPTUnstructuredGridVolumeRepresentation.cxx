@@ -1,0 +1,84 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "vtkMTPTUnstructuredGridVolumeRepresentation.h"
+
+#include "vtkMultiThreadedProjectedTetrahedraMapper.h"
+#include "vtkObjectFactory.h"
+
+vtkStandardNewMacro(vtkMTPTUnstructuredGridVolumeRepresentation);
+
+//------------------------------------------------------------------------------
+vtkMTPTUnstructuredGridVolumeRepresentation::vtkMTPTUnstructuredGridVolumeRepresentation()
+{
+  // The server-manager proxy's si_class then registers ParaView's own mappers beside it, and
+  // the proxy's SelectMapper property (default: this name) keeps this one active.
+  this->AddVolumeMapper(GetMapperName(), this->MTPTMapper);
+  this->SetActiveVolumeMapper(GetMapperName());
+}
+
+//------------------------------------------------------------------------------
+vtkMTPTUnstructuredGridVolumeRepresentation::~vtkMTPTUnstructuredGridVolumeRepresentation() =
+  default;
+
+//------------------------------------------------------------------------------
+const char* vtkMTPTUnstructuredGridVolumeRepresentation::GetMapperName()
+{
+  return "Multi-threaded projected tetra";
+}
+
+//------------------------------------------------------------------------------
+vtkMultiThreadedProjectedTetrahedraMapper*
+vtkMTPTUnstructuredGridVolumeRepresentation::GetMTPTMapper()
+{
+  return this->MTPTMapper;
+}
+
+//------------------------------------------------------------------------------
+// The mapper's setters call Modified() on a change, which is all a render needs: these are
+// drawing settings, so the representation's data pipeline does not run again.
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetNumberOfThreads(int threads)
+{
+  this->MTPTMapper->SetNumberOfThreads(threads);
+}
+
+int vtkMTPTUnstructuredGridVolumeRepresentation::GetNumberOfThreads()
+{
+  return this->MTPTMapper->GetNumberOfThreads();
+}
+
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetOrderMethod(int method)
+{
+  this->MTPTMapper->SetOrderMethod(method);
+}
+
+int vtkMTPTUnstructuredGridVolumeRepresentation::GetOrderMethod()
+{
+  return this->MTPTMapper->GetOrderMethod();
+}
+
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetBackend(int backend)
+{
+  this->MTPTMapper->SetBackend(backend);
+}
+
+int vtkMTPTUnstructuredGridVolumeRepresentation::GetBackend()
+{
+  return this->MTPTMapper->GetBackend();
+}
+
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetShadingMode(int mode)
+{
+  this->MTPTMapper->SetShadingMode(mode);
+}
+
+int vtkMTPTUnstructuredGridVolumeRepresentation::GetShadingMode()
+{
+  return this->MTPTMapper->GetShadingMode();
+}
+
+//------------------------------------------------------------------------------
+void vtkMTPTUnstructuredGridVolumeRepresentation::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "MTPTMapper:\n";
+  this->MTPTMapper->PrintSelf(os, indent.GetNextIndent());
+}

@@ -1,0 +1,66 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @class   vtkMTPTUnstructuredGridVolumeRepresentation
+ * @brief   ParaView's unstructured-grid volume representation, drawn by
+ *          vtkMultiThreadedProjectedTetrahedraMapper.
+ *
+ * ParaView's volume representation for unstructured grids keeps a fixed list of mappers
+ * ("Projected tetra", "Z sweep", "Bunyk ray cast", "Resample To Image") that a plugin cannot
+ * extend. This subclass registers one more, under MapperName ("Multi-threaded projected
+ * tetra"), and makes it the active one; everything else (input preparation, LOD, ordered
+ * compositing in parallel, transfer functions, scalar selection) is the superclass's. The
+ * plugin's server-manager XML offers it as its own representation type with the same label,
+ * sharing the properties of the stock "Volume" representation, and adds the mapper's
+ * settings, which this class forwards to the mapper.
+ *
+ * @sa vtkUnstructuredGridVolumeRepresentation vtkMultiThreadedProjectedTetrahedraMapper
+ */
+#ifndef vtkMTPTUnstructuredGridVolumeRepresentation_h
+#define vtkMTPTUnstructuredGridVolumeRepresentation_h
+
+#include "vtkNew.h"                      // for vtkNew
+#include "vtkRepresentationMTPTModule.h" // for export macro
+#include "vtkUnstructuredGridVolumeRepresentation.h"
+
+class vtkMultiThreadedProjectedTetrahedraMapper;
+
+class VTKREPRESENTATIONMTPT_EXPORT vtkMTPTUnstructuredGridVolumeRepresentation
+  : public vtkUnstructuredGridVolumeRepresentation
+{
+public:
+  static vtkMTPTUnstructuredGridVolumeRepresentation* New();
+  vtkTypeMacro(
+    vtkMTPTUnstructuredGridVolumeRepresentation, vtkUnstructuredGridVolumeRepresentation);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  /// The name under which the mapper is registered (the value of SelectMapper).
+  static const char* GetMapperName();
+
+  ///@{
+  /// Forwarded to vtkMultiThreadedProjectedTetrahedraMapper (see its setters for meaning).
+  void SetNumberOfThreads(int threads);
+  int GetNumberOfThreads();
+  void SetOrderMethod(int method);
+  int GetOrderMethod();
+  void SetBackend(int backend);
+  int GetBackend();
+  void SetShadingMode(int mode);
+  int GetShadingMode();
+  ///@}
+
+  /// The mapper this representation draws with.
+  vtkMultiThreadedProjectedTetrahedraMapper* GetMTPTMapper();
+
+protected:
+  vtkMTPTUnstructuredGridVolumeRepresentation();
+  ~vtkMTPTUnstructuredGridVolumeRepresentation() override;
+
+  vtkNew<vtkMultiThreadedProjectedTetrahedraMapper> MTPTMapper;
+
+private:
+  vtkMTPTUnstructuredGridVolumeRepresentation(
+    const vtkMTPTUnstructuredGridVolumeRepresentation&) = delete;
+  void operator=(const vtkMTPTUnstructuredGridVolumeRepresentation&) = delete;
+};
+
+#endif

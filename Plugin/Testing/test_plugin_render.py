@@ -1,0 +1,96 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""The MTPT plugin in one process (pvpython, or pvbatch without MPI).
+
+Loads the plugin, shows the blunt-fin mesh as the representation "Multi-threaded projected
+tetra", checks that it draws with vtkMultiThreadedProjectedTetrahedraMapper, and compares
+its image with ParaView's own "Volume" representation ("Projected tetra" mapper) of the same
+view. Then each mapper setting is changed through its property and the image checked.
+
+usage: pvpython test_plugin_render.py PLUGIN DATA OUTPUT_DIR NAME
+Writes OUTPUT_DIR/NAME_mtpt.png and NAME_projected_tetra.png; exits non-zero on failure.
+"""
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import mtpt_plugin_testing as testing  # noqa: E402
+from paraview import simple  # noqa: E402
+
+# RMSE over the whole image in [0, 1] RGB. The two mappers differ by design where MTPT is
+# more exact (README: thick-vertex length, alpha/beta interpolation, float colours).
+MAX_RMSE_VS_PROJECTED_TETRA = 0.02
+# Partition and radix sort give the same order, so the same image.
+MAX_RMSE_ORDER_METHODS = 1e-6
+# The OpenGL backend blends the same triangles with the same math as the CPU compositor.
+MAX_RMSE_BACKENDS = 0.01
+# The volume covers at least this fraction of the image (not blank).
+MIN_COVERED = 0.10
+
+args = testing.arguments(["PLUGIN", "DATA", "OUTPUT_DIR", "NAME"])
+
+
+def out(suffix):
+    return os.path.join(args["OUTPUT_DIR"], "%s_%s.png" % (args["NAME"], suffix))
+
+
+def main():
+    ok = True
+
+    testing.load_plugin(args["PLUGIN"])
+    reader = simple.XMLUnstructuredGridReader(FileName=[args["DATA"]])
+    view = testing.make_view()
+
+    display = testing.show_volume(reader, view, testing.MTPT_REPRESENTATION)
+    testing.save(view, out("mtpt"))
+    representation_class, mapper_class = testing.active_mapper_class(display)
+    ok &= testing.check(representation_class == "vtkMTPTUnstructuredGridVolumeRepresentation" and
+                        mapper_class == testing.MTPT_MAPPER_CLASS,
+                        "representation %s draws with %s" % (representation_class, mapper_class))
+
+    display.SetRepresentationType("Volume")
+    display.SelectMapper = "Projected tetra"
+    testing.save(view, out("projected_tetra"))
+    _, stock_mapper = testing.active_mapper_class(display)
+    ok &= testing.check(stock_mapper.endswith("ProjectedTetrahedraMapper") and
+                        stock_mapper != testing.MTPT_MAPPER_CLASS,
+                        "ParaView's Volume representation draws with %s" % stock_mapper)
+
+    figures = testing.compare(out("mtpt"), out("projected_tetra"))
+    print("%s: MTPT vs Projected tetra: RMSE %.4f (covered pixels only: %.4f), volume covers "
+          "%.1f%% / %.1f%% of the image" % (args["NAME"], figures["rmse"], figures["rmse_covered"],
+                                            100 * figures["covered_a"], 100 * figures["covered_b"]))
+    ok &= testing.check(figures["covered_a"] >= MIN_COVERED,
+                        "MTPT image not blank (covered %.3f >= %.2f)" % (figures["covered_a"],
+                                                                        MIN_COVERED))
+    ok &= testing.check(figures["rmse"] <= MAX_RMSE_VS_PROJECTED_TETRA,
+                        "RMSE vs Projected tetra %.4f <= %.2f" % (figures["rmse"],
+                                                                  MAX_RMSE_VS_PROJECTED_TETRA))
+
+    # The mapper settings, through the properties the Properties panel shows.
+    display.SetRepresentationType(testing.MTPT_REPRESENTATION)
+    display.MTPTNumberOfThreads = 2
+    display.MTPTOrderMethod = "Partition sort"
+    testing.save(view, out("mtpt_partition_sort"))
+    rmse = testing.compare(out("mtpt"), out("mtpt_partition_sort"))["rmse"]
+    ok &= testing.check(rmse <= MAX_RMSE_ORDER_METHODS,
+                        "Partition sort, 2 threads: same image as radix sort (RMSE %.2g)" % rmse)
+
+    display.MTPTBackend = "OpenGL"
+    testing.save(view, out("mtpt_opengl"))
+    display.MTPTBackend = "CPU"
+    testing.save(view, out("mtpt_cpu"))
+    rmse = testing.compare(out("mtpt_opengl"), out("mtpt_cpu"))["rmse"]
+    ok &= testing.check(rmse <= MAX_RMSE_BACKENDS,
+                        "OpenGL and CPU backends agree (RMSE %.4f <= %.2f)" % (rmse,
+                                                                             MAX_RMSE_BACKENDS))
+
+    display.MTPTShadingMode = "Pre-integrated"
+    testing.save(view, out("mtpt_preintegrated"))
+    figures = testing.compare(out("mtpt_cpu"), out("mtpt_preintegrated"))
+    ok &= testing.check(figures["covered_b"] >= MIN_COVERED and figures["rmse"] > 0.0,
+                        "Pre-integrated shading renders, and differently (RMSE %.4f vs "
+                        "VTK-compatible)" % figures["rmse"])
+    return ok
+
+
+testing.run(main, args["NAME"])
