@@ -61,10 +61,12 @@ inline bool SetUp(const TetVertex* vertices, const std::uint32_t* indices, std::
   // Pixel centres x + 0.5 within [minX, maxX].
   const double x0 = std::ceil(minX - 0.5), x1 = std::floor(maxX - 0.5);
   const double y0 = std::ceil(minY - 0.5), y1 = std::floor(maxY - 0.5);
-  s.xmin = static_cast<int>(std::max(0.0, x0));
-  s.xmax = static_cast<int>(std::min(width - 1.0, x1));
-  s.ymin = static_cast<int>(std::max(0.0, y0));
-  s.ymax = static_cast<int>(std::min(height - 1.0, y1));
+  // Clamped on both sides before the conversions: a finite vertex far off screen would
+  // otherwise overflow int (undefined behaviour; found by the fuzzer).
+  s.xmin = static_cast<int>(std::min(std::max(0.0, x0), static_cast<double>(width)));
+  s.xmax = static_cast<int>(std::max(std::min(width - 1.0, x1), -1.0));
+  s.ymin = static_cast<int>(std::min(std::max(0.0, y0), static_cast<double>(height)));
+  s.ymax = static_cast<int>(std::max(std::min(height - 1.0, y1), -1.0));
   return s.xmin <= s.xmax && s.ymin <= s.ymax;
 }
 

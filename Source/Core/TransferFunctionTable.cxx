@@ -184,7 +184,14 @@ void PreIntegrationTable::Segment(const TransferFunctionTable& tf, float front, 
     const double weight = (1.0 - alpha) * a;
     for (int k = 0; k < 3; ++k)
     {
-      colour[k] += weight * (e[k] / tau + (static_cast<double>(c0[k]) - c1[k]) * (0.5 - h));
+      // Within the colours of the step (a colour that is not linear across the step could
+      // otherwise push the correction past them; found by the fuzzer).
+      const double mean = e[k] / tau;
+      const double low = std::min({ mean, static_cast<double>(c0[k]), static_cast<double>(c1[k]) });
+      const double high =
+        std::max({ mean, static_cast<double>(c0[k]), static_cast<double>(c1[k]) });
+      const double c = mean + (static_cast<double>(c0[k]) - c1[k]) * (0.5 - h);
+      colour[k] += weight * std::min(high, std::max(low, c));
     }
     alpha += (1.0 - alpha) * a;
   }
