@@ -2,6 +2,7 @@
 // mtpt_render: renders an unstructured grid with vtkMultiThreadedProjectedTetrahedraMapper
 // to a PNG (or an interactive window), prints the mapper's per-stage times and, with
 // --compare-vtk, VTK's own vtkProjectedTetrahedraMapper on the same scene.
+#include "vtkMTPTReferenceRenderer.h"
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
 
 #include "vtkCamera.h"
@@ -22,6 +23,7 @@
 #include "vtkSmartPointer.h"
 #include "vtkUnstructuredGrid.h"
 #include "vtkVolume.h"
+#include "vtkVolumeCollection.h"
 #include "vtkVolumeProperty.h"
 #include "vtkWindowToImageFilter.h"
 #include "vtkXMLUnstructuredGridReader.h"
@@ -45,9 +47,10 @@ struct Options
   std::string tf = "smooth";
   std::string order = "radix";
   std::string backend = "auto";
+  std::string shading = "vtk";
   int width = 800, height = 600;
   double azimuth = 0, elevation = 30, zoom = 1.0, unitDistance = 0;
-  bool parallel = false, interactive = false, compare = false;
+  bool parallel = false, interactive = false, compare = false, reference = false;
   int threads = 0, frames = 5;
 };
 
@@ -68,8 +71,11 @@ void Usage()
     "  --threads N          threads for the CPU stages (default 0: all)\n"
     "  --order radix|partition   visibility order (default radix)\n"
     "  --backend auto|gl|cpu     how triangles reach the screen (default auto)\n"
+    "  --shading vtk|pre-integrated   VTK-compatible (default) or pre-integrated shading\n"
     "  --frames N           frames to time (default 5; medians are printed)\n"
     "  --compare-vtk        also render with vtkProjectedTetrahedraMapper (<output>-vtkpt.png)\n"
+    "  --reference          render the exact ray-integral reference of the scene and print\n"
+    "                       each image's error against it (RMSE, PSNR, worst channel)\n"
     "  --interactive        open a window instead of only writing the PNG\n"
     "  --help\n"
     "Default data set: %s\n",
@@ -126,6 +132,10 @@ bool Parse(int argc, char** argv, Options& o)
       o.order = next("radix or partition");
     else if (a == "--backend")
       o.backend = next("auto, gl or cpu");
+    else if (a == "--shading")
+      o.shading = next("vtk or pre-integrated");
+    else if (a == "--reference")
+      o.reference = true;
     else if (a == "--frames")
       o.frames = std::max(1, std::atoi(next("a count")));
     else if (a == "--compare-vtk")
@@ -153,6 +163,11 @@ bool Parse(int argc, char** argv, Options& o)
   if (o.backend != "auto" && o.backend != "gl" && o.backend != "cpu")
   {
     std::fprintf(stderr, "mtpt_render: --backend takes auto, gl or cpu\n");
+    return false;
+  }
+  if (o.shading != "vtk" && o.shading != "pre-integrated")
+  {
+    std::fprintf(stderr, "mtpt_render: --shading takes vtk or pre-integrated\n");
     return false;
   }
   return true;
@@ -358,6 +373,24 @@ Timing RenderFrames(const Options& o, vtkUnstructuredGrid* grid, vtkVolumeProper
     Median(composite), Median(upload), Median(draw) };
 }
 
+vtkVolume* FirstVolume(vtkRenderer* renderer)
+{
+  vtkVolumeCollection* volumes = renderer->GetVolumes();
+  volumes->InitTraversal();
+  return volumes->GetNextVolume();
+}
+
+/// The window's image against the reference: RMSE and PSNR over linear RGB, worst channel.
+void PrintError(const char* name, vtkMTPTReferenceRenderer* exact, vtkRenderer* renderer)
+{
+  double e[3];
+  if (exact->CompareWithRenderer(renderer, e))
+  {
+    std::printf("%s against the exact reference: RMSE %.5f, PSNR %.1f dB, worst channel %.3f\n",
+      name, e[0], e[1], e[2]);
+  }
+}
+
 } // namespace
 
 int main(int argc, char** argv)
@@ -384,6 +417,9 @@ int main(int argc, char** argv)
   mapper->SetBackend(o.backend == "gl" ? vtkMultiThreadedProjectedTetrahedraMapper::OPENGL_BACKEND
       : o.backend == "cpu"             ? vtkMultiThreadedProjectedTetrahedraMapper::CPU_BACKEND
                            : vtkMultiThreadedProjectedTetrahedraMapper::AUTOMATIC_BACKEND);
+  mapper->SetShadingMode(o.shading == "vtk"
+      ? vtkMultiThreadedProjectedTetrahedraMapper::VTK_COMPATIBLE_SHADING
+      : vtkMultiThreadedProjectedTetrahedraMapper::PRE_INTEGRATED_SHADING);
   mapper->SynchronizedTimingOn();
 
   vtkNew<vtkRenderer> renderer;
@@ -409,6 +445,18 @@ int main(int argc, char** argv)
     1e3 * t.upload, 1e3 * t.draw, 1e3 * (t.transform + t.keys + t.order + t.decompose),
     1e3 * t.frame);
   std::printf("wrote %s\n", o.output.c_str());
+  vtkNew<vtkMTPTReferenceRenderer> exact;
+  if (o.reference)
+  {
+    if (!exact->Render(renderer, FirstVolume(renderer)))
+    {
+      return 1;
+    }
+    std::printf("exact reference: %.1f s, %lld ray segments%s\n", exact->GetRenderSeconds(),
+      static_cast<long long>(exact->GetNumberOfSegments()),
+      exact->GetExactTransferFunctions() ? "" : " (transfer functions sampled)");
+    PrintError("MTPT", exact, renderer);
+  }
 
   if (o.compare)
   {
@@ -423,6 +471,10 @@ int main(int argc, char** argv)
     std::printf("vtkProjectedTetrahedraMapper, same scene: %.1f ms per frame; MTPT is %.2fx "
                 "faster; wrote %s\n",
       1e3 * v.frame, v.frame / t.frame, vtkPng.c_str());
+    if (o.reference)
+    {
+      PrintError("vtkProjectedTetrahedraMapper", exact, renderer);
+    }
     if (o.interactive)
     {
       // Leave the MTPT scene in the window.
