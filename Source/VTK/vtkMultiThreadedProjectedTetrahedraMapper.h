@@ -142,8 +142,9 @@ public:
     /// The front scalar, back scalar and segment length are interpolated and each fragment
     /// is shaded by pre-integration over them (integral functions of the transfer
     /// functions, exact optical depth): features of the transfer functions between vertex
-    /// values are not missed. See mtpt::PreIntegrationTable. About 1.3x the compositing
-    /// cost of VTK-compatible shading.
+    /// values are not missed, and interpolates perspective-exactly. See
+    /// mtpt::PreIntegrationTable. About twice the frame time of VTK-compatible shading on the
+    /// CPU backend (Documentation/accuracy.md).
     PRE_INTEGRATED_SHADING = 1
   };
 
