@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkMTPTMeshAdapter.h"
 
+#include "vtkCamera.h"
 #include "vtkCellArray.h"
 #include "vtkCellType.h"
 #include "vtkCellTypes.h"
@@ -9,12 +10,16 @@
 #include "vtkDoubleArray.h"
 #include "vtkFloatArray.h"
 #include "vtkIdList.h"
+#include "vtkMatrix4x4.h"
+#include "vtkNew.h"
 #include "vtkPoints.h"
+#include "vtkRenderer.h"
 #include "vtkTypeInt32Array.h"
 #include "vtkTypeInt64Array.h"
 #include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
 #include "vtkUnstructuredGridBase.h"
+#include "vtkVolume.h"
 
 #include <cmath>
 #include <limits>
@@ -226,6 +231,26 @@ const float* vtkMTPTMeshAdapter::Scalars(
   range[1] = this->ScalarRange[1];
   nonFinite = this->ScalarNonFinite;
   return this->ScalarValues.data();
+}
+
+void ViewMatrices(vtkRenderer* renderer, vtkVolume* volume, Matrix4& modelView, Matrix4& projection)
+{
+  auto copy = [](vtkMatrix4x4* m, Matrix4& out)
+  {
+    for (int r = 0; r < 4; ++r)
+    {
+      for (int c = 0; c < 4; ++c)
+      {
+        out[4 * r + c] = m->GetElement(r, c);
+      }
+    }
+  };
+  vtkCamera* camera = renderer->GetActiveCamera();
+  vtkNew<vtkMatrix4x4> eye;
+  vtkMatrix4x4::Multiply4x4(camera->GetModelViewTransformMatrix(), volume->GetMatrix(), eye);
+  copy(eye, modelView);
+  copy(
+    camera->GetProjectionTransformMatrix(renderer->GetTiledAspectRatio(), -1.0, 1.0), projection);
 }
 
 } // namespace mtpt

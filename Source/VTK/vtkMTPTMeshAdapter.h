@@ -26,6 +26,9 @@ class vtkDataArray;
 class vtkDoubleArray;
 class vtkUnstructuredGridBase;
 
+class vtkRenderer;
+class vtkVolume;
+
 namespace mtpt
 {
 
@@ -77,6 +80,15 @@ private:
   double ScalarRange[2] = { 0, 0 };
   vtkIdType ScalarNonFinite = 0;
 };
+
+/**
+ * The matrices of a frame of `volume` in `renderer`, as the mapper draws it: model-view =
+ * the active camera's view transform times the volume's matrix; projection = the camera's
+ * for the renderer's tiled aspect ratio with OpenGL's depth range. The mapper and the
+ * reference renderer share it, so the two see the same scene.
+ */
+void ViewMatrices(
+  vtkRenderer* renderer, vtkVolume* volume, Matrix4& modelView, Matrix4& projection);
 
 } // namespace mtpt
 

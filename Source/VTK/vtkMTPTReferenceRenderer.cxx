@@ -33,19 +33,6 @@ vtkStandardNewMacro(vtkMTPTReferenceRenderer);
 namespace
 {
 
-mtpt::Matrix4 ToMatrix4(vtkMatrix4x4* m)
-{
-  mtpt::Matrix4 out;
-  for (int r = 0; r < 4; ++r)
-  {
-    for (int c = 0; c < 4; ++c)
-    {
-      out[4 * r + c] = m->GetElement(r, c);
-    }
-  }
-  return out;
-}
-
 /// True when the piecewise function is exactly the polyline through its nodes, clamped.
 bool IsPolyline(vtkPiecewiseFunction* f)
 {
@@ -297,12 +284,7 @@ bool vtkMTPTReferenceRenderer::Render(
 
   // The mapper's camera: eye = view * volume matrix; projection for the tiled aspect with
   // the OpenGL depth range (vtkMultiThreadedProjectedTetrahedraMapper::Render).
-  vtkCamera* camera = renderer->GetActiveCamera();
-  vtkNew<vtkMatrix4x4> modelView;
-  vtkMatrix4x4::Multiply4x4(camera->GetModelViewTransformMatrix(), volume->GetMatrix(), modelView);
-  settings.modelView = ToMatrix4(modelView);
-  settings.projection =
-    ToMatrix4(camera->GetProjectionTransformMatrix(renderer->GetTiledAspectRatio(), -1.0, 1.0));
+  mtpt::ViewMatrices(renderer, volume, settings.modelView, settings.projection);
   settings.width = width;
   settings.height = height;
   const double unitDistance = property->GetScalarOpacityUnitDistance(0);

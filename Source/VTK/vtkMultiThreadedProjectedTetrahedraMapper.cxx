@@ -63,18 +63,6 @@ double SecondsSince(std::chrono::steady_clock::time_point start)
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-mtpt::Matrix4 ToMatrix4(vtkMatrix4x4* m)
-{
-  mtpt::Matrix4 out;
-  for (int r = 0; r < 4; ++r)
-  {
-    for (int c = 0; c < 4; ++c)
-    {
-      out[4 * r + c] = m->GetElement(r, c);
-    }
-  }
-  return out;
-}
 } // namespace
 
 class vtkMultiThreadedProjectedTetrahedraMapper::Internals
@@ -552,13 +540,8 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
   frame.cells = in.Adapter.Cells();
   frame.scalars = { values,
     cellFlag ? mtpt::ScalarsView::Association::Cells : mtpt::ScalarsView::Association::Points };
-  vtkCamera* camera = renderer->GetActiveCamera();
-  vtkNew<vtkMatrix4x4> modelView;
-  vtkMatrix4x4::Multiply4x4(camera->GetModelViewTransformMatrix(), volume->GetMatrix(), modelView);
-  frame.modelView = ToMatrix4(modelView);
-  frame.projection =
-    ToMatrix4(camera->GetProjectionTransformMatrix(renderer->GetTiledAspectRatio(), -1.0, 1.0));
-  frame.perspective = camera->GetParallelProjection() == 0;
+  mtpt::ViewMatrices(renderer, volume, frame.modelView, frame.projection);
+  frame.perspective = renderer->GetActiveCamera()->GetParallelProjection() == 0;
   this->Internal->Interpolation = frame.perspective
     ? mtpt::PerspectiveInterpolation::FromProjection(frame.projection)
     : mtpt::PerspectiveInterpolation{};

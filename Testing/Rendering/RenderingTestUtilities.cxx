@@ -25,6 +25,7 @@
 
 #include <vtksys/SystemTools.hxx>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 
@@ -132,25 +133,33 @@ vtkSmartPointer<vtkVolumeProperty> MakeProperty(double low, double high, double 
   return property;
 }
 
-vtkSmartPointer<vtkImageData> Render(
-  const Scene& scene, vtkUnstructuredGridVolumeMapper* mapper, int frames)
+Stage MakeStage(vtkUnstructuredGrid* grid, vtkVolumeProperty* property,
+  vtkUnstructuredGridVolumeMapper* mapper, int width, int height)
 {
-  mapper->SetInputData(scene.grid);
-  vtkNew<vtkVolume> volume;
-  volume->SetMapper(mapper);
-  volume->SetProperty(scene.property);
-  vtkNew<vtkRenderer> renderer;
-  renderer->SetBackground(Background[0], Background[1], Background[2]);
-  renderer->AddVolume(volume);
-  vtkNew<vtkRenderWindow> window;
-  window->SetOffScreenRendering(1);
-  window->SetMultiSamples(0);
-  window->SetSize(scene.size, scene.size);
-  window->AddRenderer(renderer);
+  Stage stage;
+  mapper->SetInputData(grid);
+  stage.volume = vtkSmartPointer<vtkVolume>::New();
+  stage.volume->SetMapper(mapper);
+  stage.volume->SetProperty(property);
+  stage.renderer = vtkSmartPointer<vtkRenderer>::New();
+  stage.renderer->SetBackground(Background[0], Background[1], Background[2]);
+  stage.renderer->AddVolume(stage.volume);
+  stage.window = vtkSmartPointer<vtkRenderWindow>::New();
+  stage.window->SetOffScreenRendering(1);
+  stage.window->SetMultiSamples(0);
+  stage.window->SetSize(width, height);
+  stage.window->AddRenderer(stage.renderer);
+  return stage;
+}
+
+Stage RenderStage(const Scene& scene, vtkUnstructuredGridVolumeMapper* mapper, int frames)
+{
+  Stage stage = MakeStage(scene.grid, scene.property, mapper, scene.size, scene.size);
   if (scene.customize)
   {
-    scene.customize(volume, renderer);
+    scene.customize(stage.volume, stage.renderer);
   }
+  vtkRenderer* renderer = stage.renderer;
   renderer->ResetCamera();
   vtkCamera* camera = renderer->GetActiveCamera();
   camera->SetParallelProjection(scene.perspective ? 0 : 1);
@@ -160,11 +169,18 @@ vtkSmartPointer<vtkImageData> Render(
   renderer->ResetCameraClippingRange();
   for (int f = 0; f < frames; ++f)
   {
-    window->Render();
+    stage.window->Render();
   }
-  auto image = Grab(window);
+  return stage;
+}
+
+vtkSmartPointer<vtkImageData> Render(
+  const Scene& scene, vtkUnstructuredGridVolumeMapper* mapper, int frames)
+{
+  Stage stage = RenderStage(scene, mapper, frames);
+  auto image = Grab(stage.window);
   // The mapper may outlive this window: free its GL resources while the context exists.
-  mapper->ReleaseGraphicsResources(window);
+  mapper->ReleaseGraphicsResources(stage.window);
   return image;
 }
 

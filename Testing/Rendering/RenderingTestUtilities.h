@@ -46,6 +46,22 @@ struct Scene
   std::function<void(vtkVolume*, vtkRenderer*)> customize;
 };
 
+/// A volume drawn by a mapper, in a renderer with the tests' background, in an offscreen
+/// window without multisampling.
+struct Stage
+{
+  vtkSmartPointer<vtkVolume> volume;
+  vtkSmartPointer<vtkRenderer> renderer;
+  vtkSmartPointer<vtkRenderWindow> window;
+};
+
+/// `grid` drawn by `mapper` with `property` in a `width` x `height` window (not rendered).
+Stage MakeStage(vtkUnstructuredGrid* grid, vtkVolumeProperty* property,
+  vtkUnstructuredGridVolumeMapper* mapper, int width, int height);
+
+/// The stage of `scene` with its camera set, rendered `frames` times (what Render draws).
+Stage RenderStage(const Scene& scene, vtkUnstructuredGridVolumeMapper* mapper, int frames = 1);
+
 /// Renders `scene` with `mapper` offscreen and returns the RGB image. `frames` > 1 renders
 /// again before reading back (catches state carried between frames).
 vtkSmartPointer<vtkImageData> Render(

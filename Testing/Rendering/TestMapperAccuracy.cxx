@@ -42,30 +42,9 @@ struct Errors
 /// window back and compares it with the reference of the same renderer and volume.
 Errors RenderAgainstReference(const Scene& scene, vtkUnstructuredGridVolumeMapper* mapper)
 {
-  mapper->SetInputData(scene.grid);
-  vtkNew<vtkVolume> volume;
-  volume->SetMapper(mapper);
-  volume->SetProperty(scene.property);
-  vtkNew<vtkRenderer> renderer;
-  renderer->SetBackground(Background[0], Background[1], Background[2]);
-  renderer->AddVolume(volume);
-  vtkNew<vtkRenderWindow> window;
-  window->SetOffScreenRendering(1);
-  window->SetMultiSamples(0);
-  window->SetSize(scene.size, scene.size);
-  window->AddRenderer(renderer);
-  if (scene.customize)
-  {
-    scene.customize(volume, renderer);
-  }
-  renderer->ResetCamera();
-  vtkCamera* camera = renderer->GetActiveCamera();
-  camera->SetParallelProjection(scene.perspective ? 0 : 1);
-  camera->Azimuth(scene.azimuth);
-  camera->Elevation(scene.elevation);
-  camera->OrthogonalizeViewUp();
-  renderer->ResetCameraClippingRange();
-  window->Render();
+  const Stage stage = RenderStage(scene, mapper);
+  vtkRenderer* renderer = stage.renderer;
+  vtkVolume* volume = stage.volume;
 
   Errors e;
   vtkNew<vtkMTPTReferenceRenderer> reference;
@@ -84,7 +63,7 @@ Errors RenderAgainstReference(const Scene& scene, vtkUnstructuredGridVolumeMappe
   e.psnr = result[1];
   e.worst = result[2];
   e.exactFunctions = reference->GetExactTransferFunctions();
-  mapper->ReleaseGraphicsResources(window);
+  mapper->ReleaseGraphicsResources(stage.window);
   return e;
 }
 

@@ -39,31 +39,21 @@ struct FrameError
 FrameError Frame(vtkUnstructuredGridVolumeMapper* mapper, vtkUnstructuredGrid* grid,
   vtkVolumeProperty* property, double eyeZ, double nearPlane, vtkDoubleArray* exact)
 {
-  mapper->SetInputData(grid);
-  vtkNew<vtkVolume> volume;
-  volume->SetMapper(mapper);
-  volume->SetProperty(property);
-  vtkNew<vtkRenderer> renderer;
-  renderer->SetBackground(Background[0], Background[1], Background[2]);
-  renderer->AddVolume(volume);
-  vtkNew<vtkRenderWindow> window;
-  window->SetOffScreenRendering(1);
-  window->SetMultiSamples(0);
-  window->SetSize(96, 96);
-  window->AddRenderer(renderer);
+  const Stage stage = MakeStage(grid, property, mapper, 96, 96);
+  vtkRenderer* renderer = stage.renderer;
   vtkCamera* camera = renderer->GetActiveCamera();
   camera->SetPosition(0.13, 0.07, eyeZ);
   camera->SetFocalPoint(0.0, 0.0, eyeZ - 1.0);
   camera->SetViewUp(0, 1, 0);
   camera->SetViewAngle(60);
   camera->SetClippingRange(nearPlane, 20.0);
-  window->Render();
+  stage.window->Render();
 
   FrameError e;
   if (exact->GetNumberOfTuples() == 0)
   {
     vtkNew<vtkMTPTReferenceRenderer> reference;
-    if (!reference->Render(renderer, volume))
+    if (!reference->Render(renderer, stage.volume))
     {
       ADD_FAILURE() << "no reference image";
       return e;
@@ -86,7 +76,7 @@ FrameError Frame(vtkUnstructuredGridVolumeMapper* mapper, vtkUnstructuredGrid* g
     }
     e.holes += exactOff > 0.05 && drawnOff < 0.01 ? 1 : 0;
   }
-  mapper->ReleaseGraphicsResources(window);
+  mapper->ReleaseGraphicsResources(stage.window);
   return e;
 }
 

@@ -74,18 +74,9 @@ TEST(MapperSoak, ResidentMemoryStaysFlatOverAThousandFrames)
   auto property = MakeProperty(range[0], range[1], 0.5);
 
   vtkNew<Mapper> mapper;
-  mapper->SetInputData(grid);
-  vtkNew<vtkVolume> volume;
-  volume->SetMapper(mapper);
-  volume->SetProperty(property);
-  vtkNew<vtkRenderer> renderer;
-  renderer->SetBackground(Background[0], Background[1], Background[2]);
-  renderer->AddVolume(volume);
-  vtkNew<vtkRenderWindow> window;
-  window->SetOffScreenRendering(1);
-  window->SetMultiSamples(0);
-  window->SetSize(64, 64);
-  window->AddRenderer(renderer);
+  const Stage stage = MakeStage(grid, property, mapper, 64, 64);
+  vtkRenderer* renderer = stage.renderer;
+  vtkRenderWindow* window = stage.window;
   renderer->ResetCamera();
   vtkCamera* camera = renderer->GetActiveCamera();
   camera->Elevation(20);
