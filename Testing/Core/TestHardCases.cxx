@@ -21,53 +21,7 @@ namespace
 
 using mtpt::test::Vec3;
 
-/// A mesh with double-precision points (offsets of 1e7 need them).
-struct Mesh
-{
-  std::vector<double> points;
-  std::vector<std::int64_t> connectivity;
-  std::vector<std::int64_t> offsets{ 0 };
-  std::vector<float> scalars;
-
-  explicit Mesh(const mtpt::test::TetMesh& m)
-    : points(m.points.begin(), m.points.end())
-    , connectivity(m.connectivity)
-    , offsets(m.offsets)
-    , scalars(m.scalars)
-  {
-  }
-  std::size_t Cells() const { return offsets.size() - 1; }
-  void Add(std::int64_t a, std::int64_t b, std::int64_t c, std::int64_t d)
-  {
-    connectivity.insert(connectivity.end(), { a, b, c, d });
-    offsets.push_back(static_cast<std::int64_t>(connectivity.size()));
-  }
-  std::int64_t AddPoint(double x, double y, double z, float s)
-  {
-    points.insert(points.end(), { x, y, z });
-    scalars.push_back(s);
-    return static_cast<std::int64_t>(scalars.size() - 1);
-  }
-  void Transform(double scale, const Vec3& offset)
-  {
-    for (std::size_t i = 0; i < points.size(); ++i)
-    {
-      points[i] = points[i] * scale + offset[i % 3];
-    }
-  }
-  mtpt::PointsView PointsView() const
-  {
-    return mtpt::PointsView::FromDouble(points.data(), points.size() / 3);
-  }
-  mtpt::CellsView CellsView() const
-  {
-    return mtpt::CellsView::FromInt64(connectivity.data(), offsets.data(), Cells());
-  }
-  mtpt::ScalarsView ScalarsView() const
-  {
-    return { scalars.data(), mtpt::ScalarsView::Association::Points };
-  }
-};
+using Mesh = mtpt::test::DoubleMesh;
 
 /// Camera, transfer functions and image size of a scene.
 struct View
@@ -136,9 +90,9 @@ std::vector<double> RenderMTPT(const Mesh& mesh, const View& v, bool preIntegrat
   const double low = *range.first, high = *range.second > low ? *range.second : low + 1;
   const std::vector<float> table = Table(v, low, high);
   mtpt::FrameInput input;
-  input.points = mesh.PointsView();
-  input.cells = mesh.CellsView();
-  input.scalars = mesh.ScalarsView();
+  input.points = mesh.Points();
+  input.cells = mesh.Cells();
+  input.scalars = mesh.Scalars();
   input.modelView = v.modelView;
   input.projection = v.projection;
   input.perspective = v.perspective;
@@ -184,8 +138,7 @@ std::vector<double> RenderExact(const Mesh& mesh, const View& v)
   std::copy(v.background, v.background + 3, s.background);
   std::vector<double> rgb;
   std::string error;
-  EXPECT_TRUE(mtpt::RenderReference(
-    mesh.PointsView(), mesh.CellsView(), mesh.ScalarsView(), s, rgb, 2, &error))
+  EXPECT_TRUE(mtpt::RenderReference(mesh.Points(), mesh.Cells(), mesh.Scalars(), s, rgb, 2, &error))
     << error;
   return rgb;
 }
@@ -283,10 +236,10 @@ TEST(HardCases, NonConvexMeshesMatchTheReference)
   const auto base = static_cast<std::int64_t>(mesh.scalars.size());
   mesh.points.insert(mesh.points.end(), second.points.begin(), second.points.end());
   mesh.scalars.insert(mesh.scalars.end(), second.scalars.begin(), second.scalars.end());
-  for (std::size_t c = 0; c < second.Cells(); ++c)
+  for (std::size_t c = 0; c < second.CellCount(); ++c)
   {
     const std::int64_t* ids = second.connectivity.data() + second.offsets[c];
-    mesh.Add(base + ids[0], base + ids[1], base + ids[2], base + ids[3]);
+    mesh.AddTetrahedron(base + ids[0], base + ids[1], base + ids[2], base + ids[3]);
   }
   View v = View::LookingAt({ 0.9, 0.7, 3.0 }, 50, 0.5, 20);
   EXPECT_LT(
@@ -300,11 +253,11 @@ TEST(HardCases, HugeCellsBesideTinyOnes)
   Mesh mesh = Grid();
   const std::int64_t a = mesh.AddPoint(-40, -30, -60, 0.0f), b = mesh.AddPoint(40, -30, -60, 2.0f),
                      c = mesh.AddPoint(0, 40, -60, 1.0f), d = mesh.AddPoint(0, 0, -130, 3.0f);
-  mesh.Add(a, b, c, d);
+  mesh.AddTetrahedron(a, b, c, d);
   const std::int64_t e = mesh.AddPoint(1.2, 0, 0, 0.0f), f = mesh.AddPoint(1.2003, 0, 0, 1.0f),
                      g = mesh.AddPoint(1.2, 0.0003, 0, 2.0f),
                      h = mesh.AddPoint(1.2, 0, 0.0003, 3.0f);
-  mesh.Add(e, f, g, h);
+  mesh.AddTetrahedron(e, f, g, h);
   View v = View::LookingAt({ 1.5, 1.2, 3.5 }, 45, 0.5, 400);
   v.opacity = { { -1.0, 0.02 }, { 3.0, 0.4 } };
   EXPECT_LT(Check("huge and tiny cells", RenderMTPT(mesh, v), RenderExact(mesh, v)).rmse, 5e-4);
@@ -348,11 +301,11 @@ TEST(HardCases, SliversAndZeroVolumeCellsChangeNothing)
                      u = mesh.AddPoint(0.7, 0.2, 0.1, 1.0f), w = mesh.AddPoint(0.9, 0.2, 0.1, 1.0f),
                      x = mesh.AddPoint(1.1, 0.2, 0.1, 1.0f),
                      y = mesh.AddPoint(0.7, 0.2 + 1e-6, 0.1 + 1e-6, 1.0f);
-  mesh.Add(p, p, q, r);
-  mesh.Add(p, q, r, s);
-  mesh.Add(p, u, w, x);
-  mesh.Add(p, q, r, t);
-  mesh.Add(u, w, x, y);
+  mesh.AddTetrahedron(p, p, q, r);
+  mesh.AddTetrahedron(p, q, r, s);
+  mesh.AddTetrahedron(p, u, w, x);
+  mesh.AddTetrahedron(p, q, r, t);
+  mesh.AddTetrahedron(u, w, x, y);
   const mtpt::ImageError e =
     Check("slivers and zero-volume cells added", RenderMTPT(mesh, v), expected);
   EXPECT_LT(e.maxAbs, 1e-5);

@@ -104,6 +104,59 @@ struct TetMesh
   }
 };
 
+/// A tetrahedral mesh with double-precision points (so tests can move it 1e7 from the
+/// origin), point or cell scalars.
+struct DoubleMesh
+{
+  std::vector<double> points; // xyz
+  std::vector<std::int64_t> connectivity;
+  std::vector<std::int64_t> offsets{ 0 };
+  std::vector<float> scalars;
+  bool cellScalars = false;
+
+  DoubleMesh() = default;
+  explicit DoubleMesh(const TetMesh& m)
+    : points(m.points.begin(), m.points.end())
+    , connectivity(m.connectivity)
+    , offsets(m.offsets)
+    , scalars(m.scalars)
+  {
+  }
+  std::int64_t AddPoint(double x, double y, double z, float s = 0)
+  {
+    points.insert(points.end(), { x, y, z });
+    if (!cellScalars)
+    {
+      scalars.push_back(s);
+    }
+    return static_cast<std::int64_t>(points.size() / 3 - 1);
+  }
+  void AddTetrahedron(std::int64_t a, std::int64_t b, std::int64_t c, std::int64_t d)
+  {
+    connectivity.insert(connectivity.end(), { a, b, c, d });
+    offsets.push_back(static_cast<std::int64_t>(connectivity.size()));
+  }
+  std::size_t CellCount() const { return offsets.size() - 1; }
+  /// Every point p becomes scale * p + offset.
+  void Transform(double scale, const Vec3& offset)
+  {
+    for (std::size_t i = 0; i < points.size(); ++i)
+    {
+      points[i] = points[i] * scale + offset[i % 3];
+    }
+  }
+  PointsView Points() const { return PointsView::FromDouble(points.data(), points.size() / 3); }
+  CellsView Cells() const
+  {
+    return CellsView::FromInt64(connectivity.data(), offsets.data(), CellCount());
+  }
+  ScalarsView Scalars() const
+  {
+    return { scalars.data(),
+      cellScalars ? ScalarsView::Association::Cells : ScalarsView::Association::Points };
+  }
+};
+
 /// n^3 cubes in [-1, 1]^3, each split into 6 tetrahedra (Kuhn), interior points jittered,
 /// a smooth scalar field. Deterministic for a given seed.
 TetMesh JitteredGrid(int n, unsigned seed);

@@ -22,45 +22,7 @@ using mtpt::OpacityNode;
 using mtpt::ReferenceSettings;
 using mtpt::test::Vec3;
 
-/// A tetrahedral mesh with double points (so tests can offset it far from the origin).
-struct Mesh
-{
-  std::vector<double> points;
-  std::vector<std::int64_t> connectivity;
-  std::vector<std::int64_t> offsets{ 0 };
-  std::vector<float> scalars;
-  bool cellScalars = false;
-
-  std::int64_t AddPoint(double x, double y, double z, float s = 0)
-  {
-    points.insert(points.end(), { x, y, z });
-    if (!cellScalars)
-    {
-      scalars.push_back(s);
-    }
-    return static_cast<std::int64_t>(points.size() / 3 - 1);
-  }
-  void AddTetrahedron(std::int64_t a, std::int64_t b, std::int64_t c, std::int64_t d)
-  {
-    connectivity.insert(connectivity.end(), { a, b, c, d });
-    offsets.push_back(static_cast<std::int64_t>(connectivity.size()));
-  }
-  std::size_t CellCount() const { return offsets.size() - 1; }
-  mtpt::PointsView Points() const
-  {
-    return mtpt::PointsView::FromDouble(points.data(), points.size() / 3);
-  }
-  mtpt::CellsView Cells() const
-  {
-    return mtpt::CellsView::FromInt64(connectivity.data(), offsets.data(), CellCount());
-  }
-  mtpt::ScalarsView Scalars() const
-  {
-    return { scalars.data(),
-      cellScalars ? mtpt::ScalarsView::Association::Cells
-                  : mtpt::ScalarsView::Association::Points };
-  }
-};
+using Mesh = mtpt::test::DoubleMesh;
 
 /// A box [x0, x1] x [y0, y1] x [z0, z1] of nx * ny * nz cubes, 6 tetrahedra each (Kuhn),
 /// point scalars from `field`. Appends to `mesh`.
