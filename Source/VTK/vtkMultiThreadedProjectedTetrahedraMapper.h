@@ -25,12 +25,19 @@
  * ScalarOpacityUnitDistance) are those of vtkProjectedTetrahedraMapper. Where the results
  * differ, this mapper is the more accurate one:
  * - the thickness at the thick vertex is the exact eye-space ray segment length (no square
- *   root table), with perspective-correct interpolation;
+ *   root table);
  * - the scalar at a quadrilateral's crossing is interpolated with alpha along one edge and
  *   beta along the other (VTK uses alpha for both);
  * - colours are not quantized to 8 bits; the transfer functions are evaluated at the front
  *   and back scalars of the thick vertex, from a 4096-entry float table over the data range;
- * - perspective views sort by distance from the eye, not along the view direction.
+ * - perspective views sort by distance from the eye, not along the view direction;
+ * - cells that cross the near plane are cut by it and their visible part drawn (VTK's PT
+ *   drops them, leaving holes when the camera is near or inside the mesh);
+ * - ShadingMode PRE_INTEGRATED_SHADING integrates the transfer functions exactly over each
+ *   fragment's ray segment, with perspective-exact interpolation, where the default
+ *   VTK_COMPATIBLE_SHADING classifies at the vertices as VTK's PT does (a feature of the
+ *   transfer functions between vertex values is then missed). Measured against the exact
+ *   ray integral (vtkMTPTReferenceRenderer) in Documentation/accuracy.md.
  *
  * Per-frame work follows what the view shows, never changing the image:
  * - culling: cells whose opacity is zero over their whole scalar range (recomputed only
@@ -54,8 +61,9 @@
  * change (point data passed, cell data copied to each piece); vertices, lines and polygons
  * are ignored with one warning.
  *
- * Limits: cells with a point behind the eye plane are not drawn (as in VTK's PT); at most
- * 858,993,459 tetrahedra (32-bit indices, 5 vertices each); composite blending only.
+ * Limits: at most 858,993,459 tetrahedra (32-bit indices, 5 vertices each); composite
+ * blending only; the visibility order is the cells' centroid order (as VTK's PT), exact for
+ * most meshes but not for every one.
  *
  * After each Render the seconds spent in each stage are available from the Get...Seconds
  * methods. Upload and draw are asynchronous in OpenGL: turn SynchronizedTiming on to wait
