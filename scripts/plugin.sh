@@ -50,7 +50,11 @@ if ! installed python3-paraview; then
     find_deb() { find "$build/debs" -maxdepth 1 -name "python3-paraview_${version}_*.deb"; }
     if [ -z "$(find_deb)" ]; then
       echo "plugin.sh: downloading python3-paraview $version (not installed)"
-      (cd "$build/debs" && timeout 600 apt-get download -q "python3-paraview=$version")
+      # Package lists may be missing on a machine whose packages were all present (then
+      # install-deps.sh never ran apt-get update): update once and try again.
+      (cd "$build/debs" && { timeout 600 apt-get download -q "python3-paraview=$version" ||
+        { timeout 600 apt-get update -qq &&
+          timeout 600 apt-get download -q "python3-paraview=$version"; }; })
     fi
     rm -rf "$package_root"
     dpkg-deb -x "$(find_deb | head -n 1)" "$package_root"
