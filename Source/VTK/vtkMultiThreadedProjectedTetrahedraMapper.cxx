@@ -95,7 +95,7 @@ public:
 
   // CPU backend.
   mtpt::Compositor Compositor;
-  std::vector<float> Image, Depth;
+  std::vector<float> Image, Depth, Colour;
   vtkNew<vtkOpenGLFramebufferObject> Framebuffer;
   bool FramebufferAllocated = false;
   bool FramebufferFailed = false;
@@ -665,7 +665,23 @@ void vtkMultiThreadedProjectedTetrahedraMapper::CompositeOnCPU(
   } while (first < total);
   in.CompositeSeconds = composite;
 
+  // Composite over the colour drawn so far here, in float, and write the result back with
+  // blending off: blending the image in OpenGL would round it to 8 bits before the blend
+  // on an 8-bit framebuffer, a second rounding the OpenGL path does not have.
   start = std::chrono::steady_clock::now();
+  const std::size_t pixels = static_cast<std::size_t>(width) * height;
+  in.Colour.resize(4 * pixels);
+  glReadPixels(x0, y0, width, height, GL_RGBA, GL_FLOAT, in.Colour.data());
+  float* image = in.Image.data();
+  const float* below = in.Colour.data();
+  for (std::size_t i = 0; i < 4 * pixels; i += 4)
+  {
+    const float keep = 1.0f - image[i + 3];
+    for (int c = 0; c < 4; ++c)
+    {
+      image[i + c] += keep * below[i + c];
+    }
+  }
   in.ImageTexture->SetContext(window);
   in.ImageTexture->SetWrapS(vtkTextureObject::ClampToEdge);
   in.ImageTexture->SetWrapT(vtkTextureObject::ClampToEdge);
@@ -700,9 +716,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::CompositeOnCPU(
   vtkOpenGLState::ScopedglEnableDisable blendEnableSaver(state, GL_BLEND);
   state->vtkglDepthMask(GL_FALSE);
   state->vtkglDisable(GL_DEPTH_TEST);
-  state->vtkglEnable(GL_BLEND);
-  // Premultiplied colour over the framebuffer.
-  state->vtkglBlendFuncSeparate(GL_ONE, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
+  state->vtkglDisable(GL_BLEND); // the image already holds what was drawn below it
   in.ImageTexture->Activate();
   in.Quad->Program->SetUniformi("image", in.ImageTexture->GetTextureUnit());
   in.Quad->Render();

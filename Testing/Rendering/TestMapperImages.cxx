@@ -268,7 +268,7 @@ TEST_F(MapperImages, CPUCompositorMatchesTheOpenGLPath)
     const ImageDifference d = Compare(Render(c.scene, cpu), Render(c.scene, gl));
     std::printf("%s CPU vs GL: RMSE %.5f, worst %.3f, pixels over 0.1: %.4f%%\n", c.name, d.rmse,
       d.worst, 100 * d.fractionOver);
-    EXPECT_LT(d.rmse, 0.004) << c.name;
+    EXPECT_LT(d.rmse, 0.001) << c.name;
     EXPECT_LT(d.fractionOver, 0.0005) << c.name;
   }
 }
@@ -295,7 +295,7 @@ TEST_F(MapperImages, PreIntegratedShadingMatchesAcrossBackends)
     Save(glImage, std::string("MTPT_PreIntegrated_") + c.name);
     std::printf("pre-integrated %s CPU vs GL: RMSE %.5f, worst %.3f, pixels over 0.1: %.4f%%\n",
       c.name, d.rmse, d.worst, 100 * d.fractionOver);
-    EXPECT_LT(d.rmse, 0.004) << c.name;
+    EXPECT_LT(d.rmse, 0.001) << c.name;
     EXPECT_LT(d.fractionOver, 0.0005) << c.name;
   }
 }

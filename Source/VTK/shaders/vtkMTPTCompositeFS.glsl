@@ -1,8 +1,8 @@
 //VTK::System::Dec
 //VTK::Output::Dec
 // SPDX-License-Identifier: BSD-3-Clause
-// Puts the CPU compositor's premultiplied image into the framebuffer; the blend function
-// (ONE, ONE_MINUS_SRC_ALPHA) composites it over what is already drawn.
+// Puts the CPU compositor's image, already composited over the colour drawn before it, into
+// the framebuffer (blending off).
 in vec2 texCoord;
 uniform sampler2D image;
 
