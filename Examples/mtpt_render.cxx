@@ -12,6 +12,8 @@
 #include "vtkDataSet.h"
 #include "vtkDataSetReader.h"
 #include "vtkDataSetTriangleFilter.h"
+#include "vtkDoubleArray.h"
+#include "vtkImageData.h"
 #include "vtkNew.h"
 #include "vtkPNGWriter.h"
 #include "vtkPiecewiseFunction.h"
@@ -391,6 +393,36 @@ void PrintError(const char* name, vtkMTPTReferenceRenderer* exact, vtkRenderer* 
   }
 }
 
+/// `output` without its .png ending, followed by `suffix`.
+std::string Sibling(std::string output, const char* suffix)
+{
+  if (EndsWith(output, ".png"))
+  {
+    output.resize(output.size() - 4);
+  }
+  return output + suffix;
+}
+
+/// The reference's last image as an 8-bit PNG.
+void WriteImage(vtkMTPTReferenceRenderer* exact, const std::string& png)
+{
+  const int* size = exact->GetSize();
+  vtkNew<vtkImageData> image;
+  image->SetDimensions(size[0], size[1], 1);
+  image->AllocateScalars(VTK_UNSIGNED_CHAR, 3);
+  auto* out = static_cast<unsigned char*>(image->GetScalarPointer());
+  vtkDoubleArray* rgb = exact->GetImage();
+  for (vtkIdType i = 0; i < rgb->GetNumberOfValues(); ++i)
+  {
+    const double v = std::min(1.0, std::max(0.0, rgb->GetValue(i)));
+    out[i] = static_cast<unsigned char>(std::lround(255.0 * v));
+  }
+  vtkNew<vtkPNGWriter> writer;
+  writer->SetFileName(png.c_str());
+  writer->SetInputData(image);
+  writer->Write();
+}
+
 } // namespace
 
 int main(int argc, char** argv)
@@ -456,16 +488,14 @@ int main(int argc, char** argv)
       static_cast<long long>(exact->GetNumberOfSegments()),
       exact->GetExactTransferFunctions() ? "" : " (transfer functions sampled)");
     PrintError("MTPT", exact, renderer);
+    const std::string png = Sibling(o.output, "-reference.png");
+    WriteImage(exact, png);
+    std::printf("wrote %s (the reference, rounded to 8 bits)\n", png.c_str());
   }
 
   if (o.compare)
   {
-    std::string vtkPng = o.output;
-    if (EndsWith(vtkPng, ".png"))
-    {
-      vtkPng.resize(vtkPng.size() - 4);
-    }
-    vtkPng += "-vtkpt.png";
+    const std::string vtkPng = Sibling(o.output, "-vtkpt.png");
     vtkNew<vtkProjectedTetrahedraMapper> reference;
     const Timing v = RenderFrames(o, grid, property, reference, vtkPng, window, renderer);
     std::printf("vtkProjectedTetrahedraMapper, same scene: %.1f ms per frame; MTPT is %.2fx "
