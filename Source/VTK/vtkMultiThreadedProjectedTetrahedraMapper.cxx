@@ -542,9 +542,8 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
     cellFlag ? mtpt::ScalarsView::Association::Cells : mtpt::ScalarsView::Association::Points };
   mtpt::ViewMatrices(renderer, volume, frame.modelView, frame.projection);
   frame.perspective = renderer->GetActiveCamera()->GetParallelProjection() == 0;
-  this->Internal->Interpolation = frame.perspective
-    ? mtpt::PerspectiveInterpolation::FromProjection(frame.projection)
-    : mtpt::PerspectiveInterpolation{};
+  // Orthographic projections give the linear default.
+  this->Internal->Interpolation = mtpt::PerspectiveInterpolation::FromProjection(frame.projection);
   // Cells the opacity function hides are culled (exact: see mtpt/Culling.h).
   frame.opacity = { in.Table.data(), TransferFunctionTableSize, in.TableRange[0],
     in.TableRange[1] };
@@ -644,9 +643,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::CompositeOnCPU(
   settings.opaqueDepth = in.Depth.data();
   if (this->ShadingMode == PRE_INTEGRATED_SHADING)
   {
-    settings.shading = mtpt::Shading::PreIntegrated;
-    settings.preIntegration = &in.PreIntegration;
-    settings.interpolation = in.Interpolation;
+    settings.UsePreIntegration(in.PreIntegration, in.Interpolation);
   }
   // Batch after batch, back to front, into one image. Decomposition and compositing both
   // use every thread, so they run one after the other.

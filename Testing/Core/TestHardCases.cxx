@@ -107,9 +107,7 @@ std::vector<double> RenderMTPT(const Mesh& mesh, const View& v, bool preIntegrat
   if (preIntegrated)
   {
     pre.Build(settings.transferFunction);
-    settings.shading = mtpt::Shading::PreIntegrated;
-    settings.preIntegration = &pre;
-    settings.interpolation = mtpt::PerspectiveInterpolation::FromProjection(v.projection);
+    settings.UsePreIntegration(pre, mtpt::PerspectiveInterpolation::FromProjection(v.projection));
   }
   mtpt::Compositor compositor;
   std::vector<float> rgba;

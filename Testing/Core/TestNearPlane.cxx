@@ -173,9 +173,8 @@ struct InsideFrame
     if (preIntegrated)
     {
       pre.Build(settings.transferFunction);
-      settings.shading = mtpt::Shading::PreIntegrated;
-      settings.preIntegration = &pre;
-      settings.interpolation = mtpt::PerspectiveInterpolation::FromProjection(input.projection);
+      settings.UsePreIntegration(
+        pre, mtpt::PerspectiveInterpolation::FromProjection(input.projection));
     }
     mtpt::Compositor compositor;
     std::vector<float> image;

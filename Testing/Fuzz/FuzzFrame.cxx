@@ -755,12 +755,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (in.ConsumeBool())
   {
     preIntegration.Build(colour.view);
-    settings.shading = mtpt::Shading::PreIntegrated;
-    settings.preIntegration = &preIntegration;
-  }
-  if (frame.perspective)
-  {
-    settings.interpolation = mtpt::PerspectiveInterpolation::FromProjection(frame.projection);
+    settings.UsePreIntegration(
+      preIntegration, mtpt::PerspectiveInterpolation::FromProjection(frame.projection));
   }
   settings.unitDistance = in.PickValueInArray({ 1.0, 1e-3, 0.37, 100.0, 1e-7 });
   std::vector<float> depth;

@@ -90,6 +90,15 @@ struct CompositeSettings
   bool accumulate = false;
   /// Pre-integrated shading in perspective views: see PerspectiveInterpolation.
   PerspectiveInterpolation interpolation;
+
+  /// Switches to pre-integrated shading with `table` (the integral functions of
+  /// transferFunction, kept alive by the caller) and the view's `interpolation`.
+  void UsePreIntegration(const PreIntegrationTable& table, const PerspectiveInterpolation& view)
+  {
+    this->shading = Shading::PreIntegrated;
+    this->preIntegration = &table;
+    this->interpolation = view;
+  }
 };
 
 /**
