@@ -174,6 +174,24 @@ Stage RenderStage(const Scene& scene, vtkUnstructuredGridVolumeMapper* mapper, i
   return stage;
 }
 
+vtkSmartPointer<vtkVolumeProperty> MakeNarrowPeakProperty(double unitDistance)
+{
+  vtkNew<vtkColorTransferFunction> color;
+  color->AddRGBPoint(0.0, 0.9, 0.5, 0.1);
+  color->AddRGBPoint(1.0, 0.2, 0.4, 0.95);
+  vtkNew<vtkPiecewiseFunction> opacity;
+  opacity->AddPoint(0.0, 0.0);
+  opacity->AddPoint(0.49, 0.0);
+  opacity->AddPoint(0.5, 20.0);
+  opacity->AddPoint(0.51, 0.0);
+  opacity->AddPoint(1.0, 0.0);
+  auto property = vtkSmartPointer<vtkVolumeProperty>::New();
+  property->SetColor(color);
+  property->SetScalarOpacity(opacity);
+  property->SetScalarOpacityUnitDistance(unitDistance);
+  return property;
+}
+
 vtkSmartPointer<vtkImageData> Render(
   const Scene& scene, vtkUnstructuredGridVolumeMapper* mapper, int frames)
 {

@@ -138,21 +138,9 @@ TEST_F(MapperAccuracy, PreIntegrationCapturesNarrowOpacityPeaks)
   // Transparent but for an opacity peak of width 0.02 at scalar 0.5, about a fifth of the
   // scalar step between neighbouring vertices: classifying at the vertices (VTK's PT)
   // misses most of it; pre-integration integrates it exactly.
-  vtkNew<vtkColorTransferFunction> color;
-  color->AddRGBPoint(0.0, 0.9, 0.5, 0.1);
-  color->AddRGBPoint(1.0, 0.2, 0.4, 0.95);
-  vtkNew<vtkPiecewiseFunction> opacity;
-  opacity->AddPoint(0.0, 0.0);
-  opacity->AddPoint(0.49, 0.0);
-  opacity->AddPoint(0.5, 20.0);
-  opacity->AddPoint(0.51, 0.0);
-  opacity->AddPoint(1.0, 0.0);
   Scene s;
   s.grid = Box;
-  s.property = vtkSmartPointer<vtkVolumeProperty>::New();
-  s.property->SetColor(color);
-  s.property->SetScalarOpacity(opacity);
-  s.property->SetScalarOpacityUnitDistance(0.5);
+  s.property = MakeNarrowPeakProperty(0.5);
   s.perspective = true;
   Errors ours, theirs;
   Measure(s, "box-narrow-peak", Mapper::PRE_INTEGRATED_SHADING, ours, theirs);

@@ -144,19 +144,7 @@ protected:
   /// peak at scalar 0.5 (width 0.02, about a fifth of the scalar step between vertices).
   Scene NarrowPeakBoxScene(bool perspective)
   {
-    vtkNew<vtkColorTransferFunction> color;
-    color->AddRGBPoint(0.0, 0.9, 0.5, 0.1);
-    color->AddRGBPoint(1.0, 0.2, 0.4, 0.95);
-    vtkNew<vtkPiecewiseFunction> opacity;
-    opacity->AddPoint(0.0, 0.0);
-    opacity->AddPoint(0.49, 0.0);
-    opacity->AddPoint(0.5, 20.0);
-    opacity->AddPoint(0.51, 0.0);
-    opacity->AddPoint(1.0, 0.0);
-    this->NarrowProperty = vtkSmartPointer<vtkVolumeProperty>::New();
-    this->NarrowProperty->SetColor(color);
-    this->NarrowProperty->SetScalarOpacity(opacity);
-    this->NarrowProperty->SetScalarOpacityUnitDistance(0.5);
+    this->NarrowProperty = MakeNarrowPeakProperty(0.5);
     Scene s;
     s.grid = Box;
     s.property = this->NarrowProperty;
