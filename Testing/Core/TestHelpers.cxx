@@ -36,8 +36,6 @@ TetMesh JitteredGrid(int n, unsigned seed)
   std::mt19937 random(seed);
   std::uniform_real_distribution<double> jitter(-0.3, 0.3);
   const double h = 2.0 / n;
-  auto id = [n](int i, int j, int k)
-  { return static_cast<std::int64_t>((k * (n + 1) + j) * (n + 1) + i); };
   for (int k = 0; k <= n; ++k)
   {
     for (int j = 0; j <= n; ++j)
@@ -54,31 +52,42 @@ TetMesh JitteredGrid(int n, unsigned seed)
       }
     }
   }
-  // Kuhn split: the 6 paths from corner 000 to 111, always conforming across cubes.
+  const int cubes[3] = { n, n, n };
+  AddKuhnTetrahedra(cubes, 0,
+    [&mesh](std::int64_t a, std::int64_t b, std::int64_t c, std::int64_t d)
+    { mesh.AddTetrahedron(a, b, c, d); });
+  return mesh;
+}
+
+void AddKuhnTetrahedra(const int n[3], std::int64_t base,
+  const std::function<void(std::int64_t, std::int64_t, std::int64_t, std::int64_t)>& add)
+{
+  auto id = [&](const int c[3])
+  { return base + static_cast<std::int64_t>((c[2] * (n[1] + 1) + c[1]) * (n[0] + 1) + c[0]); };
+  // The 6 paths from corner 000 to 111, always conforming across cubes.
   static const int paths[6][3] = { { 0, 1, 2 }, { 0, 2, 1 }, { 1, 0, 2 }, { 1, 2, 0 }, { 2, 0, 1 },
     { 2, 1, 0 } };
-  for (int k = 0; k < n; ++k)
+  for (int k = 0; k < n[2]; ++k)
   {
-    for (int j = 0; j < n; ++j)
+    for (int j = 0; j < n[1]; ++j)
     {
-      for (int i = 0; i < n; ++i)
+      for (int i = 0; i < n[0]; ++i)
       {
         for (const auto& path : paths)
         {
           int c[3] = { i, j, k };
           std::int64_t v[4];
-          v[0] = id(c[0], c[1], c[2]);
+          v[0] = id(c);
           for (int s = 0; s < 3; ++s)
           {
             ++c[path[s]];
-            v[s + 1] = id(c[0], c[1], c[2]);
+            v[s + 1] = id(c);
           }
-          mesh.AddTetrahedron(v[0], v[1], v[2], v[3]);
+          add(v[0], v[1], v[2], v[3]);
         }
       }
     }
   }
-  return mesh;
 }
 
 double ChordLength(

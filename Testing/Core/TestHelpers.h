@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <random>
 #include <vector>
 
@@ -156,6 +157,11 @@ struct DoubleMesh
       cellScalars ? ScalarsView::Association::Cells : ScalarsView::Association::Points };
   }
 };
+
+/// Kuhn split of a lattice of n[0] x n[1] x n[2] cubes into 6 tetrahedra each (conforming
+/// across cubes): calls add(a, b, c, d) with point ids base + (k (n1 + 1) + j)(n0 + 1) + i.
+void AddKuhnTetrahedra(const int n[3], std::int64_t base,
+  const std::function<void(std::int64_t, std::int64_t, std::int64_t, std::int64_t)>& add);
 
 /// n^3 cubes in [-1, 1]^3, each split into 6 tetrahedra (Kuhn), interior points jittered,
 /// a smooth scalar field. Deterministic for a given seed.

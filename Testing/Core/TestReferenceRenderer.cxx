@@ -30,8 +30,6 @@ void AddBox(Mesh& mesh, const double lo[3], const double hi[3], const int n[3],
   const std::function<double(double, double, double)>& field)
 {
   const std::int64_t base = static_cast<std::int64_t>(mesh.points.size() / 3);
-  auto id = [&](int i, int j, int k)
-  { return base + static_cast<std::int64_t>((k * (n[1] + 1) + j) * (n[0] + 1) + i); };
   for (int k = 0; k <= n[2]; ++k)
   {
     for (int j = 0; j <= n[1]; ++j)
@@ -45,29 +43,9 @@ void AddBox(Mesh& mesh, const double lo[3], const double hi[3], const int n[3],
       }
     }
   }
-  static const int paths[6][3] = { { 0, 1, 2 }, { 0, 2, 1 }, { 1, 0, 2 }, { 1, 2, 0 }, { 2, 0, 1 },
-    { 2, 1, 0 } };
-  for (int k = 0; k < n[2]; ++k)
-  {
-    for (int j = 0; j < n[1]; ++j)
-    {
-      for (int i = 0; i < n[0]; ++i)
-      {
-        for (const auto& path : paths)
-        {
-          int c[3] = { i, j, k };
-          std::int64_t v[4];
-          v[0] = id(c[0], c[1], c[2]);
-          for (int s = 0; s < 3; ++s)
-          {
-            ++c[path[s]];
-            v[s + 1] = id(c[0], c[1], c[2]);
-          }
-          mesh.AddTetrahedron(v[0], v[1], v[2], v[3]);
-        }
-      }
-    }
-  }
+  mtpt::test::AddKuhnTetrahedra(n, base,
+    [&mesh](std::int64_t a, std::int64_t b, std::int64_t c, std::int64_t d)
+    { mesh.AddTetrahedron(a, b, c, d); });
 }
 
 /// Each tetrahedron split into 8 at its edge midpoints (point scalars averaged: the same
