@@ -2,8 +2,7 @@
 #include "mtpt/MeshView.h"
 
 #include "detail/Parallel.h"
-
-#include <omp.h>
+#include "mtpt/Threads.h"
 
 namespace mtpt
 {
@@ -33,7 +32,7 @@ namespace detail
 {
 int ResolveThreads(int requested)
 {
-  return requested > 0 ? requested : omp_get_max_threads();
+  return ResolveThreadCount(requested);
 }
 } // namespace detail
 

@@ -1,0 +1,100 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "mtpt/Threads.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <thread>
+
+namespace mtpt
+{
+
+namespace
+{
+
+/// A positive integer from the environment variable `name`, or 0.
+int PositiveVariable(const char* name)
+{
+  const char* value = std::getenv(name);
+  if (!value || !*value)
+  {
+    return 0;
+  }
+  char* end = nullptr;
+  const long parsed = std::strtol(value, &end, 10);
+  return end && *end == '\0' && parsed > 0 && parsed < (1 << 20) ? static_cast<int>(parsed) : 0;
+}
+
+/// MPI ranks on this node, as the launchers announce it; 1 when none does.
+int LocalRanks()
+{
+  for (const char* name : { "OMPI_COMM_WORLD_LOCAL_SIZE", "MPI_LOCALNRANKS",
+         "MV2_COMM_WORLD_LOCAL_SIZE", "PALS_LOCAL_SIZE" })
+  {
+    if (const int ranks = PositiveVariable(name))
+    {
+      return ranks;
+    }
+  }
+  return 1;
+}
+
+struct LaunchEnvironment
+{
+  bool threadsRequested;
+  int localRanks;
+  int hardwareThreads;
+};
+
+const LaunchEnvironment& Launch()
+{
+  static const LaunchEnvironment launch = []
+  {
+    // An empty OMP_NUM_THREADS is no request (libgomp rejects it and uses its default).
+    const char* requested = std::getenv("OMP_NUM_THREADS");
+    return LaunchEnvironment{ requested && *requested, LocalRanks(),
+      std::max(1, static_cast<int>(std::thread::hardware_concurrency())) };
+  }();
+  return launch;
+}
+
+} // namespace
+
+ThreadEnvironment CurrentThreadEnvironment()
+{
+  const LaunchEnvironment& launch = Launch();
+  ThreadEnvironment e;
+  e.processors = std::max(1, omp_get_num_procs());
+  e.hardwareThreads = launch.hardwareThreads;
+  e.threadsRequested = launch.threadsRequested;
+  e.openMPThreads = std::max(1, omp_get_max_threads());
+  e.localRanks = launch.localRanks;
+  return e;
+}
+
+int DefaultThreadCount(const ThreadEnvironment& e)
+{
+  if (e.threadsRequested)
+  {
+    return std::max(1, e.openMPThreads);
+  }
+  const bool narrowedByAffinity = e.processors < e.hardwareThreads;
+  if (e.localRanks > 1 && !narrowedByAffinity)
+  {
+    return std::max(1, e.hardwareThreads / e.localRanks);
+  }
+  return std::max(1, e.openMPThreads);
+}
+
+int DefaultThreadCount()
+{
+  return DefaultThreadCount(CurrentThreadEnvironment());
+}
+
+int ResolveThreadCount(int requested)
+{
+  return requested > 0 ? requested : DefaultThreadCount();
+}
+
+} // namespace mtpt
