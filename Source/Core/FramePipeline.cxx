@@ -102,6 +102,12 @@ void FramePipeline::Release()
   this->HaveTransform = this->HaveRanges = this->HaveVisible = this->HaveOrder = false;
   this->HaveDecomposition = false;
   this->SortedSize = this->BatchCount = 0;
+  ++this->BuffersVersion;
+}
+
+void FramePipeline::SetOrderMutationForTesting(OrderMutation mutation)
+{
+  this->Mutation = mutation;
 }
 
 bool FramePipeline::Run(const FrameInput& input, int threads)
@@ -121,6 +127,7 @@ bool FramePipeline::Prepare(const FrameInput& input, int threads)
   this->LastStats = FrameStats{};
   this->LastStats.cells = n;
   this->BatchCount = 0;
+  this->WasStopped = false;
   if (n > MaxTetrahedra())
   {
     this->SortedSize = 0;
@@ -159,17 +166,37 @@ bool FramePipeline::Prepare(const FrameInput& input, int threads)
     ++this->PointsVersion;
   }
   this->LastStats.transformReused = !viewChanged;
+  if (!this->Continue(Stage::Transform))
+  {
+    return false;
+  }
 
   this->UpdateCulling(input, threads, dataChanged);
-  this->UpdateOrder(input, threads, dataChanged, viewChanged);
+  if (!this->Continue(Stage::Cull) || !this->UpdateOrder(input, threads, dataChanged, viewChanged))
+  {
+    return false;
+  }
 
-  DecomposeInput& d = this->Decomposition;
+  DecomposeInput& d = this->DecomposeState;
   d.points = this->ProjectedPoints.data();
   d.pointCount = input.points.count;
   d.cells = input.cells;
   d.scalars = input.scalars;
   d.viewportWidth = input.viewportWidth;
   d.viewportHeight = input.viewportHeight;
+  return this->Continue(Stage::Order);
+}
+
+bool FramePipeline::Continue(Stage finished)
+{
+  if (this->Callback && !this->Callback(finished))
+  {
+    this->WasStopped = true;
+    // Whatever was kept may be incomplete: the next frame starts from the transform.
+    this->HaveOrder = this->HaveDecomposition = false;
+    this->SortedSize = 0;
+    return false;
+  }
   return true;
 }
 
@@ -221,14 +248,14 @@ void FramePipeline::UpdateCulling(const FrameInput& input, int threads, bool dat
   this->LastStats.opacityCulled = n - this->Visible.size();
 }
 
-void FramePipeline::UpdateOrder(
+bool FramePipeline::UpdateOrder(
   const FrameInput& input, int threads, bool dataChanged, bool viewChanged)
 {
   const std::size_t n = input.cells.cellCount;
   const bool valid = this->HaveOrder && this->OrderPointsVersion == this->PointsVersion &&
     this->OrderVisibleVersion == this->VisibleVersion &&
     this->OrderPerspective == input.perspective && this->OrderCullFrustum == input.cullFrustum &&
-    this->OrderMethodUsed == this->Order->Method();
+    this->OrderMethodUsed == this->Order->Method() && this->OrderMutationUsed == this->Mutation;
   if (valid)
   {
     this->LastStats.orderReused = true;
@@ -236,7 +263,7 @@ void FramePipeline::UpdateOrder(
     this->LastStats.nearClipped = this->OrderNearClipped;
     this->LastStats.nearPieces = this->Pieces.size();
     this->LastStats.sorted = this->SortedSize;
-    return;
+    return true;
   }
 
   auto start = Clock::now();
@@ -251,6 +278,10 @@ void FramePipeline::UpdateOrder(
   const std::size_t nearClipped = this->ClipNearPlane(input, threads);
   count = this->SortedKeys.size();
   this->LastTimes.keys = detail::SecondsSince(start);
+  if (!this->Continue(Stage::DepthKeys))
+  {
+    return false;
+  }
 
   start = Clock::now();
   double direction[3];
@@ -264,7 +295,8 @@ void FramePipeline::UpdateOrder(
     this->OrderVisibleVersion == this->VisibleVersion &&
     this->OrderPerspective == input.perspective && this->OrderFrustumCulled == 0 &&
     frustumCulled == 0 && nearClipped == 0 && this->OrderNearClipped == 0 &&
-    count == this->SortedSize && angle < NearlySortedMaxAngle;
+    count == this->SortedSize && angle < NearlySortedMaxAngle &&
+    this->Mutation == OrderMutation::None;
   bool fromPrevious = false;
   if (samePermutation)
   {
@@ -297,6 +329,7 @@ void FramePipeline::UpdateOrder(
     this->SortedKeys.swap(this->Scratch);
     count = this->SortedKeys.size();
   }
+  this->MutateOrder(count);
   this->LastTimes.order = detail::SecondsSince(start);
 
   start = Clock::now();
@@ -312,6 +345,7 @@ void FramePipeline::UpdateOrder(
   this->OrderPerspective = input.perspective;
   this->OrderCullFrustum = input.cullFrustum;
   this->OrderMethodUsed = this->Order->Method();
+  this->OrderMutationUsed = this->Mutation;
   this->OrderFrustumCulled = frustumCulled;
   this->OrderNearClipped = nearClipped;
   std::copy(direction, direction + 3, this->OrderDirection);
@@ -321,6 +355,20 @@ void FramePipeline::UpdateOrder(
   this->LastStats.nearPieces = this->Pieces.size();
   this->LastStats.sorted = count;
   this->LastStats.orderFromPrevious = fromPrevious;
+  return true;
+}
+
+void FramePipeline::MutateOrder(std::size_t count)
+{
+  if (this->Mutation == OrderMutation::Reversed)
+  {
+    std::reverse(this->SortedKeys.begin(), this->SortedKeys.begin() + count);
+  }
+  else if (this->Mutation == OrderMutation::Storage)
+  {
+    std::sort(this->SortedKeys.begin(), this->SortedKeys.begin() + count,
+      [](SortKey a, SortKey b) { return CellOfKey(a) < CellOfKey(b); });
+  }
 }
 
 std::size_t FramePipeline::ClipNearPlane(const FrameInput& input, int threads)
@@ -428,7 +476,7 @@ void FramePipeline::DecomposeBatch(std::size_t first, std::size_t count, int thr
   count = std::min(count, this->SortedSize - first);
   ++this->LastStats.batches;
   this->BatchCount = count;
-  const DecomposeInput& in = this->Decomposition;
+  const DecomposeInput& in = this->DecomposeState;
   if (this->Reuse && this->HaveDecomposition &&
     this->DecomposedOrderVersion == this->OrderVersion && this->DecomposedFirst == first &&
     this->DecomposedCount == count && this->DecomposedViewport[0] == in.viewportWidth &&
@@ -440,6 +488,7 @@ void FramePipeline::DecomposeBatch(std::size_t first, std::size_t count, int thr
     return;
   }
   const auto start = Clock::now();
+  ++this->BuffersVersion;
   EnsureSize(this->VertexBuffer, VerticesPerTetrahedron * count);
   EnsureSize(this->IndexBuffer, IndicesPerTetrahedron * count);
   EnsureSize(this->Classes, count);

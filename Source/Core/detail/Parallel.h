@@ -4,9 +4,10 @@
 #ifndef mtpt_detail_Parallel_h
 #define mtpt_detail_Parallel_h
 
+#include "mtpt/Timing.h"
+
 #include <omp.h>
 
-#include <chrono>
 #include <cstddef>
 #include <cstring>
 #include <vector>
@@ -16,14 +17,10 @@ namespace mtpt
 namespace detail
 {
 
-/// The OpenMP thread count for a requested count: <= 0 means all available.
+/// The OpenMP thread count for a requested count: <= 0 means the default (mtpt/Threads.h).
 int ResolveThreads(int requested);
 
-/// Seconds elapsed on a steady clock since `start`.
-inline double SecondsSince(std::chrono::steady_clock::time_point start)
-{
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
+using mtpt::SecondsSince;
 
 /**
  * Stream compaction in input order: [0, n) is cut into one contiguous block per thread;

@@ -32,6 +32,7 @@
 #include "mtpt/VisibilityOrder.h"
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -89,6 +90,33 @@ struct FrameInput
 };
 
 /**
+ * Deliberately wrong visibility orders, for testing that tests can see the order (a test
+ * suite that passes with a reversed or unsorted order does not check it). Never for use.
+ */
+enum class OrderMutation
+{
+  None,     ///< the visibility order (default)
+  Reversed, ///< front to back instead of back to front
+  Storage,  ///< the cells in storage order: not sorted at all
+};
+
+/// Stages of a frame, as reported to a StageCallback.
+enum class Stage
+{
+  Transform,
+  Cull,
+  DepthKeys,
+  Order,
+};
+
+/**
+ * Called after each stage of Prepare with the stage just finished; returning false stops
+ * the frame there (Prepare then returns false and nothing is sorted). The mapper reports
+ * progress and polls the render window's abort flag with it.
+ */
+using StageCallback = std::function<bool(Stage)>;
+
+/**
  * Runs the CPU stages and keeps their results until the next frame. Buffers grow to the
  * largest mesh (or batch) seen and are reused, so steady-state frames allocate nothing.
  * Thread safety: one object per thread of control; the stages use OpenMP inside.
@@ -110,12 +138,21 @@ public:
   void SetReuse(bool reuse) { this->Reuse = reuse; }
   bool GetReuse() const { return this->Reuse; }
 
+  /// Testing only: see OrderMutation. Takes effect at the next sort.
+  void SetOrderMutationForTesting(OrderMutation mutation);
+
+  /// Called after each stage of Prepare (see StageCallback); empty: none.
+  void SetStageCallback(StageCallback callback) { this->Callback = std::move(callback); }
+
   /**
    * Stages 1-3 and the order's inverse: transform, culling, keys, order. Returns false
-   * (and sorts nothing) if the mesh is too large for 32-bit indices. Then decompose with
-   * DecomposeBatch, or use Run for the whole order at once.
+   * (and sorts nothing) if the mesh is too large for 32-bit indices or the stage callback
+   * stopped the frame (Stopped() tells which). Then decompose with DecomposeBatch, or use
+   * Run for the whole order at once.
    */
   bool Prepare(const FrameInput& input, int threads);
+  /// Whether the last Prepare was stopped by the stage callback.
+  bool Stopped() const { return this->WasStopped; }
 
   /**
    * Decomposes the order's window [first, first + count) (clamped to SortedCount()) into
@@ -139,6 +176,17 @@ public:
   const std::vector<TetVertex>& Vertices() const { return VertexBuffer; }
   const std::vector<std::uint32_t>& Indices() const { return IndexBuffer; }
 
+  /**
+   * Changes whenever the buffers' content changes: a new decomposition, another batch, or
+   * Release. A consumer that copied the buffers (an OpenGL upload) is current exactly when
+   * it holds this version; never 0 once a batch has been decomposed.
+   */
+  std::uint64_t BufferVersion() const { return this->BuffersVersion; }
+  /// Changes whenever the visibility order (or the set of cells in it) changes.
+  std::uint64_t OrderVersionNumber() const { return this->OrderVersion; }
+  /// The view's projected points and the inputs of the decomposition of the last Prepare.
+  const DecomposeInput& Decomposition() const { return this->DecomposeState; }
+
   /// Bytes held by the pipeline's buffers (capacity, not size).
   std::size_t MemoryBytes() const;
   /// Frees every buffer and forgets what could be reused.
@@ -154,7 +202,9 @@ public:
 private:
   bool SameTransform(const FrameInput& input) const;
   void UpdateCulling(const FrameInput& input, int threads, bool dataChanged);
-  void UpdateOrder(const FrameInput& input, int threads, bool dataChanged, bool viewChanged);
+  bool UpdateOrder(const FrameInput& input, int threads, bool dataChanged, bool viewChanged);
+  void MutateOrder(std::size_t count);
+  bool Continue(Stage finished);
   std::size_t ClipNearPlane(const FrameInput& input, int threads);
 
   std::unique_ptr<VisibilityOrder> Order;
@@ -175,8 +225,12 @@ private:
   std::vector<NearPiece> Pieces; ///< piece j has cell id cellCount + j in the order
   std::vector<SortKey> PieceKeys;
   std::vector<std::uint8_t> Crossing; ///< per key of the order being built
-  DecomposeInput Decomposition;       ///< of the frame being prepared
+  DecomposeInput DecomposeState;      ///< of the frame being prepared
   std::size_t SortedSize = 0, BatchCount = 0;
+  OrderMutation Mutation = OrderMutation::None;
+  StageCallback Callback;
+  bool WasStopped = false;
+  std::uint64_t BuffersVersion = 0;
   StageTimes LastTimes;
   FrameStats LastStats;
 
@@ -205,6 +259,7 @@ private:
   std::uint64_t OrderPointsVersion = 0, OrderVisibleVersion = 0;
   bool OrderPerspective = false, OrderCullFrustum = false;
   OrderMethod OrderMethodUsed = OrderMethod::RadixSort;
+  OrderMutation OrderMutationUsed = OrderMutation::None;
   std::size_t OrderFrustumCulled = 0, OrderOpacityCulled = 0, OrderNearClipped = 0;
   double OrderDirection[3] = { 0, 0, 0 };
   std::uint64_t DecomposedOrderVersion = 0;
