@@ -91,72 +91,52 @@ inline Edge MakeEdge(std::int64_t ax, std::int64_t ay, std::int64_t bx, std::int
   return e;
 }
 
-/// Rasterizes a set-up triangle over the pixel range in `s` (the caller may have clipped
-/// it): coverage by the top-left rule on 8-bit sub-pixel fixed point, the shaders' fragment
-/// math, GL_LEQUAL against the opaque depth, "over" blending. True if it covered a pixel.
-bool RasterizeTriangle(const TetVertex* vertices, const std::uint32_t* tri, const ScreenTriangle& s,
-  int width, const CompositeSettings& settings, float inverseUnit, float* rgba)
+constexpr std::int64_t Step = std::int64_t(1) << SubpixelBits;
+constexpr std::int64_t Half = Step / 2;
+
+/**
+ * Calls covered(x, y, e) for every pixel centre in rows [ymin, ymax] and columns [xmin,
+ * xmax] that the triangle (x[k], y[k]) covers by the top-left rule on the 8-bit sub-pixel
+ * grid (every coordinate within FixedPointLimit). e[k] is the edge function opposite
+ * vertex k (CCW-oriented, so positive inside); e[k] / (e[0] + e[1] + e[2]) is vertex k's
+ * barycentric weight. Returns false when the triangle has no area.
+ */
+template <typename Covered>
+bool CoverTriangle(
+  const double x[3], const double y[3], int xmin, int xmax, int ymin, int ymax, Covered&& covered)
 {
-  const float* opaqueDepth = settings.opaqueDepth;
-  const TransferFunctionTable& tf = settings.transferFunction;
-  const PreIntegrationTable* preIntegration =
-    settings.shading == Shading::PreIntegrated ? settings.preIntegration : nullptr;
-  for (int k = 0; k < 3; ++k)
-  {
-    if (!(std::fabs(s.x[k]) < FixedPointLimit && std::fabs(s.y[k]) < FixedPointLimit))
-    {
-      return false; // beyond 4 million pixels off screen: the GL path clips such triangles
-    }
-  }
   std::int64_t fx[3], fy[3];
   for (int k = 0; k < 3; ++k)
   {
-    fx[k] = static_cast<std::int64_t>(std::nearbyint(s.x[k] * SubpixelScale));
-    fy[k] = static_cast<std::int64_t>(std::nearbyint(s.y[k] * SubpixelScale));
+    fx[k] = static_cast<std::int64_t>(std::nearbyint(x[k] * SubpixelScale));
+    fy[k] = static_cast<std::int64_t>(std::nearbyint(y[k] * SubpixelScale));
   }
-  // Orient counter-clockwise so that inside means all edge functions positive.
   const std::int64_t area2 = (fx[1] - fx[0]) * (fy[2] - fy[0]) - (fy[1] - fy[0]) * (fx[2] - fx[0]);
   if (area2 == 0)
   {
     return false;
   }
-  int order[3] = { 0, 1, 2 };
-  if (area2 < 0)
-  {
-    std::swap(order[1], order[2]);
-  }
+  // Edge k is opposite vertex k, oriented so that the inside is positive.
   Edge edges[3];
   for (int k = 0; k < 3; ++k)
   {
-    const int a = order[(k + 1) % 3], c = order[(k + 2) % 3];
-    edges[k] = MakeEdge(fx[a], fy[a], fx[c], fy[c]); // the edge opposite order[k]
+    int a = (k + 1) % 3, b = (k + 2) % 3;
+    if (area2 < 0)
+    {
+      std::swap(a, b);
+    }
+    edges[k] = MakeEdge(fx[a], fy[a], fx[b], fy[b]);
   }
-  const double inverseArea = 1.0 / static_cast<double>(area2 < 0 ? -area2 : area2);
-  constexpr std::int64_t Step = std::int64_t(1) << SubpixelBits;
-  constexpr std::int64_t Half = Step / 2;
-
-  bool classified = false;
-  // Per vertex: r, g, b, attenuation (pre-integrated: front scalar, back scalar, unused,
-  // unused), then segment length and NDC z.
-  float attributes[3][6] = {};
-  // Perspective-exact pre-integration: per vertex 1 / w of front and back, and the eye
-  // ray direction's x and y per unit depth.
-  const PerspectiveInterpolation& view = settings.interpolation;
-  const bool exact = preIntegration && view.perspective;
-  double frontW[3] = { 1, 1, 1 }, backW[3] = { 1, 1, 1 }, rayX[3] = { 0, 0, 0 },
-         rayY[3] = { 0, 0, 0 };
-  bool any = false;
-  for (int y = s.ymin; y <= s.ymax; ++y)
+  for (int y = ymin; y <= ymax; ++y)
   {
     const std::int64_t py = y * Step + Half;
-    const std::int64_t px0 = s.xmin * Step + Half;
-    // Edge functions at the row's first pixel, then stepped by one pixel.
+    const std::int64_t px0 = xmin * Step + Half;
     std::int64_t e[3];
     for (int k = 0; k < 3; ++k)
     {
       e[k] = edges[k].a * px0 + edges[k].b * py + edges[k].c;
     }
-    for (int x = s.xmin; x <= s.xmax;
+    for (int x = xmin; x <= xmax;
          ++x, e[0] += edges[0].a * Step, e[1] += edges[1].a * Step, e[2] += edges[2].a * Step)
     {
       bool inside = true;
@@ -164,101 +144,287 @@ bool RasterizeTriangle(const TetVertex* vertices, const std::uint32_t* tri, cons
       {
         inside = inside && (e[k] > 0 || (e[k] == 0 && edges[k].owns));
       }
-      if (!inside)
+      if (inside)
       {
-        continue;
+        covered(x, y, e);
       }
-      any = true;
-      if (!classified)
+    }
+  }
+  return true;
+}
+
+/**
+ * The shading of one triangle: its vertices classified once (lazily: at the first covered
+ * pixel), then each fragment from barycentric weights, with the OpenGL shaders' math,
+ * GL_LEQUAL against the opaque depth and "over" blending into `rgba`.
+ */
+class TriangleShader
+{
+public:
+  TriangleShader(const TetVertex* const corners[3], const CompositeSettings& settings,
+    float inverseUnit, int width, float* rgba)
+    : Corners(corners)
+    , Settings(settings)
+    , PreIntegration(settings.shading == Shading::PreIntegrated ? settings.preIntegration : nullptr)
+    , Exact(this->PreIntegration && settings.interpolation.perspective)
+    , InverseUnit(inverseUnit)
+    , Width(width)
+    , Image(rgba)
+  {
+  }
+
+  /// Shades and blends the fragment at pixel (x, y) with barycentric weights l[3].
+  void Fragment(int x, int y, const double l[3])
+  {
+    if (!this->Classified)
+    {
+      this->Classify();
+    }
+    float f[6];
+    for (int c = 0; c < 6; ++c)
+    {
+      f[c] = static_cast<float>(l[0] * this->Attributes[0][c] + l[1] * this->Attributes[1][c] +
+        l[2] * this->Attributes[2][c]);
+    }
+    if (this->Exact)
+    {
+      this->PerspectiveExact(l, f);
+    }
+    if (f[5] < -1.0f || f[5] > 1.0f)
+    {
+      return; // clipped by the near or far plane
+    }
+    const std::size_t pixel = static_cast<std::size_t>(y) * this->Width + x;
+    const float* opaqueDepth = this->Settings.opaqueDepth;
+    if (opaqueDepth && 0.5f * (f[5] + 1.0f) > opaqueDepth[pixel])
+    {
+      return;
+    }
+    if (this->PreIntegration)
+    {
+      // f[0..3] become the segment's colour and opacity.
+      this->PreIntegration->Segment(
+        this->Settings.transferFunction, f[0], f[1], f[4], this->InverseUnit, f);
+    }
+    else
+    {
+      f[3] = 1.0f - std::exp(-f[3] * f[4] * this->InverseUnit);
+    }
+    const float opacity = f[3];
+    if (!(opacity > 0.0f))
+    {
+      return;
+    }
+    float* d = this->Image + 4 * pixel;
+    const float keep = 1.0f - opacity;
+    d[0] = opacity * f[0] + keep * d[0];
+    d[1] = opacity * f[1] + keep * d[1];
+    d[2] = opacity * f[2] + keep * d[2];
+    d[3] = opacity + keep * d[3];
+  }
+
+private:
+  /// Per vertex: r, g, b, attenuation (pre-integrated: front scalar, back scalar, unused,
+  /// unused), then segment length and NDC z; for perspective-exact pre-integration also
+  /// 1 / w of front and back and the eye ray direction's x and y per unit depth.
+  void Classify()
+  {
+    const TransferFunctionTable& tf = this->Settings.transferFunction;
+    const PerspectiveInterpolation& view = this->Settings.interpolation;
+    for (int k = 0; k < 3; ++k)
+    {
+      const TetVertex& v = *this->Corners[k];
+      if (this->PreIntegration)
       {
-        for (int k = 0; k < 3; ++k)
-        {
-          const TetVertex& v = vertices[tri[order[k]]];
-          if (preIntegration)
-          {
-            attributes[k][0] = v.scalarFront;
-            attributes[k][1] = v.scalarBack;
-            attributes[k][2] = attributes[k][3] = 0.0f;
-          }
-          else
-          {
-            float front[4], back[4];
-            tf.Lookup(v.scalarFront, front);
-            tf.Lookup(v.scalarBack, back);
-            for (int c = 0; c < 4; ++c)
-            {
-              attributes[k][c] = 0.5f * (front[c] + back[c]);
-            }
-          }
-          attributes[k][4] = v.thickness;
-          attributes[k][5] = v.z;
-          if (exact)
-          {
-            rayX[k] = (v.x + view.shiftX) * view.scaleX;
-            rayY[k] = (v.y + view.shiftY) * view.scaleY;
-            const double ray = std::sqrt(1.0 + rayX[k] * rayX[k] + rayY[k] * rayY[k]);
-            const double w = 1.0 / (view.inverseWScale * v.z + view.inverseWOffset);
-            frontW[k] = 1.0 / w;
-            backW[k] = 1.0 / (w + v.thickness / ray);
-          }
-        }
-        classified = true;
-      }
-      // Barycentric weight of vertex order[k]: its opposite edge's function over the area.
-      const double l0 = e[0] * inverseArea, l1 = e[1] * inverseArea, l2 = e[2] * inverseArea;
-      float f[6];
-      for (int c = 0; c < 6; ++c)
-      {
-        f[c] =
-          static_cast<float>(l0 * attributes[0][c] + l1 * attributes[1][c] + l2 * attributes[2][c]);
-      }
-      if (exact)
-      {
-        const double front = l0 * frontW[0] + l1 * frontW[1] + l2 * frontW[2];
-        const double back = l0 * backW[0] + l1 * backW[1] + l2 * backW[2];
-        const double dx = l0 * rayX[0] + l1 * rayX[1] + l2 * rayX[2];
-        const double dy = l0 * rayY[0] + l1 * rayY[1] + l2 * rayY[2];
-        f[0] = static_cast<float>(
-          (l0 * frontW[0] * attributes[0][0] + l1 * frontW[1] * attributes[1][0] +
-            l2 * frontW[2] * attributes[2][0]) /
-          front);
-        f[1] =
-          static_cast<float>((l0 * backW[0] * attributes[0][1] + l1 * backW[1] * attributes[1][1] +
-                               l2 * backW[2] * attributes[2][1]) /
-            back);
-        f[4] = static_cast<float>(
-          std::max(0.0, 1.0 / back - 1.0 / front) * std::sqrt(1.0 + dx * dx + dy * dy));
-      }
-      if (f[5] < -1.0f || f[5] > 1.0f)
-      {
-        continue; // clipped by the near or far plane
-      }
-      const std::size_t pixel = static_cast<std::size_t>(y) * width + x;
-      if (opaqueDepth && 0.5f * (f[5] + 1.0f) > opaqueDepth[pixel])
-      {
-        continue;
-      }
-      if (preIntegration)
-      {
-        // f[0..3] become the segment's colour and opacity.
-        preIntegration->Segment(tf, f[0], f[1], f[4], inverseUnit, f);
+        this->Attributes[k][0] = v.scalarFront;
+        this->Attributes[k][1] = v.scalarBack;
+        this->Attributes[k][2] = this->Attributes[k][3] = 0.0f;
       }
       else
       {
-        f[3] = 1.0f - std::exp(-f[3] * f[4] * inverseUnit);
+        float front[4], back[4];
+        tf.Lookup(v.scalarFront, front);
+        tf.Lookup(v.scalarBack, back);
+        for (int c = 0; c < 4; ++c)
+        {
+          this->Attributes[k][c] = 0.5f * (front[c] + back[c]);
+        }
       }
-      const float opacity = f[3];
-      if (!(opacity > 0.0f))
+      this->Attributes[k][4] = v.thickness;
+      this->Attributes[k][5] = v.z;
+      if (this->Exact)
       {
-        continue;
+        this->RayX[k] = (v.x + view.shiftX) * view.scaleX;
+        this->RayY[k] = (v.y + view.shiftY) * view.scaleY;
+        const double ray =
+          std::sqrt(1.0 + this->RayX[k] * this->RayX[k] + this->RayY[k] * this->RayY[k]);
+        const double w = 1.0 / (view.inverseWScale * v.z + view.inverseWOffset);
+        this->FrontW[k] = 1.0 / w;
+        this->BackW[k] = 1.0 / (w + v.thickness / ray);
       }
-      float* d = rgba + 4 * pixel;
-      const float keep = 1.0f - opacity;
-      d[0] = opacity * f[0] + keep * d[0];
-      d[1] = opacity * f[1] + keep * d[1];
-      d[2] = opacity * f[2] + keep * d[2];
-      d[3] = opacity + keep * d[3];
     }
+    this->Classified = true;
+  }
+
+  /// Front and back scalars and the segment length, perspective-correctly.
+  void PerspectiveExact(const double l[3], float f[6]) const
+  {
+    const double front = l[0] * FrontW[0] + l[1] * FrontW[1] + l[2] * FrontW[2];
+    const double back = l[0] * BackW[0] + l[1] * BackW[1] + l[2] * BackW[2];
+    const double dx = l[0] * RayX[0] + l[1] * RayX[1] + l[2] * RayX[2];
+    const double dy = l[0] * RayY[0] + l[1] * RayY[1] + l[2] * RayY[2];
+    f[0] = static_cast<float>(
+      (l[0] * FrontW[0] * Attributes[0][0] + l[1] * FrontW[1] * Attributes[1][0] +
+        l[2] * FrontW[2] * Attributes[2][0]) /
+      front);
+    f[1] =
+      static_cast<float>((l[0] * BackW[0] * Attributes[0][1] + l[1] * BackW[1] * Attributes[1][1] +
+                           l[2] * BackW[2] * Attributes[2][1]) /
+        back);
+    f[4] = static_cast<float>(
+      std::max(0.0, 1.0 / back - 1.0 / front) * std::sqrt(1.0 + dx * dx + dy * dy));
+  }
+
+  const TetVertex* const* Corners;
+  const CompositeSettings& Settings;
+  const PreIntegrationTable* PreIntegration;
+  const bool Exact;
+  const float InverseUnit;
+  const int Width;
+  float* Image;
+  bool Classified = false;
+  float Attributes[3][6] = {};
+  double FrontW[3] = { 1, 1, 1 }, BackW[3] = { 1, 1, 1 }, RayX[3] = {}, RayY[3] = {};
+};
+
+/// Whether every vertex of the set-up triangle is inside the fixed-point range.
+inline bool InFixedPointRange(const ScreenTriangle& s)
+{
+  for (int k = 0; k < 3; ++k)
+  {
+    if (!(std::fabs(s.x[k]) < FixedPointLimit && std::fabs(s.y[k]) < FixedPointLimit))
+    {
+      return false;
+    }
+  }
+  return true;
+}
+
+/**
+ * Clips the triangle (x[k], y[k]) to the box [lo, hi] in both axes (Sutherland-Hodgman),
+ * writing the polygon's vertices to px, py (at most 7) and returning their number.
+ */
+int ClipToBox(const double x[3], const double y[3], double lo, double hiX, double hiY, double px[9],
+  double py[9])
+{
+  double ax[9], ay[9];
+  int n = 3;
+  for (int k = 0; k < 3; ++k)
+  {
+    px[k] = x[k];
+    py[k] = y[k];
+  }
+  // Planes: x >= lo, x <= hiX, y >= lo, y <= hiY, as signed distances.
+  for (int plane = 0; plane < 4 && n > 0; ++plane)
+  {
+    auto distance = [plane, lo, hiX, hiY](double u, double v)
+    {
+      switch (plane)
+      {
+        case 0:
+          return u - lo;
+        case 1:
+          return hiX - u;
+        case 2:
+          return v - lo;
+        default:
+          return hiY - v;
+      }
+    };
+    int m = 0;
+    for (int i = 0; i < n; ++i)
+    {
+      const int j = (i + 1) % n;
+      const double di = distance(px[i], py[i]), dj = distance(px[j], py[j]);
+      if (di >= 0)
+      {
+        ax[m] = px[i];
+        ay[m++] = py[i];
+      }
+      if ((di >= 0) != (dj >= 0))
+      {
+        const double t = di / (di - dj);
+        ax[m] = px[i] + t * (px[j] - px[i]);
+        ay[m++] = py[i] + t * (py[j] - py[i]);
+      }
+    }
+    n = m;
+    std::copy(ax, ax + n, px);
+    std::copy(ay, ay + n, py);
+  }
+  return n;
+}
+
+/// Pixels within this distance of the viewport are rasterized from a triangle clipped to
+/// it; the guard band keeps clipped edges far from every pixel centre that can be drawn.
+constexpr double GuardBand = 1 << 20;
+
+/**
+ * Rasterizes a set-up triangle over the pixel range in `s` (the caller may have clipped
+ * it): coverage by the top-left rule on 8-bit sub-pixel fixed point, shading by
+ * TriangleShader. A triangle with a vertex beyond the fixed-point range (a near-plane piece
+ * far off screen, say) is clipped to a guard band around the viewport first, as OpenGL's
+ * rasterizers clip it; its attributes are still interpolated over the whole triangle, so
+ * the pixels drawn are the same. True if it covered a pixel.
+ */
+bool RasterizeTriangle(const TetVertex* vertices, const std::uint32_t* tri, const ScreenTriangle& s,
+  int width, int height, const CompositeSettings& settings, float inverseUnit, float* rgba)
+{
+  const TetVertex* corners[3] = { vertices + tri[0], vertices + tri[1], vertices + tri[2] };
+  TriangleShader shader(corners, settings, inverseUnit, width, rgba);
+  bool any = false;
+  if (InFixedPointRange(s))
+  {
+    CoverTriangle(s.x, s.y, s.xmin, s.xmax, s.ymin, s.ymax,
+      [&](int x, int y, const std::int64_t e[3])
+      {
+        const double inverseArea = 1.0 / static_cast<double>(e[0] + e[1] + e[2]);
+        const double l[3] = { e[0] * inverseArea, e[1] * inverseArea, e[2] * inverseArea };
+        shader.Fragment(x, y, l);
+        any = true;
+      });
+    return any;
+  }
+  // Barycentric weights of the whole triangle as planes over the window: l[k] = a[k] X +
+  // b[k] Y + c[k], from the edge opposite vertex k.
+  const double area2 =
+    (s.x[1] - s.x[0]) * (s.y[2] - s.y[0]) - (s.y[1] - s.y[0]) * (s.x[2] - s.x[0]);
+  if (!(std::fabs(area2) > 0.0) || !std::isfinite(area2))
+  {
+    return false;
+  }
+  double a[3], b[3], c[3];
+  for (int k = 0; k < 3; ++k)
+  {
+    const int i = (k + 1) % 3, j = (k + 2) % 3;
+    a[k] = (s.y[i] - s.y[j]) / area2;
+    b[k] = (s.x[j] - s.x[i]) / area2;
+    c[k] = (s.x[i] * s.y[j] - s.x[j] * s.y[i]) / area2;
+  }
+  double px[9], py[9];
+  const int n = ClipToBox(s.x, s.y, -GuardBand, width + GuardBand, height + GuardBand, px, py);
+  for (int k = 1; k + 1 < n; ++k)
+  {
+    const double fanX[3] = { px[0], px[k], px[k + 1] }, fanY[3] = { py[0], py[k], py[k + 1] };
+    CoverTriangle(fanX, fanY, s.xmin, s.xmax, s.ymin, s.ymax,
+      [&](int x, int y, const std::int64_t*)
+      {
+        const double X = x + 0.5, Y = y + 0.5;
+        const double l[3] = { a[0] * X + b[0] * Y + c[0], a[1] * X + b[1] * Y + c[1],
+          a[2] * X + b[2] * Y + c[2] };
+        shader.Fragment(x, y, l);
+        any = true;
+      });
   }
   return any;
 }
@@ -436,7 +602,7 @@ void Compositor::Composite(const TetVertex* vertices, const std::uint32_t* indic
         s.ymin = std::max(s.ymin, rowBegin);
         s.ymax = std::min(s.ymax, rowEnd);
         rasterized += RasterizeTriangle(vertices, indices + 12 * (t / 4) + 3 * (t % 4), s, width,
-                        settings, inverseUnit, rgba.data())
+                        height, settings, inverseUnit, rgba.data())
           ? 1
           : 0;
       }

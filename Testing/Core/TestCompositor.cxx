@@ -300,3 +300,84 @@ TEST(Compositor, CullingCellsThatCoverNoPixelChangesNothing)
 }
 
 } // namespace
+
+namespace
+{
+
+/// One triangle slot: vertices a, b, c (window coordinates in a w x h window), each with its
+/// front and back scalar and segment length; the slot's other triangles degenerate.
+void TriangleSlot(const double (&x)[3], const double (&y)[3], const float (&front)[3],
+  const float (&back)[3], const float (&length)[3], int w, int h, TetVertex vertices[5],
+  std::uint32_t indices[12])
+{
+  for (int k = 0; k < 3; ++k)
+  {
+    vertices[k] = TetVertex{ Ndc(x[k], w), Ndc(y[k], h), 0.0f, front[k], back[k], length[k] };
+  }
+  vertices[3] = vertices[4] = vertices[0];
+  const std::uint32_t local[12] = { 0, 1, 2, 3, 3, 3, 3, 3, 3, 3, 3, 3 };
+  std::copy(local, local + 12, indices);
+}
+
+} // namespace
+
+TEST(Compositor, TrianglesBeyondTheFixedPointRangeAreClippedNotDropped)
+{
+  // A triangle with one vertex 10^8 pixels off screen (a near-plane piece seen from inside
+  // the mesh): the fixed-point rasterizer cannot hold it, so it is clipped to a guard band.
+  // The same plane given by a nearer vertex on the same two edges (attributes interpolated
+  // there) must draw the same pixels with the same colours.
+  const int w = 40, h = 30;
+  std::vector<float> table = { 0.2f, 0.4f, 1.0f, 0.5f, 1.0f, 0.6f, 0.1f, 3.0f };
+  const double far = 1e8;
+  const double x[3] = { 5, 35, far }, y[3] = { 4, 8, 0.6 * far };
+  const float front[3] = { 0.0f, 1.0f, 0.5f }, back[3] = { 0.2f, 0.9f, 0.7f },
+              length[3] = { 0.0f, 0.5f, 3.0f };
+  // The nearer description: vertex 2 moved to parameter t along the edges from vertex 0
+  // and 1 would change the triangle; instead cut both edges 0-2 and 1-2 at t and split
+  // the quadrilateral in two, with every attribute interpolated linearly (exact: all are
+  // affine over the window).
+  const double t = 60.0 / far;
+  auto lerp = [t](double a, double b) { return a + t * (b - a); };
+  const double x02 = lerp(x[0], x[2]), y02 = lerp(y[0], y[2]);
+  const double x12 = lerp(x[1], x[2]), y12 = lerp(y[1], y[2]);
+  auto lerpf = [t](const float(&v)[3], int k)
+  { return static_cast<float>(v[k] + t * (static_cast<double>(v[2]) - v[k])); };
+  TetVertex farSlot[5], nearSlots[10];
+  std::uint32_t farIndices[12], nearIndices[24];
+  TriangleSlot(x, y, front, back, length, w, h, farSlot, farIndices);
+  // Quadrilateral 0, 1, 12, 02 as triangles (0, 1, 12) and (0, 12, 02).
+  TriangleSlot({ x[0], x[1], x12 }, { y[0], y[1], y12 }, { front[0], front[1], lerpf(front, 1) },
+    { back[0], back[1], lerpf(back, 1) }, { length[0], length[1], lerpf(length, 1) }, w, h,
+    nearSlots, nearIndices);
+  TriangleSlot({ x[0], x12, x02 }, { y[0], y12, y02 },
+    { front[0], lerpf(front, 1), lerpf(front, 0) }, { back[0], lerpf(back, 1), lerpf(back, 0) },
+    { length[0], lerpf(length, 1), lerpf(length, 0) }, w, h, nearSlots + 5, nearIndices + 12);
+  for (std::uint32_t& i : nearIndices)
+  {
+    i += &i >= nearIndices + 12 ? 5 : 0;
+  }
+  for (const bool preIntegrated : { false, true })
+  {
+    mtpt::PreIntegrationTable integrals;
+    auto settings = Settings(w, h, table);
+    integrals.Build(settings.transferFunction);
+    if (preIntegrated)
+    {
+      settings.UsePreIntegration(integrals, mtpt::PerspectiveInterpolation{});
+    }
+    mtpt::Compositor compositor;
+    std::vector<float> clipped, reference;
+    compositor.Composite(farSlot, farIndices, 1, settings, clipped, 2);
+    compositor.Composite(nearSlots, nearIndices, 2, settings, reference, 2);
+    int covered = 0;
+    double worst = 0;
+    for (std::size_t i = 0; i < clipped.size(); ++i)
+    {
+      worst = std::max(worst, static_cast<double>(std::fabs(clipped[i] - reference[i])));
+      covered += i % 4 == 3 && reference[i] > 0.0f ? 1 : 0;
+    }
+    EXPECT_GT(covered, 200) << "the triangle covers a good part of the window";
+    EXPECT_LT(worst, 1e-5) << (preIntegrated ? "pre-integrated" : "VTK-compatible");
+  }
+}
