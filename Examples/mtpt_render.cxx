@@ -458,7 +458,6 @@ int main(int argc, char** argv)
   renderer->SetBackground(1.0, 1.0, 1.0);
   vtkNew<vtkRenderWindow> window;
   window->SetSize(o.width, o.height);
-  window->SetMultiSamples(0);
   window->AddRenderer(renderer);
   window->SetOffScreenRendering(o.interactive ? 0 : 1);
 

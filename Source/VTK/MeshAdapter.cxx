@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "vtkMTPTMeshAdapter.h"
+#include "MeshAdapter.h"
 
-#include "vtkCamera.h"
 #include "vtkCellArray.h"
 #include "vtkCellType.h"
 #include "vtkCellTypes.h"
@@ -10,16 +9,13 @@
 #include "vtkDoubleArray.h"
 #include "vtkFloatArray.h"
 #include "vtkIdList.h"
-#include "vtkMatrix4x4.h"
 #include "vtkNew.h"
 #include "vtkPoints.h"
-#include "vtkRenderer.h"
 #include "vtkTypeInt32Array.h"
 #include "vtkTypeInt64Array.h"
 #include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
 #include "vtkUnstructuredGridBase.h"
-#include "vtkVolume.h"
 
 #include <cmath>
 #include <limits>
@@ -28,10 +24,10 @@
 namespace mtpt
 {
 
-vtkMTPTMeshAdapter::vtkMTPTMeshAdapter() = default;
-vtkMTPTMeshAdapter::~vtkMTPTMeshAdapter() = default;
+MeshAdapter::MeshAdapter() = default;
+MeshAdapter::~MeshAdapter() = default;
 
-bool vtkMTPTMeshAdapter::Update(vtkUnstructuredGridBase* input)
+bool MeshAdapter::Update(vtkUnstructuredGridBase* input)
 {
   if (input == this->LastInput && input->GetMTime() == this->InputTime)
   {
@@ -43,8 +39,18 @@ bool vtkMTPTMeshAdapter::Update(vtkUnstructuredGridBase* input)
   this->WarningMessage.clear();
   this->PointData = PointsView{};
   this->CellData = CellsView{};
+  if (!this->AdaptPoints(input) || !this->CheckCellTypes(input))
+  {
+    return false;
+  }
+  vtkCellArray* cells = this->AdaptCells(input);
+  this->WarningMessage = this->Problems(cells, input->GetPoints()->GetData());
+  return true;
+}
 
-  // Points: float or double arrays in VTK's interleaved layout are used in place.
+bool MeshAdapter::AdaptPoints(vtkUnstructuredGridBase* input)
+{
+  // Float or double arrays in VTK's interleaved layout are used in place.
   vtkPoints* points = input->GetPoints();
   if (!points || points->GetNumberOfPoints() == 0)
   {
@@ -67,8 +73,43 @@ bool vtkMTPTMeshAdapter::Update(vtkUnstructuredGridBase* input)
     this->PointCopy->DeepCopy(coordinates);
     this->PointData = PointsView::FromDouble(this->PointCopy->GetPointer(0), pointCount);
   }
+  return true;
+}
 
-  // Cells: a vtkUnstructuredGrid's own vtkCellArray is used in place; any other
+bool MeshAdapter::CheckCellTypes(vtkUnstructuredGridBase* input)
+{
+  // Every cell must be a tetrahedron (the mapper splits other cells first: see
+  // Tetrahedralizer; this guards the core against anything else).
+  auto* grid = vtkUnstructuredGrid::SafeDownCast(input);
+  const vtkIdType cellCount = input->GetNumberOfCells();
+  vtkIdType nonTetrahedra = 0, firstBad = -1;
+  int firstBadType = VTK_EMPTY_CELL;
+  const unsigned char* types =
+    grid && grid->GetCellTypesArray() ? grid->GetCellTypesArray()->GetPointer(0) : nullptr;
+  for (vtkIdType c = 0; c < cellCount; ++c)
+  {
+    const int type = types ? types[c] : input->GetCellType(c);
+    if (type != VTK_TETRA && nonTetrahedra++ == 0)
+    {
+      firstBad = c;
+      firstBadType = type;
+    }
+  }
+  if (nonTetrahedra == 0)
+  {
+    return true;
+  }
+  std::ostringstream message;
+  message << nonTetrahedra << " of " << cellCount << " cells are not tetrahedra (first: cell "
+          << firstBad << ", " << vtkCellTypes::GetClassNameFromTypeId(firstBadType)
+          << "); tetrahedralize the input first, e.g. with vtkDataSetTriangleFilter";
+  this->ErrorMessage = message.str();
+  return false;
+}
+
+vtkCellArray* MeshAdapter::AdaptCells(vtkUnstructuredGridBase* input)
+{
+  // A vtkUnstructuredGrid's own vtkCellArray is used in place; any other
   // vtkUnstructuredGridBase is copied into one through its cell interface.
   const vtkIdType cellCount = input->GetNumberOfCells();
   vtkCellArray* cells = nullptr;
@@ -89,35 +130,6 @@ bool vtkMTPTMeshAdapter::Update(vtkUnstructuredGridBase* input)
     }
     cells = this->CellCopy;
   }
-
-  // Every cell must be a tetrahedron (the mapper splits other cells first: see
-  // vtkMTPTTetrahedralizer; this guards the core against anything else).
-  vtkIdType nonTetrahedra = 0, firstBad = -1;
-  int firstBadType = VTK_EMPTY_CELL;
-  const unsigned char* types =
-    grid && grid->GetCellTypesArray() ? grid->GetCellTypesArray()->GetPointer(0) : nullptr;
-  for (vtkIdType c = 0; c < cellCount; ++c)
-  {
-    const int type = types ? types[c] : input->GetCellType(c);
-    if (type != VTK_TETRA)
-    {
-      if (nonTetrahedra++ == 0)
-      {
-        firstBad = c;
-        firstBadType = type;
-      }
-    }
-  }
-  if (nonTetrahedra > 0)
-  {
-    std::ostringstream message;
-    message << nonTetrahedra << " of " << cellCount << " cells are not tetrahedra (first: cell "
-            << firstBad << ", " << vtkCellTypes::GetClassNameFromTypeId(firstBadType)
-            << "); tetrahedralize the input first, e.g. with vtkDataSetTriangleFilter";
-    this->ErrorMessage = message.str();
-    return false;
-  }
-
   // vtkTypeInt64 is long long, std::int64_t may be long: same size and representation.
   static_assert(sizeof(vtkTypeInt64) == sizeof(std::int64_t), "64-bit ids");
   static_assert(sizeof(vtkTypeInt32) == sizeof(std::int32_t), "32-bit ids");
@@ -135,10 +147,14 @@ bool vtkMTPTMeshAdapter::Update(vtkUnstructuredGridBase* input)
       reinterpret_cast<const std::int32_t*>(cells->GetOffsetsArray32()->GetPointer(0)),
       static_cast<std::size_t>(cellCount));
   }
+  return cells;
+}
 
-  // Point ids out of range: the core skips those cells; say so once per input change.
+std::string MeshAdapter::Problems(vtkCellArray* cells, vtkDataArray* coordinates)
+{
+  // Point ids out of range: the core skips those cells.
   vtkIdType outOfRange = 0;
-  const vtkIdType pointIds = static_cast<vtkIdType>(pointCount);
+  const vtkIdType pointIds = coordinates->GetNumberOfTuples();
   for (const auto id : vtk::DataArrayValueRange<1>(cells->GetConnectivityArray()))
   {
     outOfRange += (id < 0 || id >= pointIds) ? 1 : 0;
@@ -161,11 +177,10 @@ bool vtkMTPTMeshAdapter::Update(vtkUnstructuredGridBase* input)
     message << (outOfRange > 0 ? "; " : "") << nonFinitePoints << " of " << pointIds
             << " points have NaN or infinite coordinates; the cells using them are not drawn";
   }
-  this->WarningMessage = message.str();
-  return true;
+  return message.str();
 }
 
-const float* vtkMTPTMeshAdapter::Scalars(
+const float* MeshAdapter::Scalars(
   vtkDataArray* array, int component, double range[2], vtkIdType& nonFinite)
 {
   const int components = array->GetNumberOfComponents();
@@ -231,26 +246,6 @@ const float* vtkMTPTMeshAdapter::Scalars(
   range[1] = this->ScalarRange[1];
   nonFinite = this->ScalarNonFinite;
   return this->ScalarValues.data();
-}
-
-void ViewMatrices(vtkRenderer* renderer, vtkVolume* volume, Matrix4& modelView, Matrix4& projection)
-{
-  auto copy = [](vtkMatrix4x4* m, Matrix4& out)
-  {
-    for (int r = 0; r < 4; ++r)
-    {
-      for (int c = 0; c < 4; ++c)
-      {
-        out[4 * r + c] = m->GetElement(r, c);
-      }
-    }
-  };
-  vtkCamera* camera = renderer->GetActiveCamera();
-  vtkNew<vtkMatrix4x4> eye;
-  vtkMatrix4x4::Multiply4x4(camera->GetModelViewTransformMatrix(), volume->GetMatrix(), eye);
-  copy(eye, modelView);
-  copy(
-    camera->GetProjectionTransformMatrix(renderer->GetTiledAspectRatio(), -1.0, 1.0), projection);
 }
 
 } // namespace mtpt

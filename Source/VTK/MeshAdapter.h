@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 /**
- * @file vtkMTPTMeshAdapter.h
+ * @file MeshAdapter.h
  * @brief Private glue: presents a vtkUnstructuredGridBase to mtpt_core as views, without
  * copying where VTK's storage already has the core's layout.
  *
@@ -9,8 +9,8 @@
  * subclasses) is copied once per input change. Scalars become one float per tuple (a
  * component or the magnitude), recomputed only when the array or the selection changes.
  */
-#ifndef vtkMTPTMeshAdapter_h
-#define vtkMTPTMeshAdapter_h
+#ifndef MeshAdapter_h
+#define MeshAdapter_h
 
 #include "mtpt/MeshView.h"
 
@@ -26,17 +26,14 @@ class vtkDataArray;
 class vtkDoubleArray;
 class vtkUnstructuredGridBase;
 
-class vtkRenderer;
-class vtkVolume;
-
 namespace mtpt
 {
 
-class vtkMTPTMeshAdapter
+class MeshAdapter
 {
 public:
-  vtkMTPTMeshAdapter();
-  ~vtkMTPTMeshAdapter();
+  MeshAdapter();
+  ~MeshAdapter();
 
   /**
    * Brings the views up to date with `input` (cheap when nothing changed). Returns false
@@ -53,15 +50,22 @@ public:
 
   /**
    * One float scalar per tuple of `array`: its `component`, or its magnitude when
-   * component < 0 (single-component arrays: the value). Cached; returns the values and
+   * component < 0 (single-component arrays: the value; a component beyond the last reads
+   * the last: SelectScalars warns about it). Cached; returns the values and
    * sets the finite range and the number of non-finite values. Recomputed when the array,
    * its MTime, the component or the MTime of the input of the last Update() changes.
    */
   const float* Scalars(vtkDataArray* array, int component, double range[2], vtkIdType& nonFinite);
 
 private:
-  vtkMTPTMeshAdapter(const vtkMTPTMeshAdapter&) = delete;
-  void operator=(const vtkMTPTMeshAdapter&) = delete;
+  MeshAdapter(const MeshAdapter&) = delete;
+  void operator=(const MeshAdapter&) = delete;
+
+  bool AdaptPoints(vtkUnstructuredGridBase* input);
+  bool CheckCellTypes(vtkUnstructuredGridBase* input);
+  vtkCellArray* AdaptCells(vtkUnstructuredGridBase* input);
+  /// Ids out of range and non-finite points, as one warning (empty: none).
+  static std::string Problems(vtkCellArray* cells, vtkDataArray* coordinates);
 
   PointsView PointData;
   CellsView CellData;
@@ -80,15 +84,6 @@ private:
   double ScalarRange[2] = { 0, 0 };
   vtkIdType ScalarNonFinite = 0;
 };
-
-/**
- * The matrices of a frame of `volume` in `renderer`, as the mapper draws it: model-view =
- * the active camera's view transform times the volume's matrix; projection = the camera's
- * for the renderer's tiled aspect ratio with OpenGL's depth range. The mapper and the
- * reference renderer share it, so the two see the same scene.
- */
-void ViewMatrices(
-  vtkRenderer* renderer, vtkVolume* volume, Matrix4& modelView, Matrix4& projection);
 
 } // namespace mtpt
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "vtkMTPTTetrahedralizer.h"
+#include "Tetrahedralizer.h"
 
 #include "vtkCellData.h"
 #include "vtkCellIterator.h"
@@ -42,15 +42,15 @@ bool OnlyTetrahedra(vtkUnstructuredGridBase* input)
 }
 } // namespace
 
-vtkMTPTTetrahedralizer::vtkMTPTTetrahedralizer()
+Tetrahedralizer::Tetrahedralizer()
 {
   // Vertices, lines and polygons enclose no volume: the filter drops them.
   this->Filter->SetTetrahedraOnly(1);
 }
 
-vtkMTPTTetrahedralizer::~vtkMTPTTetrahedralizer() = default;
+Tetrahedralizer::~Tetrahedralizer() = default;
 
-vtkUnstructuredGridBase* vtkMTPTTetrahedralizer::Update(vtkUnstructuredGridBase* input)
+vtkUnstructuredGridBase* Tetrahedralizer::Update(vtkUnstructuredGridBase* input)
 {
   if (input == this->LastInput && input->GetMTime() == this->InputTime)
   {
@@ -64,91 +64,92 @@ vtkUnstructuredGridBase* vtkMTPTTetrahedralizer::Update(vtkUnstructuredGridBase*
   {
     return input; // the common case: nothing to split, nothing copied
   }
-
-  // One pass over the cells: which are tetrahedra, which enclose no volume, which name a
-  // point that does not exist (the filter reads every cell's points: those must go first).
-  const vtkIdType cellCount = input->GetNumberOfCells();
-  const vtkIdType pointCount = input->GetNumberOfPoints();
-  vtkIdType lowerDimensional = 0, tetrahedra = 0;
-  vtkIdType firstLower = -1;
-  int firstLowerType = VTK_EMPTY_CELL;
-  std::vector<vtkIdType> badCells;
-  auto cell = vtkSmartPointer<vtkCellIterator>::Take(input->NewCellIterator());
-  for (cell->InitTraversal(); !cell->IsDoneWithTraversal(); cell->GoToNextCell())
-  {
-    const int type = cell->GetCellType();
-    tetrahedra += type == VTK_TETRA ? 1 : 0;
-    if (type != VTK_EMPTY_CELL && cell->GetCellDimension() < 3)
-    {
-      if (lowerDimensional++ == 0)
-      {
-        firstLower = cell->GetCellId();
-        firstLowerType = type;
-      }
-    }
-    for (const vtkIdType id : *cell->GetPointIds())
-    {
-      if (id < 0 || id >= pointCount)
-      {
-        badCells.push_back(cell->GetCellId());
-        break;
-      }
-    }
-  }
-  if (tetrahedra == cellCount)
+  const Survey survey = SurveyCells(input);
+  if (survey.tetrahedra == input->GetNumberOfCells())
   {
     return input; // a vtkUnstructuredGridBase of tetrahedra: the adapter reads it directly
   }
-
   std::ostringstream warning;
-  if (lowerDimensional > 0)
+  if (survey.lowerDimensional > 0)
   {
-    warning << lowerDimensional << " of " << cellCount
-            << " cells are vertices, lines or polygons (first: cell " << firstLower << ", "
-            << vtkCellTypes::GetClassNameFromTypeId(firstLowerType)
+    warning << survey.lowerDimensional << " of " << input->GetNumberOfCells()
+            << " cells are vertices, lines or polygons (first: cell " << survey.firstLower << ", "
+            << vtkCellTypes::GetClassNameFromTypeId(survey.firstLowerType)
             << "); they enclose no volume and are ignored";
   }
-  vtkDataSet* source = input;
-  vtkNew<vtkUnstructuredGrid> valid;
-  if (!badCells.empty())
+  vtkSmartPointer<vtkUnstructuredGrid> valid;
+  if (!survey.badCells.empty())
   {
-    if (lowerDimensional > 0)
-    {
-      warning << "; ";
-    }
-    warning << badCells.size() << " cells name points outside [0, " << pointCount
-            << ") (first: cell " << badCells.front() << "); they are not drawn";
-    // The same grid without those cells (points and point data shared, not copied).
-    valid->SetPoints(input->GetPoints());
-    valid->GetPointData()->PassData(input->GetPointData());
-    valid->GetCellData()->CopyAllocate(input->GetCellData(), cellCount);
-    valid->Allocate(cellCount);
-    std::size_t next = 0;
-    for (cell->InitTraversal(); !cell->IsDoneWithTraversal(); cell->GoToNextCell())
-    {
-      const vtkIdType id = cell->GetCellId();
-      if (next < badCells.size() && badCells[next] == id)
-      {
-        ++next;
-        continue;
-      }
-      const int type = cell->GetCellType();
-      const vtkIdType newId = type == VTK_POLYHEDRON
-        ? valid->InsertNextCell(type, cell->GetFaces())
-        : valid->InsertNextCell(type, cell->GetPointIds());
-      valid->GetCellData()->CopyData(input->GetCellData(), id, newId);
-    }
-    source = valid;
+    warning << (survey.lowerDimensional > 0 ? "; " : "") << survey.badCells.size()
+            << " cells name points outside [0, " << input->GetNumberOfPoints() << ") (first: cell "
+            << survey.badCells.front() << "); they are not drawn";
+    valid = WithoutCells(input, survey.badCells);
   }
   this->WarningMessage = warning.str();
-
-  this->Filter->SetInputData(source);
+  this->Filter->SetInputData(valid ? static_cast<vtkDataSet*>(valid) : input);
   this->Filter->Update();
   this->Output = vtkSmartPointer<vtkUnstructuredGrid>::New();
   this->Output->ShallowCopy(this->Filter->GetOutput());
   this->Filter->SetInputData(nullptr); // hold no reference to the input between updates
   ++this->Tetrahedralizations;
   return this->Output;
+}
+
+Tetrahedralizer::Survey Tetrahedralizer::SurveyCells(vtkUnstructuredGridBase* input)
+{
+  // One pass over the cells: which are tetrahedra, which enclose no volume, which name a
+  // point that does not exist (the filter reads every cell's points: those must go first).
+  Survey survey;
+  const vtkIdType pointCount = input->GetNumberOfPoints();
+  auto cell = vtkSmartPointer<vtkCellIterator>::Take(input->NewCellIterator());
+  for (cell->InitTraversal(); !cell->IsDoneWithTraversal(); cell->GoToNextCell())
+  {
+    const int type = cell->GetCellType();
+    survey.tetrahedra += type == VTK_TETRA ? 1 : 0;
+    if (type != VTK_EMPTY_CELL && cell->GetCellDimension() < 3 && survey.lowerDimensional++ == 0)
+    {
+      survey.firstLower = cell->GetCellId();
+      survey.firstLowerType = type;
+    }
+    for (const vtkIdType id : *cell->GetPointIds())
+    {
+      if (id < 0 || id >= pointCount)
+      {
+        survey.badCells.push_back(cell->GetCellId());
+        break;
+      }
+    }
+  }
+  return survey;
+}
+
+vtkSmartPointer<vtkUnstructuredGrid> Tetrahedralizer::WithoutCells(
+  vtkUnstructuredGridBase* input, const std::vector<vtkIdType>& cells)
+{
+  // The same grid without those cells (points and point data shared, not copied).
+  const vtkIdType cellCount = input->GetNumberOfCells();
+  auto valid = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  valid->SetPoints(input->GetPoints());
+  valid->GetPointData()->PassData(input->GetPointData());
+  valid->GetCellData()->CopyAllocate(input->GetCellData(), cellCount);
+  valid->Allocate(cellCount);
+  std::size_t next = 0;
+  auto cell = vtkSmartPointer<vtkCellIterator>::Take(input->NewCellIterator());
+  for (cell->InitTraversal(); !cell->IsDoneWithTraversal(); cell->GoToNextCell())
+  {
+    const vtkIdType id = cell->GetCellId();
+    if (next < cells.size() && cells[next] == id)
+    {
+      ++next;
+      continue;
+    }
+    const int type = cell->GetCellType();
+    const vtkIdType newId = type == VTK_POLYHEDRON
+      ? valid->InsertNextCell(type, cell->GetFaces())
+      : valid->InsertNextCell(type, cell->GetPointIds());
+    valid->GetCellData()->CopyData(input->GetCellData(), id, newId);
+  }
+  return valid;
 }
 
 } // namespace mtpt

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 /**
- * @file vtkMTPTTetrahedralizer.h
+ * @file Tetrahedralizer.h
  * @brief Private glue: turns any unstructured grid into the tetrahedra the mapper draws,
  * once per input change.
  *
@@ -14,17 +14,18 @@
  * What cannot be drawn is left out, with one message per input change: cells of
  * dimension below 3 (vertices, lines, polygons: they enclose no volume) and, for grids that
  * need splitting, cells naming a point id outside the point array (vtkDataSetTriangleFilter
- * would read past the points). Tetrahedra with such ids are left to vtkMTPTMeshAdapter,
+ * would read past the points). Tetrahedra with such ids are left to MeshAdapter,
  * which reports them and whose core skips them.
  */
-#ifndef vtkMTPTTetrahedralizer_h
-#define vtkMTPTTetrahedralizer_h
+#ifndef Tetrahedralizer_h
+#define Tetrahedralizer_h
 
 #include "vtkNew.h"
 #include "vtkSmartPointer.h"
 #include "vtkType.h"
 
 #include <string>
+#include <vector>
 
 class vtkDataSetTriangleFilter;
 class vtkUnstructuredGrid;
@@ -33,11 +34,11 @@ class vtkUnstructuredGridBase;
 namespace mtpt
 {
 
-class vtkMTPTTetrahedralizer
+class Tetrahedralizer
 {
 public:
-  vtkMTPTTetrahedralizer();
-  ~vtkMTPTTetrahedralizer();
+  Tetrahedralizer();
+  ~Tetrahedralizer();
 
   /**
    * The grid to draw for `input`: `input` itself when all its cells are tetrahedra,
@@ -53,8 +54,22 @@ public:
   vtkIdType GetNumberOfTetrahedralizations() const { return this->Tetrahedralizations; }
 
 private:
-  vtkMTPTTetrahedralizer(const vtkMTPTTetrahedralizer&) = delete;
-  void operator=(const vtkMTPTTetrahedralizer&) = delete;
+  Tetrahedralizer(const Tetrahedralizer&) = delete;
+  void operator=(const Tetrahedralizer&) = delete;
+
+  /// What one pass over a grid's cells finds.
+  struct Survey
+  {
+    vtkIdType tetrahedra = 0;
+    vtkIdType lowerDimensional = 0; ///< vertices, lines, polygons
+    vtkIdType firstLower = -1;
+    int firstLowerType = 0;
+    std::vector<vtkIdType> badCells; ///< cells naming a point id out of range, ascending
+  };
+  static Survey SurveyCells(vtkUnstructuredGridBase* input);
+  /// `input` without `cells` (ascending ids), sharing its points and point data.
+  static vtkSmartPointer<vtkUnstructuredGrid> WithoutCells(
+    vtkUnstructuredGridBase* input, const std::vector<vtkIdType>& cells);
 
   vtkNew<vtkDataSetTriangleFilter> Filter;
   vtkSmartPointer<vtkUnstructuredGrid> Output; // null when the input is passed through

@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkMTPTReferenceRenderer.h"
 
-#include "vtkMTPTMeshAdapter.h"
-#include "vtkMTPTTetrahedralizer.h"
+#include "MeshAdapter.h"
+#include "Tetrahedralizer.h"
+#include "VolumeInput.h"
 
 #include "mtpt/ReferenceRenderer.h"
 
@@ -116,13 +117,86 @@ vtkDoubleArray* vtkMTPTReferenceRenderer::GetImage()
   return this->Image;
 }
 
-bool vtkMTPTReferenceRenderer::Render(
-  vtkRenderer* renderer, vtkVolume* volume, vtkUnstructuredGridBase* input)
+namespace
 {
-  this->Image->SetNumberOfTuples(0);
-  this->Size[0] = this->Size[1] = 0;
-  this->RenderSeconds = 0;
-  this->NumberOfSegments = 0;
+
+/// The transfer functions of `property` as the reference's piecewise-linear nodes: node for
+/// node when that is exact, VTK's own samples over `dataRange` and the nodes otherwise.
+/// Returns whether the conversion was exact.
+bool ConvertTransferFunctions(vtkVolumeProperty* property, const double dataRange[2], int samples,
+  mtpt::ReferenceSettings& settings)
+{
+  const bool gray = property->GetColorChannels(0) == 1;
+  vtkPiecewiseFunction* opacity = property->GetScalarOpacity(0);
+  vtkPiecewiseFunction* grayFunction = gray ? property->GetGrayTransferFunction(0) : nullptr;
+  vtkColorTransferFunction* rgbFunction = gray ? nullptr : property->GetRGBTransferFunction(0);
+  if (IsPolyline(opacity) && (gray ? IsPolyline(grayFunction) : IsPolyline(rgbFunction)))
+  {
+    for (int i = 0; i < opacity->GetSize(); ++i)
+    {
+      double node[4];
+      opacity->GetNodeValue(i, node);
+      settings.opacity.push_back({ node[0], node[1] });
+    }
+    const int colours = gray ? grayFunction->GetSize() : rgbFunction->GetSize();
+    for (int i = 0; i < colours; ++i)
+    {
+      double node[6];
+      if (gray)
+      {
+        grayFunction->GetNodeValue(i, node);
+        node[2] = node[3] = node[1];
+      }
+      else
+      {
+        rgbFunction->GetNodeValue(i, node);
+      }
+      settings.color.push_back({ node[0], node[1], node[2], node[3] });
+    }
+    return true;
+  }
+  double range[2] = { dataRange[0], dataRange[1] };
+  NodeRange(opacity, range);
+  if (gray)
+  {
+    NodeRange(grayFunction, range);
+  }
+  else
+  {
+    NodeRange(rgbFunction, range);
+  }
+  if (!(range[1] > range[0]))
+  {
+    range[1] = range[0] + 1.0;
+  }
+  std::vector<double> alpha(samples), colour(3 * static_cast<std::size_t>(samples));
+  opacity->GetTable(range[0], range[1], samples, alpha.data());
+  if (gray)
+  {
+    grayFunction->GetTable(range[0], range[1], samples, colour.data());
+    for (int i = samples - 1; i >= 0; --i)
+    {
+      colour[3 * i] = colour[3 * i + 1] = colour[3 * i + 2] = colour[i];
+    }
+  }
+  else
+  {
+    rgbFunction->GetTable(range[0], range[1], samples, colour.data());
+  }
+  for (int i = 0; i < samples; ++i)
+  {
+    const double s = range[0] + (range[1] - range[0]) * i / (samples - 1);
+    settings.opacity.push_back({ s, alpha[i] });
+    settings.color.push_back({ s, colour[3 * i], colour[3 * i + 1], colour[3 * i + 2] });
+  }
+  return false;
+}
+
+} // namespace
+
+bool vtkMTPTReferenceRenderer::CheckScene(
+  vtkRenderer* renderer, vtkVolume* volume, vtkUnstructuredGridBase*& input, int size[2])
+{
   if (!renderer || !renderer->GetActiveCamera())
   {
     vtkErrorMacro(<< "no renderer or no active camera");
@@ -133,10 +207,9 @@ bool vtkMTPTReferenceRenderer::Render(
     vtkErrorMacro(<< "no volume or no volume property");
     return false;
   }
-  auto* volumeMapper = vtkAbstractVolumeMapper::SafeDownCast(volume->GetMapper());
   if (!input)
   {
-    auto* gridMapper = vtkUnstructuredGridVolumeMapper::SafeDownCast(volumeMapper);
+    auto* gridMapper = vtkUnstructuredGridVolumeMapper::SafeDownCast(volume->GetMapper());
     input = gridMapper ? gridMapper->GetInput() : nullptr;
   }
   if (!input || input->GetNumberOfCells() == 0)
@@ -150,149 +223,63 @@ bool vtkMTPTReferenceRenderer::Render(
     vtkErrorMacro(<< "the renderer is in no render window: its viewport has no size");
     return false;
   }
-  int width = 0, height = 0, x0 = 0, y0 = 0;
-  renderer->GetTiledSizeAndOrigin(&width, &height, &x0, &y0);
-  if (width <= 0 || height <= 0)
+  int x0 = 0, y0 = 0;
+  renderer->GetTiledSizeAndOrigin(&size[0], &size[1], &x0, &y0);
+  if (size[0] <= 0 || size[1] <= 0)
   {
-    vtkErrorMacro(<< "the renderer's viewport is empty (" << width << " x " << height
+    vtkErrorMacro(<< "the renderer's viewport is empty (" << size[0] << " x " << size[1]
                   << "): add it to a render window with a size");
     return false;
   }
+  return true;
+}
 
+bool vtkMTPTReferenceRenderer::Render(
+  vtkRenderer* renderer, vtkVolume* volume, vtkUnstructuredGridBase* input)
+{
+  this->Image->SetNumberOfTuples(0);
+  this->Size[0] = this->Size[1] = 0;
+  this->RenderSeconds = 0;
+  this->NumberOfSegments = 0;
+  int size[2] = { 0, 0 };
+  if (!this->CheckScene(renderer, volume, input, size))
+  {
+    return false;
+  }
   // Mesh and scalars exactly as the mapper reads them: other cell types split into
-  // tetrahedra the same way, then the same views.
-  mtpt::vtkMTPTTetrahedralizer tetrahedralizer;
+  // tetrahedra the same way, then the same views and the same scalar selection.
+  mtpt::Tetrahedralizer tetrahedralizer;
   input = tetrahedralizer.Update(input);
-  if (input->GetNumberOfCells() == 0)
+  mtpt::MeshAdapter adapter;
+  if (input->GetNumberOfCells() == 0 || !adapter.Update(input))
   {
-    vtkErrorMacro(<< "the input has no 3D cells to integrate");
-    return false;
-  }
-  mtpt::vtkMTPTMeshAdapter adapter;
-  if (!adapter.Update(input))
-  {
-    vtkErrorMacro(<< "cannot integrate the input: " << adapter.Error());
-    return false;
-  }
-  int cellFlag = 0;
-  vtkDataArray* scalars = volumeMapper
-    ? vtkAbstractMapper::GetScalars(input, volumeMapper->GetScalarMode(),
-        volumeMapper->GetArrayAccessMode(), volumeMapper->GetArrayId(),
-        volumeMapper->GetArrayName(), cellFlag)
-    : vtkAbstractMapper::GetScalars(
-        input, VTK_SCALAR_MODE_DEFAULT, VTK_GET_ARRAY_BY_ID, -1, nullptr, cellFlag);
-  if (!scalars)
-  {
-    vtkErrorMacro(<< "the input has no scalars to integrate (point or cell scalars, or the "
-                     "array the volume mapper selects)");
-    return false;
-  }
-  const vtkIdType needed = cellFlag ? input->GetNumberOfCells() : input->GetNumberOfPoints();
-  if (scalars->GetNumberOfTuples() < needed)
-  {
-    vtkErrorMacro(<< "the scalar array has " << scalars->GetNumberOfTuples() << " tuples for "
-                  << needed << (cellFlag ? " cells" : " points"));
+    vtkErrorMacro(<< "cannot integrate the input: "
+                  << (input->GetNumberOfCells() == 0 ? "it has no 3D cells" : adapter.Error()));
     return false;
   }
   vtkVolumeProperty* property = volume->GetProperty();
-  const bool gray = property->GetColorChannels(0) == 1;
-  int component = -1; // magnitude
-  if (gray)
+  const mtpt::ScalarSelection selected = mtpt::SelectScalars(
+    input, vtkAbstractVolumeMapper::SafeDownCast(volume->GetMapper()), property);
+  if (!selected.array)
   {
-    component = 0;
-  }
-  else if (property->GetRGBTransferFunction(0)->GetVectorMode() == vtkScalarsToColors::COMPONENT)
-  {
-    component = property->GetRGBTransferFunction(0)->GetVectorComponent();
+    vtkErrorMacro(<< "cannot integrate the input: " << selected.error);
+    return false;
   }
   double dataRange[2];
   vtkIdType nonFinite = 0;
-  const float* values = adapter.Scalars(scalars, component, dataRange, nonFinite);
+  const float* values = adapter.Scalars(selected.array, selected.component, dataRange, nonFinite);
 
-  // Transfer functions: nodes when exact, VTK's own samples otherwise.
   mtpt::ReferenceSettings settings;
-  vtkPiecewiseFunction* opacity = property->GetScalarOpacity(0);
-  vtkPiecewiseFunction* grayFunction = gray ? property->GetGrayTransferFunction(0) : nullptr;
-  vtkColorTransferFunction* rgbFunction = gray ? nullptr : property->GetRGBTransferFunction(0);
   this->ExactTransferFunctions =
-    IsPolyline(opacity) && (gray ? IsPolyline(grayFunction) : IsPolyline(rgbFunction));
-  if (this->ExactTransferFunctions)
-  {
-    for (int i = 0; i < opacity->GetSize(); ++i)
-    {
-      double node[4];
-      opacity->GetNodeValue(i, node);
-      settings.opacity.push_back({ node[0], node[1] });
-    }
-    if (gray)
-    {
-      for (int i = 0; i < grayFunction->GetSize(); ++i)
-      {
-        double node[4];
-        grayFunction->GetNodeValue(i, node);
-        settings.color.push_back({ node[0], node[1], node[1], node[1] });
-      }
-    }
-    else
-    {
-      for (int i = 0; i < rgbFunction->GetSize(); ++i)
-      {
-        double node[6];
-        rgbFunction->GetNodeValue(i, node);
-        settings.color.push_back({ node[0], node[1], node[2], node[3] });
-      }
-    }
-  }
-  else
-  {
-    double range[2] = { dataRange[0], dataRange[1] };
-    NodeRange(opacity, range);
-    if (gray)
-    {
-      NodeRange(grayFunction, range);
-    }
-    else
-    {
-      NodeRange(rgbFunction, range);
-    }
-    if (!(range[1] > range[0]))
-    {
-      range[1] = range[0] + 1.0;
-    }
-    const int n = this->TransferFunctionSamples;
-    std::vector<double> alpha(n), colour(3 * static_cast<std::size_t>(n));
-    opacity->GetTable(range[0], range[1], n, alpha.data());
-    if (gray)
-    {
-      grayFunction->GetTable(range[0], range[1], n, colour.data());
-      for (int i = n - 1; i >= 0; --i)
-      {
-        colour[3 * i] = colour[3 * i + 1] = colour[3 * i + 2] = colour[i];
-      }
-    }
-    else
-    {
-      rgbFunction->GetTable(range[0], range[1], n, colour.data());
-    }
-    for (int i = 0; i < n; ++i)
-    {
-      const double s = range[0] + (range[1] - range[0]) * i / (n - 1);
-      settings.opacity.push_back({ s, alpha[i] });
-      settings.color.push_back({ s, colour[3 * i], colour[3 * i + 1], colour[3 * i + 2] });
-    }
-  }
-
-  // The mapper's camera: eye = view * volume matrix; projection for the tiled aspect with
-  // the OpenGL depth range (vtkMultiThreadedProjectedTetrahedraMapper::Render).
+    ConvertTransferFunctions(property, dataRange, this->TransferFunctionSamples, settings);
   mtpt::ViewMatrices(renderer, volume, settings.modelView, settings.projection);
-  settings.width = width;
-  settings.height = height;
-  const double unitDistance = property->GetScalarOpacityUnitDistance(0);
-  settings.unitDistance = unitDistance > 0 ? unitDistance : 1.0;
+  settings.width = size[0];
+  settings.height = size[1];
+  settings.unitDistance = mtpt::UnitDistance(property);
   renderer->GetBackground(settings.background);
-
   const mtpt::ScalarsView view{ values,
-    cellFlag ? mtpt::ScalarsView::Association::Cells : mtpt::ScalarsView::Association::Points };
+    selected.cellData ? mtpt::ScalarsView::Association::Cells
+                      : mtpt::ScalarsView::Association::Points };
   std::vector<double> rgb;
   std::string error;
   mtpt::ReferenceStats stats;
@@ -303,11 +290,11 @@ bool vtkMTPTReferenceRenderer::Render(
     return false;
   }
   this->Image->SetNumberOfComponents(3);
-  this->Image->SetNumberOfTuples(static_cast<vtkIdType>(width) * height);
+  this->Image->SetNumberOfTuples(static_cast<vtkIdType>(size[0]) * size[1]);
   std::copy(rgb.begin(), rgb.end(), this->Image->GetPointer(0));
   this->Image->Modified();
-  this->Size[0] = width;
-  this->Size[1] = height;
+  this->Size[0] = size[0];
+  this->Size[1] = size[1];
   this->RenderSeconds = stats.seconds;
   this->NumberOfSegments = static_cast<vtkIdType>(stats.segments);
   this->Modified();

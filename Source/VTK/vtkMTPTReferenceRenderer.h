@@ -119,6 +119,10 @@ protected:
 
 private:
   vtkMTPTReferenceRenderer(const vtkMTPTReferenceRenderer&) = delete;
+  /// Checks what Render needs, takes the volume mapper's input when `input` is null, and
+  /// sets the viewport's `size`; false with an error message when something is missing.
+  bool CheckScene(
+    vtkRenderer* renderer, vtkVolume* volume, vtkUnstructuredGridBase*& input, int size[2]);
   void operator=(const vtkMTPTReferenceRenderer&) = delete;
 };
 

@@ -1,39 +1,27 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
 
-#include "vtkMTPTCompositeFS.h"
-#include "vtkMTPTMeshAdapter.h"
-#include "vtkMTPTTetrahedralizer.h"
-#include "vtkMTPTTetrahedraFS.h"
-#include "vtkMTPTTetrahedraVS.h"
+#include "CPUBackend.h"
+#include "MeshAdapter.h"
+#include "OpenGLBackend.h"
+#include "Tetrahedralizer.h"
+#include "TransferFunctionTables.h"
+#include "VolumeInput.h"
 
-#include "mtpt/Compositor.h"
 #include "mtpt/FramePipeline.h"
+#include "mtpt/Threads.h"
 
 #include "vtkBoundingBox.h"
 #include "vtkCamera.h"
-#include "vtkColorTransferFunction.h"
+#include "vtkCommand.h"
 #include "vtkDataArray.h"
 #include "vtkDataArrayRange.h"
 #include "vtkMath.h"
-#include "vtkMatrix4x4.h"
 #include "vtkObjectFactory.h"
-#include "vtkOpenGLBufferObject.h"
-#include "vtkOpenGLFramebufferObject.h"
-#include "vtkOpenGLHelper.h"
-#include "vtkOpenGLIndexBufferObject.h"
-#include "vtkOpenGLQuadHelper.h"
-#include "vtkOpenGLRenderUtilities.h"
 #include "vtkOpenGLRenderWindow.h"
-#include "vtkOpenGLShaderCache.h"
 #include "vtkOpenGLState.h"
-#include "vtkOpenGLVertexArrayObject.h"
-#include "vtkOpenGLVertexBufferObject.h"
-#include "vtkPiecewiseFunction.h"
 #include "vtkPoints.h"
 #include "vtkRenderer.h"
-#include "vtkShaderProgram.h"
-#include "vtkTextureObject.h"
 #include "vtkUnstructuredGridBase.h"
 #include "vtkVolume.h"
 #include "vtkVolumeProperty.h"
@@ -41,26 +29,48 @@
 #include "vtk_glew.h"
 
 #include <algorithm>
-#include <chrono>
-#include <climits>
-#include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <map>
-#include <sstream>
-#include <vector>
+#include <set>
+#include <string>
 
 vtkStandardNewMacro(vtkMultiThreadedProjectedTetrahedraMapper);
 
 namespace
 {
-/// Entries of the transfer-function table. The functions are piecewise linear and the
-/// table is sampled with linear filtering, so it reproduces them exactly except within one
-/// entry (1/4095 of the scalar range) of a breakpoint.
-constexpr int TransferFunctionTableSize = 4096;
 
-double SecondsSince(std::chrono::steady_clock::time_point start)
+/// Testing only: MTPT_TESTING_ORDER=reversed or storage draws the cells in a wrong order,
+/// to check that the image tests see the order (scripts/mutation-check.sh).
+mtpt::OrderMutation OrderMutationFromEnvironment()
 {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const char* order = std::getenv("MTPT_TESTING_ORDER");
+  if (order && std::strcmp(order, "reversed") == 0)
+  {
+    return mtpt::OrderMutation::Reversed;
+  }
+  if (order && std::strcmp(order, "storage") == 0)
+  {
+    return mtpt::OrderMutation::Storage;
+  }
+  return mtpt::OrderMutation::None;
+}
+
+/// Fraction of a frame's progress reached at the end of each pipeline stage; the backend's
+/// batches share the rest.
+double StageProgress(mtpt::Stage stage)
+{
+  switch (stage)
+  {
+    case mtpt::Stage::Transform:
+      return 0.1;
+    case mtpt::Stage::Cull:
+      return 0.15;
+    case mtpt::Stage::DepthKeys:
+      return 0.25;
+    default:
+      return 0.35;
+  }
 }
 
 } // namespace
@@ -68,38 +78,17 @@ double SecondsSince(std::chrono::steady_clock::time_point start)
 class vtkMultiThreadedProjectedTetrahedraMapper::Internals
 {
 public:
-  mtpt::vtkMTPTTetrahedralizer Tetrahedralizer;
-  mtpt::vtkMTPTMeshAdapter Adapter;
+  mtpt::Tetrahedralizer Tetrahedralizer;
+  mtpt::MeshAdapter Adapter;
   mtpt::FramePipeline Pipeline;
+  mtpt::TransferFunctionTables Tables;
+  mtpt::OpenGLBackend OpenGL;
+  mtpt::CPUBackend CPU;
 
-  // OpenGL resources, owned by LastWindow's context. Weak: a window destroyed while this
-  // mapper was not in it must not be touched again.
+  // The window whose context owns the backends' OpenGL objects. Weak: a window destroyed
+  // while this mapper was not in it must not be touched again.
   vtkWeakPointer<vtkRenderWindow> LastWindow;
-  vtkNew<vtkOpenGLVertexBufferObject> VertexBuffer;
-  vtkOpenGLHelper Triangles;
-  vtkNew<vtkTextureObject> TransferFunction;
-  vtkTimeStamp TransferFunctionUploadTime;
-  vtkNew<vtkTextureObject> IntegralsHigh, IntegralsLow; // pre-integrated shading
-  vtkNew<vtkTextureObject> ImageTexture;
-  std::unique_ptr<vtkOpenGLQuadHelper> Quad;
-  int SoftwareRenderer = -1; // of LastWindow: -1 unknown, 0 no, 1 yes
-
-  // The transfer functions sampled over the scalar range (both backends read it).
-  std::vector<float> Table;
-  vtkTimeStamp TableBuildTime;
-  vtkMTimeType TablePropertyTime = 0;
-  vtkVolumeProperty* TableProperty = nullptr;
-  double TableRange[2] = { 0, 0 };
-  mtpt::PreIntegrationTable PreIntegration;     // integral functions of Table
-  mtpt::PerspectiveInterpolation Interpolation; // of the current frame's projection
-
-  // CPU backend.
-  mtpt::Compositor Compositor;
-  std::vector<float> Image, Depth, Colour;
-  vtkNew<vtkOpenGLFramebufferObject> Framebuffer;
-  bool FramebufferAllocated = false;
-  bool FramebufferFailed = false;
-  int FramebufferSize[2] = { 0, 0 };
+  int SoftwareRenderer = -1; ///< of LastWindow: -1 unknown, 0 no, 1 yes
 
   // What the pipeline's reusable results were computed from: a change of any of these
   // bumps DataVersion (FrameInput::dataVersion).
@@ -109,35 +98,35 @@ public:
     vtkMTimeType inputTime = 0;
     vtkDataArray* scalars = nullptr;
     vtkMTimeType scalarTime = 0;
-    int component = 0, cellFlag = 0;
-    bool operator!=(const DataKey& o) const
+    int component = 0;
+    bool cellData = false;
+    bool operator==(const DataKey& o) const
     {
-      return input != o.input || inputTime != o.inputTime || scalars != o.scalars ||
-        scalarTime != o.scalarTime || component != o.component || cellFlag != o.cellFlag;
+      return input == o.input && inputTime == o.inputTime && scalars == o.scalars &&
+        scalarTime == o.scalarTime && component == o.component && cellData == o.cellData;
     }
   };
   DataKey LastData;
   std::uint64_t DataVersion = 0;
-  // The OpenGL buffers hold the pipeline's whole (single-batch) decomposition.
-  bool BuffersCurrent = false;
 
   // What GetBounds() last computed from.
   vtkUnstructuredGridBase* BoundsInput = nullptr;
   vtkMTimeType BoundsTime = 0;
 
-  // Timers of the last frame.
-  double UploadSeconds = 0, DrawSeconds = 0, CompositeSeconds = 0;
+  // The last frame.
+  mtpt::BackendTimes Times;
   int LastBackend = OPENGL_BACKEND;
   vtkIdType Tetrahedra = 0;
+  bool Stopped = false;
 
-  // Messages are reported once per change of what caused them, not every frame: each
-  // message once per modification time of the input it is about (several messages about
-  // one input each appear once, not in turn every frame).
-  vtkMTimeType BlendWarningTime = 0;
-  std::map<std::string, vtkMTimeType> Reported;
-  bool Report(vtkUnstructuredGridBase* input, const std::string& message)
+  /**
+   * Whether `message` about `cause` is new: each message is reported once per modification
+   * time of the object it is about, not every frame (several messages about one object
+   * each appear once, not in turn every frame).
+   */
+  bool Report(vtkObject* cause, const std::string& message)
   {
-    const vtkMTimeType time = input->GetMTime();
+    const vtkMTimeType time = cause ? cause->GetMTime() : 0;
     const auto found = this->Reported.find(message);
     if (found != this->Reported.end() && found->second == time)
     {
@@ -150,6 +139,16 @@ public:
     this->Reported[message] = time;
     return true;
   }
+  /// OpenGL failures are reported once per window.
+  bool ReportOpenGL(const std::string& message)
+  {
+    return this->OpenGLReported.insert(message).second;
+  }
+  void ForgetOpenGLReports() { this->OpenGLReported.clear(); }
+
+private:
+  std::map<std::string, vtkMTimeType> Reported;
+  std::set<std::string> OpenGLReported;
 };
 
 vtkMultiThreadedProjectedTetrahedraMapper::vtkMultiThreadedProjectedTetrahedraMapper()
@@ -168,13 +167,34 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetNumberOfThreads(int threads)
   if (threads < 0)
   {
     vtkWarningMacro(<< "SetNumberOfThreads(" << threads
-                    << "): the thread count must be 0 (all cores) or positive; keeping "
+                    << "): the thread count must be 0 (the default) or positive; keeping "
                     << this->NumberOfThreads);
     return;
   }
   if (threads != this->NumberOfThreads)
   {
     this->NumberOfThreads = threads;
+    this->Modified();
+  }
+}
+
+int vtkMultiThreadedProjectedTetrahedraMapper::GetEffectiveNumberOfThreads()
+{
+  return mtpt::ResolveThreadCount(this->NumberOfThreads);
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::SetBatchSize(vtkIdType size)
+{
+  if (size < 0)
+  {
+    vtkWarningMacro(<< "SetBatchSize(" << size
+                    << "): the batch size must be 0 (one batch) or positive; keeping "
+                    << this->BatchSize);
+    return;
+  }
+  if (size != this->BatchSize)
+  {
+    this->BatchSize = size;
     this->Modified();
   }
 }
@@ -187,6 +207,12 @@ const char* vtkMultiThreadedProjectedTetrahedraMapper::GetOrderMethodAsString()
 const char* vtkMultiThreadedProjectedTetrahedraMapper::GetShadingModeAsString()
 {
   return this->ShadingMode == PRE_INTEGRATED_SHADING ? "PreIntegrated" : "VTKCompatible";
+}
+
+const char* vtkMultiThreadedProjectedTetrahedraMapper::GetBackendAsString()
+{
+  return this->Backend == AUTOMATIC_BACKEND ? "Automatic"
+                                            : (this->Backend == CPU_BACKEND ? "CPU" : "OpenGL");
 }
 
 double vtkMultiThreadedProjectedTetrahedraMapper::GetTransformSeconds()
@@ -215,19 +241,23 @@ double vtkMultiThreadedProjectedTetrahedraMapper::GetCPUStageSeconds()
 }
 double vtkMultiThreadedProjectedTetrahedraMapper::GetUploadSeconds()
 {
-  return this->Internal->UploadSeconds;
+  return this->Internal->Times.upload;
 }
 double vtkMultiThreadedProjectedTetrahedraMapper::GetDrawSeconds()
 {
-  return this->Internal->DrawSeconds;
+  return this->Internal->Times.draw;
 }
 double vtkMultiThreadedProjectedTetrahedraMapper::GetCompositeSeconds()
 {
-  return this->Internal->CompositeSeconds;
+  return this->Internal->Times.composite;
 }
 int vtkMultiThreadedProjectedTetrahedraMapper::GetLastBackend()
 {
   return this->Internal->LastBackend;
+}
+bool vtkMultiThreadedProjectedTetrahedraMapper::GetLastFrameStopped()
+{
+  return this->Internal->Stopped;
 }
 
 bool vtkMultiThreadedProjectedTetrahedraMapper::IsSoftwareRenderer(const char* renderer)
@@ -245,6 +275,7 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::IsSoftwareRenderer(const char* r
   }
   return false;
 }
+
 vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfTetrahedra()
 {
   return this->Internal->Tetrahedra;
@@ -275,7 +306,7 @@ vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfTetrahedralizati
 }
 int vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfBatches()
 {
-  return static_cast<int>(this->Internal->Pipeline.Stats().batches);
+  return this->Internal->Times.batches;
 }
 int vtkMultiThreadedProjectedTetrahedraMapper::GetLastFrameReuse()
 {
@@ -287,21 +318,6 @@ int vtkMultiThreadedProjectedTetrahedraMapper::GetLastFrameReuse()
 vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetMemoryBytes()
 {
   return static_cast<vtkIdType>(this->Internal->Pipeline.MemoryBytes());
-}
-void vtkMultiThreadedProjectedTetrahedraMapper::SetBatchSize(vtkIdType size)
-{
-  if (size < 0)
-  {
-    vtkWarningMacro(<< "SetBatchSize(" << size
-                    << "): the batch size must be 0 (one batch) or positive; keeping "
-                    << this->BatchSize);
-    return;
-  }
-  if (size != this->BatchSize)
-  {
-    this->BatchSize = size;
-    this->Modified();
-  }
 }
 
 double* vtkMultiThreadedProjectedTetrahedraMapper::GetBounds()
@@ -322,8 +338,7 @@ double* vtkMultiThreadedProjectedTetrahedraMapper::GetBounds()
   in.BoundsInput = input;
   in.BoundsTime = input->GetMTime();
   vtkBoundingBox box;
-  vtkPoints* points = input->GetPoints();
-  if (points)
+  if (vtkPoints* points = input->GetPoints())
   {
     for (const auto p : vtk::DataArrayTupleRange<3>(points->GetData()))
     {
@@ -359,52 +374,40 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::IsSupported(vtkRenderWindow* win
 void vtkMultiThreadedProjectedTetrahedraMapper::ReleaseGraphicsResources(vtkWindow* window)
 {
   Internals& in = *this->Internal;
-  in.VertexBuffer->ReleaseGraphicsResources();
-  in.Triangles.ReleaseGraphicsResources(window);
-  if (window)
-  {
-    in.TransferFunction->ReleaseGraphicsResources(window);
-    in.IntegralsHigh->ReleaseGraphicsResources(window);
-    in.IntegralsLow->ReleaseGraphicsResources(window);
-    in.ImageTexture->ReleaseGraphicsResources(window);
-    in.Framebuffer->ReleaseGraphicsResources(window);
-    if (in.Quad)
-    {
-      in.Quad->ReleaseGraphicsResources(window);
-    }
-  }
-  in.Quad.reset();
-  in.BuffersCurrent = false;
+  in.OpenGL.ReleaseGraphicsResources(window);
+  in.CPU.ReleaseGraphicsResources(window);
   in.SoftwareRenderer = -1;
-  in.FramebufferAllocated = false;
-  in.FramebufferFailed = false;
   in.LastWindow = nullptr;
+  in.ForgetOpenGLReports();
   this->Superclass::ReleaseGraphicsResources(window);
 }
 
-void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vtkVolume* volume)
+void vtkMultiThreadedProjectedTetrahedraMapper::MoveToWindow(vtkOpenGLRenderWindow* window)
 {
   Internals& in = *this->Internal;
-  in.UploadSeconds = in.DrawSeconds = in.CompositeSeconds = 0;
-  in.Tetrahedra = 0;
-  auto* window = vtkOpenGLRenderWindow::SafeDownCast(renderer->GetRenderWindow());
-  if (!window)
+  if (in.LastWindow == window)
   {
-    vtkErrorMacro(<< "needs an OpenGL render window (vtkOpenGLRenderWindow)");
     return;
   }
-  if (in.LastWindow && in.LastWindow != window)
+  if (vtkRenderWindow* previous = in.LastWindow)
   {
-    // GL resources belong to one context: release them there before moving windows.
-    this->ReleaseGraphicsResources(in.LastWindow);
+    // The OpenGL objects belong to the previous window's context: free them there (in this
+    // window's context the same names may be another object's), then come back.
+    previous->MakeCurrent();
+    this->ReleaseGraphicsResources(previous);
+    window->MakeCurrent();
   }
   in.LastWindow = window;
+}
 
+vtkUnstructuredGridBase* vtkMultiThreadedProjectedTetrahedraMapper::TetrahedraToDraw()
+{
+  Internals& in = *this->Internal;
   vtkUnstructuredGridBase* input = this->GetInput();
   if (!input)
   {
-    vtkErrorMacro(<< "no input: connect an unstructured grid of tetrahedra");
-    return;
+    vtkErrorMacro(<< "no input: connect an unstructured grid");
+    return nullptr;
   }
   if (input->GetNumberOfCells() == 0)
   {
@@ -412,16 +415,9 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
     {
       vtkWarningMacro(<< "the input has no cells: nothing to draw");
     }
-    return;
+    return nullptr;
   }
-  if (this->BlendMode != vtkUnstructuredGridVolumeMapper::COMPOSITE_BLEND &&
-    in.BlendWarningTime != this->GetMTime())
-  {
-    in.BlendWarningTime = this->GetMTime(); // once per change of the mapper's settings
-    vtkWarningMacro(<< "only composite blending is supported; drawing with it");
-  }
-  // Hexahedra, wedges, pyramids... are split into tetrahedra once per input change; from
-  // here on `input` is the grid of tetrahedra that is drawn.
+  // Hexahedra, wedges, pyramids... are split into tetrahedra once per input change.
   vtkUnstructuredGridBase* tetrahedra = in.Tetrahedralizer.Update(input);
   if (!in.Tetrahedralizer.Warning().empty() && in.Report(input, in.Tetrahedralizer.Warning()))
   {
@@ -433,123 +429,68 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
     {
       vtkWarningMacro(<< "the input has no 3D cells: nothing to draw");
     }
-    return;
+    return nullptr;
   }
-  input = tetrahedra;
-  if (!in.Adapter.Update(input))
+  if (!in.Adapter.Update(tetrahedra))
   {
-    if (in.Report(input, in.Adapter.Error()))
+    if (in.Report(tetrahedra, in.Adapter.Error()))
     {
       vtkErrorMacro(<< "cannot render the input: " << in.Adapter.Error());
     }
-    return;
+    return nullptr;
   }
-  if (!in.Adapter.Warning().empty() && in.Report(input, in.Adapter.Warning()))
+  if (!in.Adapter.Warning().empty() && in.Report(tetrahedra, in.Adapter.Warning()))
   {
     vtkWarningMacro(<< in.Adapter.Warning());
   }
+  return tetrahedra;
+}
 
-  // Scalars: the same selection rules as every VTK mapper.
-  int cellFlag = 0;
-  vtkDataArray* scalars = vtkAbstractMapper::GetScalars(
-    input, this->ScalarMode, this->ArrayAccessMode, this->ArrayId, this->ArrayName, cellFlag);
-  if (!scalars)
+bool vtkMultiThreadedProjectedTetrahedraMapper::PrepareScalars(
+  vtkUnstructuredGridBase* grid, vtkVolumeProperty* property, mtpt::FrameInput& frame)
+{
+  Internals& in = *this->Internal;
+  const mtpt::ScalarSelection selected = mtpt::SelectScalars(grid, this, property);
+  if (!selected.array)
   {
-    // Name the selection that found nothing (a misspelt array name is the usual cause).
-    std::ostringstream selection;
-    const bool pointField = this->ScalarMode == VTK_SCALAR_MODE_USE_POINT_FIELD_DATA;
-    if (pointField || this->ScalarMode == VTK_SCALAR_MODE_USE_CELL_FIELD_DATA)
+    if (in.Report(grid, selected.error))
     {
-      selection << " (selected: the " << (pointField ? "point" : "cell") << " array ";
-      if (this->ArrayAccessMode == VTK_GET_ARRAY_BY_NAME)
-      {
-        selection << "named '" << this->ArrayName << "'";
-      }
-      else
-      {
-        selection << "number " << this->ArrayId;
-      }
-      selection << ", which the input does not have)";
+      vtkErrorMacro(<< selected.error);
     }
-    if (in.Report(input, "no scalars" + selection.str()))
-    {
-      vtkErrorMacro(<< "the input has no scalars to map" << selection.str()
-                    << ": give it point or cell scalars, or select an existing array with "
-                       "SelectScalarArray() and SetScalarMode()");
-    }
-    return;
+    return false;
   }
-  const vtkIdType needed = cellFlag ? input->GetNumberOfCells() : input->GetNumberOfPoints();
-  if (scalars->GetNumberOfTuples() < needed)
+  if (!selected.warning.empty() && in.Report(property, selected.warning))
   {
-    if (in.Report(input, "short scalars"))
-    {
-      vtkErrorMacro(<< "the scalar array '" << (scalars->GetName() ? scalars->GetName() : "")
-                    << "' has " << scalars->GetNumberOfTuples() << " tuples for " << needed
-                    << (cellFlag ? " cells" : " points"));
-    }
-    return;
-  }
-  vtkVolumeProperty* property = volume->GetProperty();
-  int component = -1; // magnitude
-  if (property->GetColorChannels(0) == 1)
-  {
-    component = 0;
-  }
-  else if (property->GetRGBTransferFunction(0)->GetVectorMode() == vtkScalarsToColors::COMPONENT)
-  {
-    component = property->GetRGBTransferFunction(0)->GetVectorComponent();
+    vtkWarningMacro(<< selected.warning);
   }
   double range[2];
   vtkIdType nonFinite = 0;
-  const float* values = in.Adapter.Scalars(scalars, component, range, nonFinite);
-  if (nonFinite > 0 && in.Report(input, "non-finite scalars"))
+  const float* values = in.Adapter.Scalars(selected.array, selected.component, range, nonFinite);
+  if (nonFinite > 0 && in.Report(grid, "non-finite scalars"))
   {
     vtkWarningMacro(<< nonFinite
-                    << " scalar values are NaN or infinite; the cells using them "
-                       "are not drawn");
+                    << " scalar values are NaN or infinite; the cells using them are not drawn");
   }
-
-  Internals::DataKey data;
-  data.input = input;
-  data.inputTime = input->GetMTime();
-  data.scalars = scalars;
-  data.scalarTime = scalars->GetMTime();
-  data.component = component;
-  data.cellFlag = cellFlag;
-  if (data != in.LastData)
+  const Internals::DataKey data{ grid, grid->GetMTime(), selected.array, selected.array->GetMTime(),
+    selected.component, selected.cellData };
+  if (!(data == in.LastData))
   {
     in.LastData = data;
     ++in.DataVersion;
   }
-  this->UpdateTransferFunctionTable(property, range);
-
-  int viewportSize[2] = { 0, 0 }, viewportOrigin[2] = { 0, 0 };
-  renderer->GetTiledSizeAndOrigin(
-    &viewportSize[0], &viewportSize[1], &viewportOrigin[0], &viewportOrigin[1]);
-  if (viewportSize[0] <= 0 || viewportSize[1] <= 0)
-  {
-    // No pixel to draw (a zero-area viewport or tile): no work, and no message, as VTK's
-    // own mappers. Its aspect ratio would not even give a usable projection.
-    vtkDebugMacro(<< "the viewport has no pixels: nothing to draw");
-    return;
-  }
-
-  mtpt::FrameInput frame;
+  in.Tables.Update(property, range[0], range[1]);
   frame.points = in.Adapter.Points();
   frame.cells = in.Adapter.Cells();
   frame.scalars = { values,
-    cellFlag ? mtpt::ScalarsView::Association::Cells : mtpt::ScalarsView::Association::Points };
-  mtpt::ViewMatrices(renderer, volume, frame.modelView, frame.projection);
-  frame.perspective = renderer->GetActiveCamera()->GetParallelProjection() == 0;
-  // Orthographic projections give the linear default.
-  this->Internal->Interpolation = mtpt::PerspectiveInterpolation::FromProjection(frame.projection);
-  // Cells the opacity function hides are culled (exact: see mtpt/Culling.h).
-  frame.opacity = { in.Table.data(), TransferFunctionTableSize, in.TableRange[0],
-    in.TableRange[1] };
+    selected.cellData ? mtpt::ScalarsView::Association::Cells
+                      : mtpt::ScalarsView::Association::Points };
   frame.dataVersion = in.DataVersion;
-  frame.opacityVersion = in.TableBuildTime.GetMTime();
+  return true;
+}
 
+mtpt::RenderBackend* vtkMultiThreadedProjectedTetrahedraMapper::ChooseBackend()
+{
+  Internals& in = *this->Internal;
   int backend = this->Backend;
   if (backend == AUTOMATIC_BACKEND)
   {
@@ -561,478 +502,180 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
     backend = in.SoftwareRenderer ? CPU_BACKEND : OPENGL_BACKEND;
   }
   in.LastBackend = backend;
-  // Cells that cover no pixel centre produce no fragment when every pixel is sampled once
-  // at its centre: always in the CPU compositor, in OpenGL unless the target multisamples.
-  GLint sampleBuffers = 0;
-  if (backend == OPENGL_BACKEND)
+  return backend == CPU_BACKEND ? static_cast<mtpt::RenderBackend*>(&in.CPU) : &in.OpenGL;
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::ReportProgress(
+  vtkOpenGLRenderWindow* window, double fraction)
+{
+  if (!this->HasObserver(vtkCommand::ProgressEvent))
   {
-    glGetIntegerv(GL_SAMPLE_BUFFERS, &sampleBuffers);
+    return;
   }
-  if (sampleBuffers == 0 && this->CullInvisibleCells)
+  // An observer may draw elsewhere (a progress bar in another window): keep this frame's
+  // context and framebuffers.
+  window->GetState()->PushFramebufferBindings();
+  this->UpdateProgress(fraction);
+  window->MakeCurrent();
+  window->GetState()->PopFramebufferBindings();
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vtkVolume* volume)
+{
+  Internals& in = *this->Internal;
+  in.Times = mtpt::BackendTimes{};
+  in.Tetrahedra = 0;
+  in.Stopped = false;
+  auto* window = vtkOpenGLRenderWindow::SafeDownCast(renderer->GetRenderWindow());
+  if (!window)
   {
-    int x0, y0;
-    renderer->GetTiledSizeAndOrigin(&frame.viewportWidth, &frame.viewportHeight, &x0, &y0);
+    vtkErrorMacro(<< "needs an OpenGL render window (vtkOpenGLRenderWindow)");
+    return;
   }
-  if (!this->CullInvisibleCells)
+  this->MoveToWindow(window);
+  if (this->BlendMode != vtkUnstructuredGridVolumeMapper::COMPOSITE_BLEND &&
+    in.Report(this, "blend mode"))
   {
-    frame.opacity = mtpt::TransferFunctionTable{};
+    vtkWarningMacro(<< "only composite blending is supported; drawing with it");
+  }
+  mtpt::FrameInput frame;
+  vtkUnstructuredGridBase* grid = this->TetrahedraToDraw();
+  vtkVolumeProperty* property = volume->GetProperty();
+  if (!grid || !this->PrepareScalars(grid, property, frame))
+  {
+    return;
+  }
+  mtpt::BackendFrame draw;
+  renderer->GetTiledSizeAndOrigin(&draw.size[0], &draw.size[1], &draw.origin[0], &draw.origin[1]);
+  if (draw.size[0] <= 0 || draw.size[1] <= 0)
+  {
+    // No pixel to draw (a zero-area viewport or tile): no work, and no message, as VTK's
+    // own mappers. Its aspect ratio would not even give a usable projection.
+    return;
+  }
+  mtpt::RenderBackend* backend = this->ChooseBackend();
+  this->SetUpFrame(renderer, volume, window, backend, frame, draw);
+  this->ReportProgress(window, 0.0);
+  if (!in.Pipeline.Prepare(frame, this->NumberOfThreads))
+  {
+    in.Stopped = in.Pipeline.Stopped();
+    if (!in.Stopped)
+    {
+      vtkErrorMacro(<< "the input has " << grid->GetNumberOfCells()
+                    << " tetrahedra; this mapper draws at most "
+                    << mtpt::FramePipeline::MaxTetrahedra());
+    }
+    return;
+  }
+  in.Tetrahedra = static_cast<vtkIdType>(in.Pipeline.SortedCount());
+  if (in.Tetrahedra > 0) // else everything is culled: transparent or out of view
+  {
+    this->DrawFrame(backend, draw);
+  }
+  this->ReportProgress(window, 1.0);
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::SetUpFrame(vtkRenderer* renderer, vtkVolume* volume,
+  vtkOpenGLRenderWindow* window, mtpt::RenderBackend* backend, mtpt::FrameInput& frame,
+  mtpt::BackendFrame& draw)
+{
+  Internals& in = *this->Internal;
+  mtpt::ViewMatrices(renderer, volume, frame.modelView, frame.projection);
+  frame.perspective = renderer->GetActiveCamera()->GetParallelProjection() == 0;
+  if (this->CullInvisibleCells)
+  {
+    // Cells the opacity function hides are culled (exact: see mtpt/Culling.h), and cells
+    // covering no pixel centre where every fragment is sampled at a pixel centre.
+    frame.opacity = in.Tables.Table();
+    frame.opacityVersion = in.Tables.Version();
+    if (backend->SamplesPixelCentresOnly(window, this->UseFloatingPointFrameBuffer))
+    {
+      frame.viewportWidth = draw.size[0];
+      frame.viewportHeight = draw.size[1];
+    }
+  }
+  else
+  {
     frame.cullFrustum = false;
   }
-
   in.Pipeline.SetOrderMethod(this->OrderMethod == PARTITION_SORT ? mtpt::OrderMethod::PartitionSort
                                                                  : mtpt::OrderMethod::RadixSort,
     static_cast<std::size_t>(this->MaxSubArraySize));
   in.Pipeline.SetReuse(this->ReuseResults);
-  if (!in.Pipeline.Prepare(frame, this->NumberOfThreads))
-  {
-    vtkErrorMacro(<< "the input has " << input->GetNumberOfCells()
-                  << " cells; this mapper draws at most " << mtpt::FramePipeline::MaxTetrahedra());
-    return;
-  }
-  in.Tetrahedra = static_cast<vtkIdType>(in.Pipeline.SortedCount());
-  if (in.Tetrahedra == 0)
-  {
-    return; // everything culled: transparent or out of view
-  }
-  if (backend == CPU_BACKEND)
-  {
-    this->CompositeOnCPU(renderer, volume, window);
-  }
-  else
-  {
-    this->DrawTriangles(renderer, volume, window);
-  }
-}
-
-std::size_t vtkMultiThreadedProjectedTetrahedraMapper::BatchTetrahedra() const
-{
-  const std::size_t sorted = this->Internal->Pipeline.SortedCount();
-  return this->BatchSize > 0 ? std::min(sorted, static_cast<std::size_t>(this->BatchSize)) : sorted;
-}
-
-double vtkMultiThreadedProjectedTetrahedraMapper::UnitDistance(vtkVolume* volume)
-{
-  const double unitDistance = volume->GetProperty()->GetScalarOpacityUnitDistance(0);
-  return unitDistance > 0 ? unitDistance : 1.0;
-}
-
-void vtkMultiThreadedProjectedTetrahedraMapper::CompositeOnCPU(
-  vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window)
-{
-  Internals& in = *this->Internal;
-  int width = 0, height = 0, x0 = 0, y0 = 0;
-  renderer->GetTiledSizeAndOrigin(&width, &height, &x0, &y0);
-  if (width <= 0 || height <= 0)
-  {
-    return;
-  }
-  // The opaque geometry drawn so far occludes the volume: read its depth back.
-  auto start = std::chrono::steady_clock::now();
-  in.Depth.resize(static_cast<std::size_t>(width) * height);
-  glPixelStorei(GL_PACK_ALIGNMENT, 4);
-  glReadPixels(x0, y0, width, height, GL_DEPTH_COMPONENT, GL_FLOAT, in.Depth.data());
-  double upload = SecondsSince(start);
-
-  start = std::chrono::steady_clock::now();
-  mtpt::CompositeSettings settings;
-  settings.width = width;
-  settings.height = height;
-  settings.transferFunction = { in.Table.data(), TransferFunctionTableSize, in.TableRange[0],
-    in.TableRange[1] };
-  settings.unitDistance = UnitDistance(volume);
-  settings.opaqueDepth = in.Depth.data();
-  if (this->ShadingMode == PRE_INTEGRATED_SHADING)
-  {
-    settings.UsePreIntegration(in.PreIntegration, in.Interpolation);
-  }
-  // Batch after batch, back to front, into one image. Decomposition and compositing both
-  // use every thread, so they run one after the other.
-  const std::size_t total = in.Pipeline.SortedCount(), batch = this->BatchTetrahedra();
-  double composite = 0;
-  std::size_t first = 0;
-  do
-  {
-    in.Pipeline.DecomposeBatch(first, batch, this->NumberOfThreads);
-    start = std::chrono::steady_clock::now();
-    in.Compositor.Composite(in.Pipeline.Vertices().data(), in.Pipeline.Indices().data(),
-      in.Pipeline.TetrahedronCount(), settings, in.Image, this->NumberOfThreads);
-    composite += SecondsSince(start);
-    settings.accumulate = true;
-    first += batch;
-  } while (first < total);
-  in.CompositeSeconds = composite;
-
-  // Composite over the colour drawn so far here, in float, and write the result back with
-  // blending off: blending the image in OpenGL would round it to 8 bits before the blend
-  // on an 8-bit framebuffer, a second rounding the OpenGL path does not have.
-  start = std::chrono::steady_clock::now();
-  const std::size_t pixels = static_cast<std::size_t>(width) * height;
-  in.Colour.resize(4 * pixels);
-  glReadPixels(x0, y0, width, height, GL_RGBA, GL_FLOAT, in.Colour.data());
-  float* image = in.Image.data();
-  const float* below = in.Colour.data();
-  for (std::size_t i = 0; i < 4 * pixels; i += 4)
-  {
-    const float keep = 1.0f - image[i + 3];
-    for (int c = 0; c < 4; ++c)
+  in.Pipeline.SetOrderMutationForTesting(OrderMutationFromEnvironment());
+  in.Pipeline.SetStageCallback(
+    [this, window](mtpt::Stage stage)
     {
-      image[i + c] += keep * below[i + c];
-    }
-  }
-  in.ImageTexture->SetContext(window);
-  in.ImageTexture->SetWrapS(vtkTextureObject::ClampToEdge);
-  in.ImageTexture->SetWrapT(vtkTextureObject::ClampToEdge);
-  in.ImageTexture->SetMinificationFilter(vtkTextureObject::Nearest);
-  in.ImageTexture->SetMagnificationFilter(vtkTextureObject::Nearest);
-  in.ImageTexture->Create2DFromRaw(width, height, 4, VTK_FLOAT, in.Image.data());
-  if (this->SynchronizedTiming)
-  {
-    glFinish();
-  }
-  in.UploadSeconds = upload + SecondsSince(start);
+      this->ReportProgress(window, StageProgress(stage));
+      return window->CheckAbortStatus() == 0;
+    });
 
-  start = std::chrono::steady_clock::now();
-  if (!in.Quad)
+  std::string warning;
+  draw.unitDistance = mtpt::UnitDistance(volume->GetProperty(), &warning);
+  if (!warning.empty() && in.Report(volume->GetProperty(), warning))
   {
-    in.Quad = std::make_unique<vtkOpenGLQuadHelper>(window,
-      vtkOpenGLRenderUtilities::GetFullScreenQuadVertexShader().c_str(), vtkMTPTCompositeFS, "");
+    vtkWarningMacro(<< warning);
   }
-  else
+  draw.renderer = renderer;
+  draw.window = window;
+  draw.pipeline = &in.Pipeline;
+  draw.tables = &in.Tables;
+  draw.shading = this->ShadingMode == PRE_INTEGRATED_SHADING ? mtpt::Shading::PreIntegrated
+                                                             : mtpt::Shading::VTKCompatible;
+  // Orthographic projections give the linear default.
+  draw.interpolation = mtpt::PerspectiveInterpolation::FromProjection(frame.projection);
+  draw.threads = this->NumberOfThreads;
+  draw.floatFramebuffer = this->UseFloatingPointFrameBuffer;
+  draw.synchronizedTiming = this->SynchronizedTiming;
+  draw.afterBatch = [this, window](double fraction)
   {
-    window->GetShaderCache()->ReadyShaderProgram(in.Quad->Program);
-  }
-  if (!in.Quad->Program || !in.Quad->Program->GetCompiled())
-  {
-    vtkErrorMacro(<< "could not compile the compositing shader");
-    return;
-  }
-  vtkOpenGLState* state = window->GetState();
-  vtkOpenGLState::ScopedglDepthMask depthMaskSaver(state);
-  vtkOpenGLState::ScopedglBlendFuncSeparate blendSaver(state);
-  vtkOpenGLState::ScopedglEnableDisable depthTestSaver(state, GL_DEPTH_TEST);
-  vtkOpenGLState::ScopedglEnableDisable blendEnableSaver(state, GL_BLEND);
-  state->vtkglDepthMask(GL_FALSE);
-  state->vtkglDisable(GL_DEPTH_TEST);
-  state->vtkglDisable(GL_BLEND); // the image already holds what was drawn below it
-  in.ImageTexture->Activate();
-  in.Quad->Program->SetUniformi("image", in.ImageTexture->GetTextureUnit());
-  in.Quad->Render();
-  in.ImageTexture->Deactivate();
-  if (this->SynchronizedTiming)
-  {
-    glFinish();
-  }
-  in.DrawSeconds = SecondsSince(start);
+    const double begin = StageProgress(mtpt::Stage::Order);
+    this->ReportProgress(window, begin + (1.0 - begin) * fraction);
+    return window->CheckAbortStatus() == 0;
+  };
 }
 
-void vtkMultiThreadedProjectedTetrahedraMapper::DrawTriangles(
-  vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window)
+void vtkMultiThreadedProjectedTetrahedraMapper::DrawFrame(
+  mtpt::RenderBackend* backend, mtpt::BackendFrame& draw)
 {
   Internals& in = *this->Internal;
-  vtkOpenGLState* state = window->GetState();
-
-  // Program and vertex layout (the layout of mtpt::TetVertex).
-  vtkShaderProgram* program = in.Triangles.Program;
-  if (!program)
+  const std::size_t sorted = in.Pipeline.SortedCount();
+  draw.batchSize =
+    this->BatchSize > 0 ? std::min(sorted, static_cast<std::size_t>(this->BatchSize)) : sorted;
+  const bool drawn = backend->Draw(draw, in.Times);
+  if (!in.OpenGL.Warning().empty() && in.ReportOpenGL(in.OpenGL.Warning()))
   {
-    program =
-      window->GetShaderCache()->ReadyShaderProgram(vtkMTPTTetrahedraVS, vtkMTPTTetrahedraFS, "");
-    if (!program)
+    vtkWarningMacro(<< in.OpenGL.Warning());
+  }
+  if (!drawn)
+  {
+    const bool fallBack = backend == &in.CPU;
+    const std::string message = std::string(fallBack ? "the CPU backend" : "the OpenGL backend") +
+      " failed: " + backend->Error() + (fallBack ? "; drawing with OpenGL instead" : "");
+    if (in.ReportOpenGL(message))
     {
-      vtkErrorMacro(<< "could not compile the MTPT shaders");
-      return;
+      vtkErrorMacro(<< message);
     }
-    in.Triangles.Program = program;
-    in.Triangles.VAO->ShaderProgramChanged();
-    in.Triangles.ShaderSourceTime.Modified();
-  }
-  else
-  {
-    window->GetShaderCache()->ReadyShaderProgram(program);
-  }
-
-  if (in.TransferFunctionUploadTime < in.TableBuildTime || in.TransferFunction->GetHandle() == 0)
-  {
-    in.TransferFunction->SetContext(window);
-    in.TransferFunction->SetWrapS(vtkTextureObject::ClampToEdge);
-    in.TransferFunction->SetWrapT(vtkTextureObject::ClampToEdge);
-    in.TransferFunction->SetMinificationFilter(vtkTextureObject::Linear);
-    in.TransferFunction->SetMagnificationFilter(vtkTextureObject::Linear);
-    in.TransferFunction->Create2DFromRaw(
-      TransferFunctionTableSize, 1, 4, VTK_FLOAT, in.Table.data());
-    // The prefix integrals as float high + low parts (pre-integrated shading).
-    const std::vector<double>& integrals = in.PreIntegration.integrals;
-    std::vector<float> high(integrals.size()), low(integrals.size());
-    for (std::size_t i = 0; i < integrals.size(); ++i)
+    if (fallBack)
     {
-      high[i] = static_cast<float>(integrals[i]);
-      low[i] = static_cast<float>(integrals[i] - high[i]);
-    }
-    for (vtkTextureObject* texture : { in.IntegralsHigh.Get(), in.IntegralsLow.Get() })
-    {
-      texture->SetContext(window);
-      texture->SetWrapS(vtkTextureObject::ClampToEdge);
-      texture->SetWrapT(vtkTextureObject::ClampToEdge);
-      texture->SetMinificationFilter(vtkTextureObject::Nearest);
-      texture->SetMagnificationFilter(vtkTextureObject::Nearest);
-    }
-    in.IntegralsHigh->Create2DFromRaw(TransferFunctionTableSize, 1, 4, VTK_FLOAT, high.data());
-    in.IntegralsLow->Create2DFromRaw(TransferFunctionTableSize, 1, 4, VTK_FLOAT, low.data());
-    in.TransferFunctionUploadTime.Modified();
-  }
-  in.TransferFunction->Activate();
-  program->SetUniformi("transferFunction", in.TransferFunction->GetTextureUnit());
-  const bool preIntegrated = this->ShadingMode == PRE_INTEGRATED_SHADING;
-  program->SetUniformi("shadingMode", preIntegrated ? 1 : 0);
-  program->SetUniformi("tableSize", TransferFunctionTableSize);
-  if (preIntegrated)
-  {
-    in.IntegralsHigh->Activate();
-    in.IntegralsLow->Activate();
-    program->SetUniformi("integralsHigh", in.IntegralsHigh->GetTextureUnit());
-    program->SetUniformi("integralsLow", in.IntegralsLow->GetTextureUnit());
-  }
-  const double low = in.TableRange[0], high = in.TableRange[1];
-  // Texel centres: scalar `low` at 0.5/N, `high` at (N-0.5)/N.
-  const double n = TransferFunctionTableSize;
-  const double scale = (n - 1.0) / n / (high - low);
-  program->SetUniformf("scalarScale", static_cast<float>(scale));
-  program->SetUniformf("scalarShift", static_cast<float>(0.5 / n - low * scale));
-  const double entryScale = (n - 1.0) / (high - low);
-  program->SetUniformf("entryScale", static_cast<float>(entryScale));
-  program->SetUniformf("entryShift", static_cast<float>(-low * entryScale));
-  const mtpt::PerspectiveInterpolation& view = in.Interpolation;
-  program->SetUniformi("perspectiveExact", preIntegrated && view.perspective ? 1 : 0);
-  program->SetUniformf("inverseDepthScale", static_cast<float>(view.inverseWScale));
-  program->SetUniformf("inverseDepthOffset", static_cast<float>(view.inverseWOffset));
-  const float rayScale[2] = { static_cast<float>(view.scaleX), static_cast<float>(view.scaleY) };
-  const float rayShift[2] = { static_cast<float>(view.shiftX), static_cast<float>(view.shiftY) };
-  program->SetUniform2f("rayScale", rayScale);
-  program->SetUniform2f("rayShift", rayShift);
-  program->SetUniformf("inverseUnitDistance", static_cast<float>(1.0 / UnitDistance(volume)));
-
-  int width = 0, height = 0, x0 = 0, y0 = 0;
-  renderer->GetTiledSizeAndOrigin(&width, &height, &x0, &y0);
-  const bool floatTarget =
-    this->UseFloatingPointFrameBuffer && this->PrepareFramebuffer(window, width, height);
-
-  vtkOpenGLState::ScopedglDepthMask depthMaskSaver(state);
-  vtkOpenGLState::ScopedglBlendFuncSeparate blendSaver(state);
-  vtkOpenGLState::ScopedglEnableDisable depthTestSaver(state, GL_DEPTH_TEST);
-  vtkOpenGLState::ScopedglEnableDisable blendSaver2(state, GL_BLEND);
-  vtkOpenGLState::ScopedglEnableDisable cullSaver(state, GL_CULL_FACE);
-  vtkOpenGLState::ScopedglViewport viewportSaver(state);
-  vtkOpenGLState::ScopedglScissor scissorSaver(state);
-
-  if (floatTarget)
-  {
-    // Copy what is drawn so far (colour and the opaque geometry's depth) into the float
-    // target, blend there, and copy the colour back.
-    state->PushFramebufferBindings();
-    in.Framebuffer->Bind(vtkOpenGLFramebufferObject::GetDrawMode());
-    in.Framebuffer->ActivateDrawBuffer(0);
-    state->vtkglBlitFramebuffer(x0, y0, x0 + width, y0 + height, 0, 0, width, height,
-      GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT, GL_NEAREST);
-    state->vtkglViewport(0, 0, width, height);
-    state->vtkglScissor(0, 0, width, height);
-  }
-
-  // VTK's PT state: depth test against opaque geometry without depth writes, back-to-front
-  // "over" blending of non-premultiplied colour (DESIGN.md section 2, step 6).
-  state->vtkglDepthMask(GL_FALSE);
-  state->vtkglEnable(GL_DEPTH_TEST);
-  state->vtkglEnable(GL_BLEND);
-  state->vtkglDisable(GL_CULL_FACE);
-  state->vtkglBlendFuncSeparate(
-    GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
-
-  // Batch after batch: decompose, upload, draw. Draw calls return before the GPU is done,
-  // so the next batch's decomposition overlaps the previous batch's drawing.
-  const std::size_t total = in.Pipeline.SortedCount(), batch = this->BatchTetrahedra();
-  const bool single = batch >= total;
-  std::size_t first = 0;
-  do
-  {
-    in.Pipeline.DecomposeBatch(first, batch, this->NumberOfThreads);
-    const std::size_t count = in.Pipeline.TetrahedronCount();
-    auto start = std::chrono::steady_clock::now();
-    if (!(single && in.BuffersCurrent && in.Pipeline.Stats().decompositionReused))
-    {
-      in.VertexBuffer->SetStride(static_cast<unsigned int>(sizeof(mtpt::TetVertex)));
-      in.VertexBuffer->Upload(reinterpret_cast<const float*>(in.Pipeline.Vertices().data()),
-        count * mtpt::VerticesPerTetrahedron * 6, vtkOpenGLBufferObject::ArrayBuffer);
-      in.Triangles.IBO->Upload(in.Pipeline.Indices().data(), count * mtpt::IndicesPerTetrahedron,
-        vtkOpenGLBufferObject::ElementArrayBuffer);
-      in.Triangles.IBO->IndexCount = count * mtpt::IndicesPerTetrahedron;
-      if (this->SynchronizedTiming)
+      in.LastBackend = OPENGL_BACKEND;
+      in.Times = mtpt::BackendTimes{};
+      if (!in.OpenGL.Draw(draw, in.Times) && in.ReportOpenGL(in.OpenGL.Error()))
       {
-        glFinish();
+        vtkErrorMacro(<< "the OpenGL backend failed too: " << in.OpenGL.Error());
       }
     }
-    in.BuffersCurrent = single;
-    in.UploadSeconds += SecondsSince(start);
-
-    start = std::chrono::steady_clock::now();
-    in.VertexBuffer->Bind();
-    in.Triangles.VAO->Bind();
-    if (in.Triangles.ShaderSourceTime > in.Triangles.AttributeUpdateTime)
-    {
-      const auto stride = sizeof(mtpt::TetVertex);
-      if (!in.Triangles.VAO->AddAttributeArray(
-            program, in.VertexBuffer, "vertexNDC", 0, stride, VTK_FLOAT, 3, false) ||
-        !in.Triangles.VAO->AddAttributeArray(
-          program, in.VertexBuffer, "scalarFrontBack", 12, stride, VTK_FLOAT, 2, false) ||
-        !in.Triangles.VAO->AddAttributeArray(
-          program, in.VertexBuffer, "thickness", 20, stride, VTK_FLOAT, 1, false))
-      {
-        vtkErrorMacro(<< "could not set the vertex attributes");
-      }
-      in.Triangles.AttributeUpdateTime.Modified();
-    }
-    in.Triangles.IBO->Bind();
-    // GLsizei is 32-bit: draw in chunks of whole tetrahedra below that limit.
-    const std::size_t indices = in.Triangles.IBO->IndexCount;
-    const std::size_t chunk = (static_cast<std::size_t>(INT_MAX) / 12) * 12;
-    for (std::size_t offset = 0; offset < indices; offset += chunk)
-    {
-      const std::size_t size = std::min(chunk, indices - offset);
-      glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(size), GL_UNSIGNED_INT,
-        reinterpret_cast<const void*>(offset * sizeof(std::uint32_t)));
-    }
-    in.Triangles.IBO->Release();
-    in.Triangles.VAO->Release();
-    in.VertexBuffer->Release();
-    if (this->SynchronizedTiming)
-    {
-      glFinish();
-    }
-    in.DrawSeconds += SecondsSince(start);
-    first += batch;
-  } while (first < total);
-  in.TransferFunction->Deactivate();
-  if (preIntegrated)
-  {
-    in.IntegralsHigh->Deactivate();
-    in.IntegralsLow->Deactivate();
   }
-
-  if (floatTarget)
-  {
-    in.Framebuffer->Bind(vtkOpenGLFramebufferObject::GetReadMode());
-    state->PopDrawFramebufferBinding();
-    state->vtkglBlitFramebuffer(
-      0, 0, width, height, x0, y0, x0 + width, y0 + height, GL_COLOR_BUFFER_BIT, GL_NEAREST);
-    state->PopReadFramebufferBinding();
-  }
-}
-
-bool vtkMultiThreadedProjectedTetrahedraMapper::PrepareFramebuffer(
-  vtkOpenGLRenderWindow* window, int width, int height)
-{
-  Internals& in = *this->Internal;
-  if (in.FramebufferFailed || width <= 0 || height <= 0)
-  {
-    return false;
-  }
-  // A multisampled target cannot take a depth blit into a single-sampled one.
-  GLint sampleBuffers = 0;
-  glGetIntegerv(GL_SAMPLE_BUFFERS, &sampleBuffers);
-  if (sampleBuffers > 0)
-  {
-    return false;
-  }
-  vtkOpenGLState* state = window->GetState();
-  if (!in.FramebufferAllocated)
-  {
-    state->PushFramebufferBindings();
-    in.Framebuffer->SetContext(window);
-    int depthBits = window->GetDepthBufferSize();
-    const bool ok = in.Framebuffer->PopulateFramebuffer(
-      width, height, true, 1, VTK_FLOAT, true, depthBits > 0 ? depthBits : 24, 0);
-    const char* description = nullptr;
-    const bool complete = ok &&
-      vtkOpenGLFramebufferObject::GetFrameBufferStatus(
-        vtkOpenGLFramebufferObject::GetDrawMode(), description);
-    state->PopFramebufferBindings();
-    if (!complete)
-    {
-      vtkWarningMacro(<< "no float framebuffer ("
-                      << (description ? description : "allocation failed")
-                      << "); blending in the window's own framebuffer");
-      in.FramebufferFailed = true;
-      return false;
-    }
-    in.FramebufferAllocated = true;
-    in.FramebufferSize[0] = width;
-    in.FramebufferSize[1] = height;
-  }
-  else if (in.FramebufferSize[0] != width || in.FramebufferSize[1] != height)
-  {
-    state->PushFramebufferBindings();
-    in.Framebuffer->Bind();
-    in.Framebuffer->Resize(width, height);
-    in.Framebuffer->UnBind();
-    state->PopFramebufferBindings();
-    in.FramebufferSize[0] = width;
-    in.FramebufferSize[1] = height;
-  }
-  return true;
-}
-
-void vtkMultiThreadedProjectedTetrahedraMapper::UpdateTransferFunctionTable(
-  vtkVolumeProperty* property, const double range[2])
-{
-  Internals& in = *this->Internal;
-  double low = range[0], high = range[1];
-  if (!(high > low))
-  {
-    high = low + 1.0; // a constant field still needs a table with a width
-  }
-  if (in.TablePropertyTime >= property->GetMTime() && in.TableProperty == property &&
-    in.TableRange[0] == low && in.TableRange[1] == high && !in.Table.empty())
-  {
-    return;
-  }
-  const int n = TransferFunctionTableSize;
-  std::vector<float> rgb(3 * n), opacity(n);
-  if (property->GetColorChannels(0) == 1)
-  {
-    std::vector<float> gray(n);
-    property->GetGrayTransferFunction(0)->GetTable(low, high, n, gray.data());
-    for (int i = 0; i < n; ++i)
-    {
-      rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = gray[i];
-    }
-  }
-  else
-  {
-    property->GetRGBTransferFunction(0)->GetTable(low, high, n, rgb.data());
-  }
-  property->GetScalarOpacity(0)->GetTable(low, high, n, opacity.data());
-  in.Table.resize(4 * static_cast<std::size_t>(n));
-  for (int i = 0; i < n; ++i)
-  {
-    in.Table[4 * i + 0] = rgb[3 * i + 0];
-    in.Table[4 * i + 1] = rgb[3 * i + 1];
-    in.Table[4 * i + 2] = rgb[3 * i + 2];
-    in.Table[4 * i + 3] = opacity[i];
-  }
-  in.PreIntegration.Build({ in.Table.data(), n, low, high });
-  in.TablePropertyTime = property->GetMTime();
-  in.TableProperty = property;
-  in.TableRange[0] = low;
-  in.TableRange[1] = high;
-  in.TableBuildTime.Modified();
+  in.Stopped = in.Times.stopped;
 }
 
 void vtkMultiThreadedProjectedTetrahedraMapper::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
   os << indent << "NumberOfThreads: " << this->NumberOfThreads
-     << (this->NumberOfThreads == 0 ? " (all cores)" : "") << "\n";
-  os << indent << "Backend: "
-     << (this->Backend == AUTOMATIC_BACKEND ? "Automatic"
-                                            : (this->Backend == CPU_BACKEND ? "CPU" : "OpenGL"))
+     << (this->NumberOfThreads == 0 ? " (default: " : " (") << this->GetEffectiveNumberOfThreads()
+     << " in use)\n";
+  os << indent << "Backend: " << this->GetBackendAsString()
      << " (last frame: " << (this->Internal->LastBackend == CPU_BACKEND ? "CPU" : "OpenGL")
      << ")\n";
   os << indent << "OrderMethod: " << this->GetOrderMethodAsString() << "\n";
@@ -1047,10 +690,12 @@ void vtkMultiThreadedProjectedTetrahedraMapper::PrintSelf(ostream& os, vtkIndent
   const mtpt::FrameStats& stats = this->Internal->Pipeline.Stats();
   os << indent << "Last frame culled: " << stats.opacityCulled << " transparent, "
      << stats.frustumCulled << " outside the view, " << stats.pixelCulled << " covering no pixel; "
-     << stats.batches << " batches; " << this->GetMemoryBytes() << " bytes of buffers\n";
+     << this->GetNumberOfBatches() << " batches; " << this->GetMemoryBytes()
+     << " bytes of buffers\n";
   os << indent << "Last frame: " << this->Internal->Tetrahedra << " tetrahedra; transform "
      << this->GetTransformSeconds() << " s, cull " << this->GetCullSeconds() << " s, depth keys "
      << this->GetDepthKeySeconds() << " s, order " << this->GetOrderSeconds() << " s, decompose "
-     << this->GetDecomposeSeconds() << " s, upload " << this->GetUploadSeconds() << " s, draw "
-     << this->GetDrawSeconds() << " s\n";
+     << this->GetDecomposeSeconds() << " s, composite " << this->GetCompositeSeconds()
+     << " s, upload " << this->GetUploadSeconds() << " s, draw " << this->GetDrawSeconds()
+     << " s\n";
 }

@@ -13,11 +13,15 @@
  * stride into one vertex and one index buffer (race-free, identical for any thread count).
  * Two backends draw the buffers: OpenGL uploads them once and draws them with one call,
  * blended back to front; the CPU compositor blends the same triangles with the same
- * per-fragment math on the CPU, multi-threaded by bands of rows, and puts the image into the
- * framebuffer over what is drawn, respecting the depth of opaque geometry. The CPU
- * compositor is chosen automatically where OpenGL is itself a software rasterizer (Mesa
- * llvmpipe, softpipe, SWR: machines without a GPU); there it measured 6-7x faster than
- * VTK's PT at 16x16, 1.6-2.8x at 512x512 and level at 1024x1024 (see the README).
+ * per-fragment math on the CPU and puts the image into the framebuffer over what is drawn,
+ * respecting the depth of opaque geometry. The CPU compositor is chosen automatically where
+ * OpenGL is itself a software rasterizer (Mesa llvmpipe, softpipe, SWR: machines without a
+ * GPU), where it is the faster of the two. Both work in every window VTK makes, on-screen or
+ * off-screen, multisampled (VTK's default) or not: the window's colour and opaque depth are
+ * resolved into a single-sampled float target first, so both backends give the image they
+ * give without multisampling. An OpenGL error in the mapper's own calls is reported once
+ * with a VTK error, and a CPU backend that cannot read the window back draws nothing itself
+ * and hands the frame to the OpenGL backend.
  *
  * Input, scalar selection (scalar mode, array by name or id, point or cell data, vector
  * component or magnitude as the colour transfer function's vector mode selects) and the
@@ -69,6 +73,19 @@
  * methods. Upload and draw are asynchronous in OpenGL: turn SynchronizedTiming on to wait
  * for them (glFinish) so that their timers measure the work and not only its submission.
  *
+ * Progress and abort, as VTK's PT: with a vtkCommand::ProgressEvent observer, progress is
+ * reported after each CPU stage (transform, culling, keys, order) and after each batch;
+ * between them the render window's abort check (vtkRenderWindow::CheckAbortStatus, which
+ * fires AbortCheckEvent) is polled, and an abort stops the frame there, keeping what was
+ * drawn (GetLastFrameStopped()).
+ *
+ * Threads: NumberOfThreads 0 (the default) takes OMP_NUM_THREADS when it is set; under an
+ * MPI launcher that announces several ranks on the node (Open MPI, MPICH, Intel MPI,
+ * MVAPICH2, Cray PALS) and binds none of them to its own cores, the node's hardware threads
+ * divided by those ranks (pvbatch and pvserver under mpiexec do not oversubscribe the node);
+ * otherwise every processor the process may run on. GetEffectiveNumberOfThreads() says
+ * what the next frame uses.
+ *
  * @sa vtkProjectedTetrahedraMapper vtkUnstructuredGridVolumeMapper
  */
 #ifndef vtkMultiThreadedProjectedTetrahedraMapper_h
@@ -82,7 +99,14 @@
 
 class vtkOpenGLRenderWindow;
 class vtkRenderWindow;
+class vtkUnstructuredGridBase;
 class vtkVolumeProperty;
+namespace mtpt
+{
+struct BackendFrame;
+struct FrameInput;
+class RenderBackend;
+}
 
 class VTKRENDERINGMTPT_EXPORT vtkMultiThreadedProjectedTetrahedraMapper
   : public vtkUnstructuredGridVolumeMapper
@@ -115,6 +139,7 @@ public:
   void SetBackendToOpenGL() { this->SetBackend(OPENGL_BACKEND); }
   void SetBackendToCPU() { this->SetBackend(CPU_BACKEND); }
   int GetLastBackend();
+  const char* GetBackendAsString();
   ///@}
 
   /// True if `renderer` names a software rasterizer (llvmpipe, softpipe, SWR, swrast).
@@ -122,11 +147,14 @@ public:
 
   ///@{
   /**
-   * Number of OpenMP threads for the CPU stages. 0 (the default) uses every core OpenMP
-   * reports. Negative values are rejected with a warning and leave the setting unchanged.
+   * Number of OpenMP threads for the CPU stages. 0 (the default) chooses as the class
+   * documentation says (OMP_NUM_THREADS, or the node's cores shared among MPI ranks).
+   * Negative values are rejected with a warning and leave the setting unchanged.
    */
   void SetNumberOfThreads(int threads);
   vtkGetMacro(NumberOfThreads, int);
+  /// The thread count the next frame uses (NumberOfThreads, or the default for 0).
+  int GetEffectiveNumberOfThreads();
   ///@}
 
   ///@{
@@ -271,6 +299,9 @@ public:
   /// Batches the last Render decomposed and drew.
   int GetNumberOfBatches();
 
+  /// Whether the last Render was stopped by the render window's abort check.
+  bool GetLastFrameStopped();
+
   /// What the last Render reused: a bitwise OR of the ReuseFlags.
   enum ReuseFlags
   {
@@ -321,12 +352,16 @@ private:
     const vtkMultiThreadedProjectedTetrahedraMapper&) = delete;
   void operator=(const vtkMultiThreadedProjectedTetrahedraMapper&) = delete;
 
-  void CompositeOnCPU(vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window);
-  void DrawTriangles(vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window);
-  bool PrepareFramebuffer(vtkOpenGLRenderWindow* window, int width, int height);
-  void UpdateTransferFunctionTable(vtkVolumeProperty* property, const double range[2]);
-  static double UnitDistance(vtkVolume* volume);
-  std::size_t BatchTetrahedra() const;
+  // The steps of Render: the glue between VTK, the core's frame pipeline and a backend.
+  void MoveToWindow(vtkOpenGLRenderWindow* window);
+  vtkUnstructuredGridBase* TetrahedraToDraw();
+  bool PrepareScalars(
+    vtkUnstructuredGridBase* grid, vtkVolumeProperty* property, mtpt::FrameInput& frame);
+  mtpt::RenderBackend* ChooseBackend();
+  void SetUpFrame(vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window,
+    mtpt::RenderBackend* backend, mtpt::FrameInput& frame, mtpt::BackendFrame& draw);
+  void DrawFrame(mtpt::RenderBackend* backend, mtpt::BackendFrame& draw);
+  void ReportProgress(vtkOpenGLRenderWindow* window, double fraction);
 
   class Internals;
   std::unique_ptr<Internals> Internal;

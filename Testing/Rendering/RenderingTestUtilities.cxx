@@ -23,11 +23,18 @@
 #include "vtkWindowToImageFilter.h"
 #include "vtkXMLUnstructuredGridReader.h"
 
+#include "vtkIdList.h"
+#include "vtkMTPTReferenceRenderer.h"
+
+#include <gtest/gtest.h>
 #include <vtksys/SystemTools.hxx>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <numeric>
+#include <random>
 
 #ifndef MTPT_SOURCE_DIR
 #error "MTPT_SOURCE_DIR must be defined"
@@ -39,6 +46,8 @@ namespace rendering_test
 {
 
 const double Background[3] = { 0.1, 0.1, 0.2 };
+
+const View Views[3] = { { 30, 20 }, { 200, -35 }, { 115, 65 } };
 
 vtkSmartPointer<vtkUnstructuredGrid> MakeTetrahedralBox(int n)
 {
@@ -133,8 +142,13 @@ vtkSmartPointer<vtkVolumeProperty> MakeProperty(double low, double high, double 
   return property;
 }
 
+vtkSmartPointer<vtkVolumeProperty> MakeBluntFinProperty()
+{
+  return MakeProperty(0.19, 4.98, 1.5);
+}
+
 Stage MakeStage(vtkUnstructuredGrid* grid, vtkVolumeProperty* property,
-  vtkUnstructuredGridVolumeMapper* mapper, int width, int height)
+  vtkUnstructuredGridVolumeMapper* mapper, int width, int height, WindowSettings settings)
 {
   Stage stage;
   mapper->SetInputData(grid);
@@ -145,28 +159,57 @@ Stage MakeStage(vtkUnstructuredGrid* grid, vtkVolumeProperty* property,
   stage.renderer->SetBackground(Background[0], Background[1], Background[2]);
   stage.renderer->AddVolume(stage.volume);
   stage.window = vtkSmartPointer<vtkRenderWindow>::New();
-  stage.window->SetOffScreenRendering(1);
-  stage.window->SetMultiSamples(0);
+  stage.window->SetOffScreenRendering(settings.offScreen ? 1 : 0);
+  if (settings.multiSamples >= 0)
+  {
+    stage.window->SetMultiSamples(settings.multiSamples);
+  }
   stage.window->SetSize(width, height);
   stage.window->AddRenderer(stage.renderer);
   return stage;
 }
 
+void SetView(vtkRenderer* renderer, const View& view, bool perspective)
+{
+  renderer->ResetCamera();
+  vtkCamera* camera = renderer->GetActiveCamera();
+  camera->SetParallelProjection(perspective ? 0 : 1);
+  camera->Azimuth(view.azimuth);
+  camera->Elevation(view.elevation);
+  camera->OrthogonalizeViewUp();
+  renderer->ResetCameraClippingRange();
+}
+
+vtkSmartPointer<vtkUnstructuredGrid> ShuffleCells(vtkUnstructuredGrid* grid, unsigned seed)
+{
+  const vtkIdType cells = grid->GetNumberOfCells();
+  std::vector<vtkIdType> order(static_cast<std::size_t>(cells));
+  std::iota(order.begin(), order.end(), vtkIdType(0));
+  std::mt19937 random(seed);
+  std::shuffle(order.begin(), order.end(), random);
+  auto shuffled = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  shuffled->SetPoints(grid->GetPoints());
+  shuffled->GetPointData()->PassData(grid->GetPointData());
+  shuffled->GetCellData()->CopyAllocate(grid->GetCellData(), cells);
+  shuffled->Allocate(cells);
+  vtkNew<vtkIdList> ids;
+  for (const vtkIdType c : order)
+  {
+    grid->GetCellPoints(c, ids);
+    const vtkIdType id = shuffled->InsertNextCell(grid->GetCellType(c), ids);
+    shuffled->GetCellData()->CopyData(grid->GetCellData(), c, id);
+  }
+  return shuffled;
+}
+
 Stage RenderStage(const Scene& scene, vtkUnstructuredGridVolumeMapper* mapper, int frames)
 {
-  Stage stage = MakeStage(scene.grid, scene.property, mapper, scene.size, scene.size);
+  Stage stage = MakeStage(scene.grid, scene.property, mapper, scene.size, scene.size, scene.window);
   if (scene.customize)
   {
     scene.customize(stage.volume, stage.renderer);
   }
-  vtkRenderer* renderer = stage.renderer;
-  renderer->ResetCamera();
-  vtkCamera* camera = renderer->GetActiveCamera();
-  camera->SetParallelProjection(scene.perspective ? 0 : 1);
-  camera->Azimuth(scene.azimuth);
-  camera->Elevation(scene.elevation);
-  camera->OrthogonalizeViewUp();
-  renderer->ResetCameraClippingRange();
+  SetView(stage.renderer, { scene.azimuth, scene.elevation }, scene.perspective);
   for (int f = 0; f < frames; ++f)
   {
     stage.window->Render();
@@ -202,6 +245,28 @@ vtkSmartPointer<vtkImageData> Render(
   return image;
 }
 
+vtkSmartPointer<vtkImageData> ReferenceImage(const Stage& stage)
+{
+  vtkNew<vtkMTPTReferenceRenderer> reference;
+  if (!reference->Render(stage.renderer, stage.volume))
+  {
+    ADD_FAILURE() << "no reference image";
+    return nullptr;
+  }
+  const int* size = reference->GetSize();
+  vtkDoubleArray* rgb = reference->GetImage();
+  auto image = vtkSmartPointer<vtkImageData>::New();
+  image->SetDimensions(size[0], size[1], 1);
+  image->AllocateScalars(VTK_UNSIGNED_CHAR, 3);
+  auto* pixels = static_cast<unsigned char*>(image->GetScalarPointer());
+  for (vtkIdType i = 0; i < 3 * static_cast<vtkIdType>(size[0]) * size[1]; ++i)
+  {
+    pixels[i] =
+      static_cast<unsigned char>(std::lround(std::clamp(rgb->GetValue(i), 0.0, 1.0) * 255));
+  }
+  return image;
+}
+
 vtkSmartPointer<vtkImageData> Grab(vtkRenderWindow* window, bool rerender)
 {
   vtkNew<vtkWindowToImageFilter> grab;
@@ -215,37 +280,79 @@ vtkSmartPointer<vtkImageData> Grab(vtkRenderWindow* window, bool rerender)
   return image;
 }
 
-ImageDifference Compare(vtkImageData* a, vtkImageData* b)
+namespace
 {
+/// Whether pixel `p` of `values` (`components` per pixel) differs from the background.
+bool IsCovered(
+  vtkUnsignedCharArray* values, int components, vtkIdType p, const double background[3])
+{
+  for (int c = 0; c < 3; ++c)
+  {
+    if (std::fabs(values->GetValue(p * components + c) - 255.0 * background[c]) > 2.0)
+    {
+      return true;
+    }
+  }
+  return false;
+}
+} // namespace
+
+ImageDifference Compare(vtkImageData* a, vtkImageData* b, const double* background)
+{
+  background = background ? background : Background;
   ImageDifference d;
   auto* pa = vtkUnsignedCharArray::SafeDownCast(a->GetPointData()->GetScalars());
   auto* pb = vtkUnsignedCharArray::SafeDownCast(b->GetPointData()->GetScalars());
   if (!pa || !pb || pa->GetNumberOfValues() != pb->GetNumberOfValues() ||
     pa->GetNumberOfComponents() != pb->GetNumberOfComponents())
   {
-    d.rmse = d.worst = d.fractionOver = 1;
+    d.rmse = d.coveredRmse = d.worst = d.fractionOver = 1;
     return d;
   }
   const int components = pa->GetNumberOfComponents();
   const vtkIdType pixels = pa->GetNumberOfTuples();
-  double sum = 0;
-  vtkIdType over = 0;
+  double sum = 0, coveredSum = 0;
+  vtkIdType over = 0, covered = 0;
   for (vtkIdType p = 0; p < pixels; ++p)
   {
-    double pixelWorst = 0;
+    double pixelWorst = 0, pixelSum = 0;
     for (int c = 0; c < 3 && c < components; ++c)
     {
       const double diff =
         std::fabs(pa->GetValue(p * components + c) - pb->GetValue(p * components + c)) / 255.0;
-      sum += diff * diff;
+      pixelSum += diff * diff;
       pixelWorst = std::max(pixelWorst, diff);
     }
+    sum += pixelSum;
     d.worst = std::max(d.worst, pixelWorst);
-    over += pixelWorst > 0.1 ? 1 : 0;
+    if (IsCovered(pa, components, p, background) || IsCovered(pb, components, p, background))
+    {
+      ++covered;
+      coveredSum += pixelSum;
+      over += pixelWorst > 0.1 ? 1 : 0;
+    }
   }
   d.rmse = std::sqrt(sum / (3.0 * static_cast<double>(pixels)));
-  d.fractionOver = static_cast<double>(over) / static_cast<double>(pixels);
+  d.coveredRmse = covered ? std::sqrt(coveredSum / (3.0 * static_cast<double>(covered))) : 0.0;
+  d.fractionOver = covered ? static_cast<double>(over) / static_cast<double>(covered) : 0.0;
+  d.covered = static_cast<double>(covered) / static_cast<double>(pixels);
   return d;
+}
+
+void ExpectClose(vtkImageData* ours, vtkImageData* theirs, const Limits& limits,
+  const std::string& label, double minCovered, const double* background)
+{
+  background = background ? background : Background;
+  const ImageDifference d = Compare(ours, theirs, background);
+  const double coverage = CoveredFraction(ours, background);
+  std::printf("%s: RMSE over covered pixels %.5f (all pixels %.5f), worst %.3f, covered "
+              "pixels over 0.1: %.3f%%, covered %.1f%%\n",
+    label.c_str(), d.coveredRmse, d.rmse, d.worst, 100 * d.fractionOver, 100 * coverage);
+  ::testing::Test::RecordProperty(label + "_rmse", std::to_string(d.coveredRmse));
+  EXPECT_LE(d.coveredRmse, limits.coveredRmse) << label;
+  EXPECT_LE(d.worst, limits.worst) << label;
+  EXPECT_LE(d.fractionOver, limits.fractionOver) << label;
+  EXPECT_GE(coverage, minCovered) << label << ": not a blank frame";
 }
 
 double CoveredFraction(vtkImageData* image, const double background[3])

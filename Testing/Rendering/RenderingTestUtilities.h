@@ -39,6 +39,25 @@ vtkSmartPointer<vtkVolumeProperty> MakeProperty(double low, double high, double 
 /// of width 0.02 (on the box, about a fifth of the scalar step between vertices).
 vtkSmartPointer<vtkVolumeProperty> MakeNarrowPeakProperty(double unitDistance);
 
+/// The window a scene is drawn in. Tests run in the window VTK makes by default
+/// (multisampled: VTK asks for 8 samples, Mesa grants 4), off-screen unless a test is about
+/// on-screen windows; `multiSamples` 0 turns multisampling off, for tests about that setting.
+struct WindowSettings
+{
+  bool offScreen = true;
+  int multiSamples = -1; ///< -1: VTK's default
+};
+
+/// A camera direction: azimuth and elevation (degrees) from the default view along -z.
+struct View
+{
+  double azimuth, elevation;
+};
+
+/// Directions from which a wrong visibility order shows: from +z (where a mesh stored
+/// slab by slab is already nearly back to front), from -z and obliquely from above.
+extern const View Views[3];
+
 struct Scene
 {
   vtkUnstructuredGrid* grid = nullptr;
@@ -46,12 +65,34 @@ struct Scene
   bool perspective = true;
   int size = 200;
   double azimuth = 30, elevation = 20;
+  WindowSettings window;
   /// Called with the volume and renderer before rendering (transform, extra actors...).
   std::function<void(vtkVolume*, vtkRenderer*)> customize;
+
+  Scene From(const View& view) const
+  {
+    Scene s = *this;
+    s.azimuth = view.azimuth;
+    s.elevation = view.elevation;
+    return s;
+  }
 };
 
-/// A volume drawn by a mapper, in a renderer with the tests' background, in an offscreen
-/// window without multisampling.
+/// The scene of `grid` with `property`, from the first of Views.
+inline Scene MakeScene(
+  vtkUnstructuredGrid* grid, vtkSmartPointer<vtkVolumeProperty> property, bool perspective)
+{
+  Scene s;
+  s.grid = grid;
+  s.property = std::move(property);
+  s.perspective = perspective;
+  return s;
+}
+
+/// The blunt fin's transfer functions: colour ramp and rising opacity over its density.
+vtkSmartPointer<vtkVolumeProperty> MakeBluntFinProperty();
+
+/// A volume drawn by a mapper, in a renderer with the tests' background, in a window.
 struct Stage
 {
   vtkSmartPointer<vtkVolume> volume;
@@ -61,7 +102,14 @@ struct Stage
 
 /// `grid` drawn by `mapper` with `property` in a `width` x `height` window (not rendered).
 Stage MakeStage(vtkUnstructuredGrid* grid, vtkVolumeProperty* property,
-  vtkUnstructuredGridVolumeMapper* mapper, int width, int height);
+  vtkUnstructuredGridVolumeMapper* mapper, int width, int height, WindowSettings window = {});
+
+/// Points the renderer's camera at its props from `view` (after ResetCamera).
+void SetView(vtkRenderer* renderer, const View& view, bool perspective);
+
+/// A copy of `grid` with its cells stored in a random order (cell data follows), so that
+/// storage order says nothing about visibility order.
+vtkSmartPointer<vtkUnstructuredGrid> ShuffleCells(vtkUnstructuredGrid* grid, unsigned seed);
 
 /// The stage of `scene` with its camera set, rendered `frames` times (what Render draws).
 Stage RenderStage(const Scene& scene, vtkUnstructuredGridVolumeMapper* mapper, int frames = 1);
@@ -71,6 +119,13 @@ Stage RenderStage(const Scene& scene, vtkUnstructuredGridVolumeMapper* mapper, i
 vtkSmartPointer<vtkImageData> Render(
   const Scene& scene, vtkUnstructuredGridVolumeMapper* mapper, int frames = 1);
 
+/**
+ * The exact reference image (vtkMTPTReferenceRenderer) of the stage's volume as its
+ * renderer shows it, rounded to 8-bit RGB like a window's pixels; null (and a gtest
+ * failure) if it cannot be computed.
+ */
+vtkSmartPointer<vtkImageData> ReferenceImage(const Stage& stage);
+
 /// The RGB back buffer of a rendered window. `rerender` renders again first (the default
 /// of vtkWindowToImageFilter); that render may use a slightly different aspect ratio, so
 /// tests of frame-to-frame reuse read the buffer as it is.
@@ -78,16 +133,32 @@ vtkSmartPointer<vtkImageData> Grab(vtkRenderWindow* window, bool rerender = true
 
 struct ImageDifference
 {
-  double rmse = 0;         ///< root mean square over RGB in [0, 1]
+  double rmse = 0;         ///< root mean square over RGB in [0, 1], all pixels
+  double coveredRmse = 0;  ///< the same over the pixels the volume covers in either image
   double worst = 0;        ///< largest channel difference in [0, 1]
-  double fractionOver = 0; ///< fraction of pixels with a channel difference > 0.1
+  double fractionOver = 0; ///< fraction of the covered pixels with a channel difference > 0.1
+  double covered = 0;      ///< fraction of all pixels covered in either image
 };
-ImageDifference Compare(vtkImageData* a, vtkImageData* b);
+/// Differences of two RGB images; "covered" means differing from `background` by more than
+/// 2/255 in some channel.
+ImageDifference Compare(vtkImageData* a, vtkImageData* b, const double* background = nullptr);
+
+/// Bounds on an ImageDifference.
+struct Limits
+{
+  double coveredRmse = 1, worst = 1, fractionOver = 1;
+};
+
+/// Prints the difference of `ours` and `theirs` under `label` and checks it against the
+/// limits (a gtest failure per bound exceeded), and that `ours` is not blank (at least
+/// `minCovered` of its pixels covered).
+void ExpectClose(vtkImageData* ours, vtkImageData* theirs, const Limits& limits,
+  const std::string& label, double minCovered = 0.05, const double* background = nullptr);
 
 /// Fraction of pixels that differ from the background colour by more than 2/255.
 double CoveredFraction(vtkImageData* image, const double background[3]);
 
-/// Background of every scene.
+/// Background of every scene (the default of Compare and ExpectClose).
 extern const double Background[3];
 
 /// Baseline comparison: Testing/Data/Baseline/<name>.png. With MTPT_UPDATE_BASELINES=1 in

@@ -42,7 +42,6 @@ struct Stage
     this->renderer->SetBackground(Background[0], Background[1], Background[2]);
     this->renderer->AddVolume(this->volume);
     this->window->SetOffScreenRendering(1);
-    this->window->SetMultiSamples(0);
     this->window->SetSize(160, 160);
     this->window->AddRenderer(this->renderer);
     this->renderer->ResetCamera();

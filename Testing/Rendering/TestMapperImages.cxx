@@ -3,14 +3,19 @@
 // vtkProjectedTetrahedraMapper rendering the same scene in the same process, and against
 // stored baselines of the mapper's own output.
 //
-// Metric: RMSE over RGB in [0, 1], the largest channel difference, and the fraction of
-// pixels differing by more than 0.1 in some channel. Thresholds come from measurement
-// (values in the comments, Mesa llvmpipe, 200x200). The two mappers are expected to differ
-// a little, and where they do VTK's PT is the less accurate one: it quantizes colours to
-// 8 bits before interpolating, interpolates the opacity at a quadrilateral's crossing with
-// alpha on both edges, reads thicknesses from a 2048-entry square-root table, and sorts
-// perspective views along the view direction. The thresholds therefore bound the known
-// differences and would catch a wrong sort, a wrong thickness or a missing cell class.
+// Metric (RenderingTestUtilities.h): RMSE over RGB in [0, 1] over the pixels the volume
+// covers, the largest channel difference (worst pixel), and the fraction of covered pixels
+// differing by more than 0.1 in some channel. Every scene is drawn from three directions
+// (Views: from +z, from -z, obliquely from above) with its cells stored in a random order,
+// so that neither storage order nor a reversed order can pass for the visibility order;
+// `scripts/mutation-check.sh` runs these tests with the order reversed and with no sort
+// (MTPT_TESTING_ORDER=reversed, storage),
+// and both must fail. Thresholds come from measurement (values in the comments, Mesa
+// llvmpipe, 200x200) and sit between the correct order's figures and the mutations'.
+// The two mappers are expected to differ a little, and where they do VTK's PT is the less
+// accurate one: it quantizes colours to 8 bits before interpolating, interpolates the
+// opacity at a quadrilateral's crossing with alpha on both edges, reads thicknesses from a
+// 2048-entry square-root table, and sorts perspective views along the view direction.
 #include "RenderingTestUtilities.h"
 
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
@@ -44,11 +49,6 @@ namespace
 {
 using namespace mtpt::rendering_test;
 
-struct Thresholds
-{
-  double rmse, fractionOver;
-};
-
 using Mapper = vtkMultiThreadedProjectedTetrahedraMapper;
 
 vtkSmartPointer<Mapper> MakeMapper(int backend)
@@ -63,29 +63,79 @@ const char* BackendName(int backend)
   return backend == Mapper::CPU_BACKEND ? "cpu" : "gl";
 }
 
-/// Renders `scene` with VTK's PT and with this mapper through each backend, saves the
-/// images, and checks the differences.
-void ExpectCloseToVTK(const Scene& scene, const std::string& name, Thresholds limit)
+/// Where VTK's PT draws the image this mapper's is compared with.
+enum class TheirWindow
 {
-  vtkNew<vtkProjectedTetrahedraMapper> vtkpt;
-  auto theirs = Render(scene, vtkpt);
-  Save(theirs, name + "-vtkpt");
-  for (int backend : { Mapper::OPENGL_BACKEND, Mapper::CPU_BACKEND })
+  /// Without multisampling: in a multisampled window VTK's PT speckles along cell edges (it
+  /// shades fragments of triangles that cover a sample but not the pixel centre with
+  /// extrapolated thicknesses; TestMapperWindows.cxx measures it), which no bound on the
+  /// worst pixel would survive.
+  SingleSampled,
+  /// The window this mapper draws in (VTK's default), for scenes with opaque geometry,
+  /// whose antialiased edges differ from a single-sampled window's by up to 0.6.
+  Same
+};
+
+/**
+ * Renders `scene` from every direction of Views with VTK's PT and with this mapper through
+ * each backend (in VTK's default window), saves the images, and checks the differences.
+ */
+void ExpectCloseToVTK(const Scene& scene, const std::string& name, const Limits& limits,
+  TheirWindow window = TheirWindow::SingleSampled)
+{
+  for (std::size_t v = 0; v < std::size(Views); ++v)
   {
-    const std::string label = name + "-" + BackendName(backend);
-    auto mapper = MakeMapper(backend);
-    auto ours = Render(scene, mapper);
-    EXPECT_EQ(mapper->GetLastBackend(), backend);
-    Save(ours, label);
-    const ImageDifference d = Compare(ours, theirs);
-    std::printf("%s vs VTK PT: RMSE %.5f, worst %.3f, pixels over 0.1: %.4f%%, covered %.1f%%\n",
-      label.c_str(), d.rmse, d.worst, 100 * d.fractionOver,
-      100 * CoveredFraction(ours, Background));
-    ::testing::Test::RecordProperty(label + "_rmse", std::to_string(d.rmse));
-    EXPECT_LT(d.rmse, limit.rmse) << label;
-    EXPECT_LT(d.fractionOver, limit.fractionOver) << label;
-    // Not a blank frame: the volume covers a good part of the window.
-    EXPECT_GT(CoveredFraction(ours, Background), 0.15) << label;
+    const Scene ours = scene.From(Views[v]);
+    Scene theirs = ours;
+    if (window == TheirWindow::SingleSampled)
+    {
+      theirs.window.multiSamples = 0;
+    }
+    vtkNew<vtkProjectedTetrahedraMapper> vtkpt;
+    auto reference = Render(theirs, vtkpt);
+    const std::string view = name + "-view" + std::to_string(v);
+    Save(reference, view + "-vtkpt");
+    for (int backend : { Mapper::OPENGL_BACKEND, Mapper::CPU_BACKEND })
+    {
+      const std::string label = view + "-" + BackendName(backend);
+      auto mapper = MakeMapper(backend);
+      auto image = Render(ours, mapper);
+      EXPECT_EQ(mapper->GetLastBackend(), backend);
+      Save(image, label);
+      ExpectClose(image, reference, limits, label + " vs VTK PT", 0.1);
+    }
+  }
+}
+
+/**
+ * Renders `scene` from every direction of Views with this mapper through each backend, in
+ * `shading`, and checks the images against the exact ray integral of the same view.
+ */
+void ExpectCloseToReference(
+  const Scene& scene, const std::string& name, const Limits& limits, int shading)
+{
+  for (std::size_t v = 0; v < std::size(Views); ++v)
+  {
+    const std::string view = name + "-view" + std::to_string(v);
+    vtkSmartPointer<vtkImageData> reference;
+    for (int backend : { Mapper::OPENGL_BACKEND, Mapper::CPU_BACKEND })
+    {
+      auto mapper = MakeMapper(backend);
+      mapper->SetShadingMode(shading);
+      const Stage stage = RenderStage(scene.From(Views[v]), mapper);
+      if (!reference)
+      {
+        reference = ReferenceImage(stage);
+        ASSERT_TRUE(reference);
+        Save(reference, view + "-reference");
+      }
+      const std::string label = view + "-" + BackendName(backend) +
+        (shading == Mapper::PRE_INTEGRATED_SHADING ? "-preintegrated" : "");
+      auto image = Grab(stage.window, false);
+      mapper->ReleaseGraphicsResources(stage.window);
+      Save(image, label);
+      ExpectClose(image, reference, limits, label + " vs reference", 0.1);
+    }
   }
 }
 
@@ -94,8 +144,8 @@ class MapperImages : public ::testing::Test
 protected:
   static void SetUpTestSuite()
   {
-    Box = MakeTetrahedralBox(12); // 8640 tetrahedra
-    BluntFin = LoadBluntFin();
+    Box = ShuffleCells(MakeTetrahedralBox(12), 1); // 8640 tetrahedra
+    BluntFin = ShuffleCells(LoadBluntFin(), 2);
   }
   static void TearDownTestSuite()
   {
@@ -104,21 +154,11 @@ protected:
   }
   Scene BoxScene(bool perspective)
   {
-    this->BoxProperty = MakeProperty(-0.3, 1.3, 0.5);
-    Scene s;
-    s.grid = Box;
-    s.property = this->BoxProperty;
-    s.perspective = perspective;
-    return s;
+    return MakeScene(Box, MakeProperty(-0.3, 1.3, 0.5), perspective);
   }
   Scene BluntFinScene(bool perspective)
   {
-    this->FinProperty = MakeProperty(0.19, 4.98, 1.5);
-    Scene s;
-    s.grid = BluntFin;
-    s.property = this->FinProperty;
-    s.perspective = perspective;
-    return s;
+    return MakeScene(BluntFin, MakeBluntFinProperty(), perspective);
   }
   /// The orthographic box with an opaque sphere inside the volume (depth test).
   Scene SphereScene()
@@ -144,27 +184,27 @@ protected:
   /// peak at scalar 0.5 (width 0.02, about a fifth of the scalar step between vertices).
   Scene NarrowPeakBoxScene(bool perspective)
   {
-    this->NarrowProperty = MakeNarrowPeakProperty(0.5);
-    Scene s;
-    s.grid = Box;
-    s.property = this->NarrowProperty;
-    s.perspective = perspective;
-    return s;
+    return MakeScene(Box, MakeNarrowPeakProperty(0.5), perspective);
   }
   static vtkSmartPointer<vtkUnstructuredGrid> Box, BluntFin;
-  vtkSmartPointer<vtkVolumeProperty> BoxProperty, FinProperty, NarrowProperty;
 };
 vtkSmartPointer<vtkUnstructuredGrid> MapperImages::Box;
 vtkSmartPointer<vtkUnstructuredGrid> MapperImages::BluntFin;
 
+// Limits: { RMSE over covered pixels, worst pixel, fraction of covered pixels over 0.1 }.
+// Measured with the correct order (Mesa llvmpipe, 200x200, three views): box scenes RMSE
+// 0.0013-0.0027, worst 0.004-0.020, no pixel over 0.1; with the order reversed or left in
+// storage order RMSE 0.006-0.022 and worst 0.035-0.12 (scripts/mutation-check.sh).
+const Limits BoxLimits{ 0.004, 0.03, 0.001 };
+
 TEST_F(MapperImages, SyntheticOrthographicMatchesVTK)
 {
-  ExpectCloseToVTK(BoxScene(false), "box-ortho", { 0.005, 0.001 }); // measured 0.0016, 0
+  ExpectCloseToVTK(BoxScene(false), "box-ortho", BoxLimits);
 }
 
 TEST_F(MapperImages, SyntheticPerspectiveMatchesVTK)
 {
-  ExpectCloseToVTK(BoxScene(true), "box-persp", { 0.005, 0.001 }); // measured 0.0015, 0
+  ExpectCloseToVTK(BoxScene(true), "box-persp", BoxLimits);
 }
 
 TEST_F(MapperImages, SyntheticCellScalarsMatchVTK)
@@ -175,21 +215,43 @@ TEST_F(MapperImages, SyntheticCellScalarsMatchVTK)
   cellOnly->GetPointData()->SetScalars(nullptr);
   cellOnly->GetCellData()->SetScalars(cellOnly->GetCellData()->GetArray("cellField"));
   s.grid = cellOnly;
-  ExpectCloseToVTK(s, "box-cells", { 0.005, 0.001 }); // measured 0.0009, 0
+  ExpectCloseToVTK(s, "box-cells", BoxLimits);
 }
 
 TEST_F(MapperImages, RealMeshOrthographicMatchesVTK)
 {
-  // measured RMSE 0.0011, no pixel over 0.1
-  ExpectCloseToVTK(BluntFinScene(false), "bluntfin-ortho", { 0.005, 0.001 });
+  // Measured RMSE 0.0020-0.0021, worst 0.008-0.016; storage order 0.004-0.009 and 0.055-0.11.
+  ExpectCloseToVTK(BluntFinScene(false), "bluntfin-ortho", { 0.003, 0.03, 0.001 });
 }
 
 TEST_F(MapperImages, RealMeshPerspectiveMatchesVTK)
 {
-  // measured RMSE 0.0083, 0.15% of pixels over 0.1: all in the bright core near the fin
-  // tip, where small cells meet a steep transfer function and the two perspective sorts
-  // (distance from the eye here, along the view direction in VTK) disagree most.
-  ExpectCloseToVTK(BluntFinScene(true), "bluntfin-persp", { 0.02, 0.005 });
+  // VTK's PT sorts perspective views along the view direction, where this mapper sorts by
+  // distance from the eye: in the bright core near the fin tip, where small cells meet a
+  // steep transfer function, the two orders differ (measured RMSE 0.013-0.015, worst
+  // 0.13-0.29, 0.15-0.5% of covered pixels over 0.1). Which of the two is right the next
+  // test says: the exact reference.
+  ExpectCloseToVTK(BluntFinScene(true), "bluntfin-persp", { 0.02, 0.35, 0.01 });
+}
+
+TEST_F(MapperImages, RealMeshPerspectiveMatchesTheReference)
+{
+  // Measured RMSE 0.0015-0.0018, worst 0.004-0.020 (both shadings); with the order
+  // reversed or in storage order 0.004-0.018 and 0.059-0.17.
+  const Limits limits{ 0.0025, 0.03, 0.001 };
+  ExpectCloseToReference(
+    BluntFinScene(true), "bluntfin-persp", limits, Mapper::VTK_COMPATIBLE_SHADING);
+  ExpectCloseToReference(
+    BluntFinScene(true), "bluntfin-persp", limits, Mapper::PRE_INTEGRATED_SHADING);
+}
+
+TEST_F(MapperImages, SyntheticPerspectiveMatchesTheReference)
+{
+  // Measured: VTK-compatible RMSE 0.0026-0.0027, worst 0.016-0.020; pre-integrated 0.0016-0.0017
+  // and 0.004; mutations 0.009-0.022 and 0.059-0.12.
+  ExpectCloseToReference(BoxScene(true), "box-persp", BoxLimits, Mapper::VTK_COMPATIBLE_SHADING);
+  ExpectCloseToReference(
+    BoxScene(true), "box-persp", { 0.003, 0.015, 0.001 }, Mapper::PRE_INTEGRATED_SHADING);
 }
 
 TEST_F(MapperImages, TransformedVolumeMatchesVTK)
@@ -204,12 +266,16 @@ TEST_F(MapperImages, TransformedVolumeMatchesVTK)
     user->SetElement(0, 1, 0.2); // a shear, through the user matrix
     volume->SetUserMatrix(user);
   };
-  ExpectCloseToVTK(s, "box-transformed", { 0.005, 0.001 }); // measured 0.0012, 0
+  ExpectCloseToVTK(s, "box-transformed", BoxLimits);
 }
 
 TEST_F(MapperImages, OpaqueGeometryOccludesTheVolume)
 {
-  ExpectCloseToVTK(SphereScene(), "box-sphere", { 0.015, 0.001 }); // measured 0.0076, 0.01%
+  // Both in VTK's default window. Measured RMSE 0.0065-0.021, worst 0.10-0.41, up to 1.4% of
+  // covered pixels over 0.1: VTK's speckles, and where a tetrahedron meets the sphere the two
+  // mappers test different depths (this mapper the front of the ray segment). A black or
+  // missing volume, or a volume drawn over the sphere, is far beyond these.
+  ExpectCloseToVTK(SphereScene(), "box-sphere", { 0.03, 0.5, 0.02 }, TheirWindow::Same);
 }
 
 TEST_F(MapperImages, IdenticalForEveryThreadCountAndOrderMethod)
@@ -253,11 +319,9 @@ TEST_F(MapperImages, CPUCompositorMatchesTheOpenGLPath)
   {
     auto gl = MakeMapper(Mapper::OPENGL_BACKEND);
     auto cpu = MakeMapper(Mapper::CPU_BACKEND);
-    const ImageDifference d = Compare(Render(c.scene, cpu), Render(c.scene, gl));
-    std::printf("%s CPU vs GL: RMSE %.5f, worst %.3f, pixels over 0.1: %.4f%%\n", c.name, d.rmse,
-      d.worst, 100 * d.fractionOver);
-    EXPECT_LT(d.rmse, 0.001) << c.name;
-    EXPECT_LT(d.fractionOver, 0.0005) << c.name;
+    // Measured RMSE 0.00015-0.00019 over covered pixels, worst 0.004-0.008.
+    ExpectClose(Render(c.scene, cpu), Render(c.scene, gl), { 0.001, 0.02, 0 },
+      std::string(c.name) + " CPU vs GL");
   }
 }
 
@@ -279,12 +343,9 @@ TEST_F(MapperImages, PreIntegratedShadingMatchesAcrossBackends)
     gl->SetShadingModeToPreIntegrated();
     cpu->SetShadingModeToPreIntegrated();
     auto glImage = Render(c.scene, gl);
-    const ImageDifference d = Compare(Render(c.scene, cpu), glImage);
     Save(glImage, std::string("MTPT_PreIntegrated_") + c.name);
-    std::printf("pre-integrated %s CPU vs GL: RMSE %.5f, worst %.3f, pixels over 0.1: %.4f%%\n",
-      c.name, d.rmse, d.worst, 100 * d.fractionOver);
-    EXPECT_LT(d.rmse, 0.001) << c.name;
-    EXPECT_LT(d.fractionOver, 0.0005) << c.name;
+    ExpectClose(Render(c.scene, cpu), glImage, { 0.001, 0.02, 0 },
+      std::string("pre-integrated ") + c.name + " CPU vs GL");
   }
 }
 
@@ -410,8 +471,8 @@ void ExpectMatchesBaseline(const Scene& scene, const std::string& name)
     auto mapper = MakeMapper(backend);
     const ImageDifference d = CompareWithBaseline(Render(scene, mapper), label);
     std::printf("baseline %s: RMSE %.5f worst %.3f\n", label.c_str(), d.rmse, d.worst);
-    EXPECT_LT(d.rmse, 0.004) << label;
-    EXPECT_LT(d.fractionOver, 0.001) << label;
+    EXPECT_LT(d.coveredRmse, 0.005) << label;
+    EXPECT_LT(d.worst, 0.05) << label;
   }
 }
 

@@ -5,8 +5,11 @@
 
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
 
+#include "mtpt/Threads.h"
+
 #include "vtkCamera.h"
 #include "vtkCellData.h"
+#include "vtkColorTransferFunction.h"
 #include "vtkFloatArray.h"
 #include "vtkImageData.h"
 #include "vtkPointData.h"
@@ -21,6 +24,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <iostream>
 #include <limits>
 #include <sstream>
@@ -68,6 +72,16 @@ protected:
     Scene s = SceneOf(this->Box);
     s.size = size;
     return Render(s, fresh);
+  }
+  /// One frame of the valid box by a fresh mapper, read back without rendering again.
+  vtkSmartPointer<vtkImageData> FreshFrame(int backend)
+  {
+    vtkNew<Mapper> fresh;
+    fresh->SetBackend(backend);
+    const Stage stage = RenderStage(SceneOf(this->Box), fresh, 1);
+    auto image = Grab(stage.window, false);
+    fresh->ReleaseGraphicsResources(stage.window);
+    return image;
   }
   /// After bad input, the same mapper must render the valid box exactly as a fresh one.
   void ExpectRecovers()
@@ -365,7 +379,10 @@ TEST_F(MapperRobustness, StageTimersAndCountsAfterARender)
   std::ostringstream print;
   this->MapperUnderTest->Print(print);
   EXPECT_NE(print.str().find("OrderMethod: RadixSort"), std::string::npos);
-  EXPECT_NE(print.str().find("NumberOfThreads: 0 (all cores)"), std::string::npos);
+  EXPECT_NE(print.str().find("NumberOfThreads: 0 (default: " +
+              std::to_string(this->MapperUnderTest->GetEffectiveNumberOfThreads()) + " in use)"),
+    std::string::npos)
+    << print.str();
   EXPECT_TRUE(this->Observer->errors.empty());
 }
 
@@ -406,7 +423,6 @@ TEST_F(MapperRobustness, SeveralRenderersInOneWindowAndOneMapperInTwoWindows)
   const auto expected = FreshBoxImage(200);
   vtkNew<vtkRenderWindow> window;
   window->SetOffScreenRendering(1);
-  window->SetMultiSamples(0);
   window->SetSize(400, 200);
   vtkNew<Mapper> left, right;
   for (int side = 0; side < 2; ++side)
@@ -441,6 +457,185 @@ TEST_F(MapperRobustness, SeveralRenderersInOneWindowAndOneMapperInTwoWindows)
   EXPECT_EQ(Compare(first, expected).worst, 0.0);
   EXPECT_EQ(Compare(second, expected).worst, 0.0);
   EXPECT_TRUE(this->Observer->errors.empty());
+}
+
+/// Records the mapper's progress; optionally aborts the render when a value is reached.
+class ProgressRecorder : public vtkCommand
+{
+public:
+  static ProgressRecorder* New() { return new ProgressRecorder; }
+  void Execute(vtkObject*, unsigned long, void* data) override
+  {
+    const double value = *static_cast<double*>(data);
+    this->values.push_back(value);
+    if (this->window && value >= this->abortAt)
+    {
+      this->window->SetAbortRender(1); // what an application's AbortCheckEvent handler does
+    }
+  }
+  std::vector<double> values;
+  vtkRenderWindow* window = nullptr;
+  double abortAt = 2;
+};
+
+TEST_F(MapperRobustness, ProgressIsReportedThroughTheStagesAndBatches)
+{
+  for (const int backend : { Mapper::OPENGL_BACKEND, Mapper::CPU_BACKEND })
+  {
+    vtkNew<Mapper> mapper;
+    mapper->SetBackend(backend);
+    mapper->SetBatchSize(700); // 2560 tetrahedra: 4 batches
+    mapper->CullInvisibleCellsOff();
+    vtkNew<ProgressRecorder> progress;
+    mapper->AddObserver(vtkCommand::ProgressEvent, progress);
+    const Stage stage = RenderStage(SceneOf(this->Box), mapper, 1);
+    const auto image = Grab(stage.window, false);
+    mapper->ReleaseGraphicsResources(stage.window);
+    ASSERT_EQ(mapper->GetNumberOfBatches(), 4);
+    // 0, after the transform, culling, keys and order, after each batch but the last, 1.
+    const std::vector<double> expected = { 0.0, 0.1, 0.15, 0.25, 0.35, 0.35 + 0.65 * 700 / 2560.0,
+      0.35 + 0.65 * 1400 / 2560.0, 0.35 + 0.65 * 2100 / 2560.0, 1.0 };
+    // Before them, VTK's pipeline reports 0 and 1 for the mapper's own Update (first frame).
+    ASSERT_GE(progress->values.size(), expected.size());
+    const std::size_t first = progress->values.size() - expected.size();
+    for (std::size_t i = 0; i < expected.size(); ++i)
+    {
+      EXPECT_NEAR(progress->values[first + i], expected[i], 1e-12) << "event " << i;
+    }
+    EXPECT_FALSE(mapper->GetLastFrameStopped());
+    EXPECT_EQ(Compare(image, this->FreshFrame(backend)).worst, 0.0)
+      << "observed frames draw the same";
+  }
+}
+
+TEST_F(MapperRobustness, AnAbortStopsTheFrameAndTheNextFrameIsWhole)
+{
+  for (const int backend : { Mapper::OPENGL_BACKEND, Mapper::CPU_BACKEND })
+  {
+    for (const double abortAt : { 0.1, 0.4 }) // after the transform; after the first batch
+    {
+      vtkNew<Mapper> mapper;
+      mapper->SetBackend(backend);
+      mapper->SetBatchSize(700);
+      mapper->CullInvisibleCellsOff();
+      vtkNew<ProgressRecorder> progress;
+      mapper->AddObserver(vtkCommand::ProgressEvent, progress);
+      const Stage stage = RenderStage(SceneOf(this->Box), mapper, 0);
+      progress->window = stage.window;
+      progress->abortAt = abortAt;
+      stage.window->Render();
+      const auto stopped = Grab(stage.window, false);
+      EXPECT_TRUE(mapper->GetLastFrameStopped());
+      const double covered = CoveredFraction(stopped, Background);
+      if (abortAt < 0.35)
+      {
+        EXPECT_EQ(mapper->GetNumberOfTetrahedra(), 0) << "nothing sorted";
+        EXPECT_LT(covered, 0.001) << "nothing drawn";
+      }
+      else
+      {
+        EXPECT_EQ(mapper->GetNumberOfBatches(), 1) << "stopped after the first batch";
+        EXPECT_GT(covered, 0.01) << "the first batch was drawn";
+        EXPECT_GT(Compare(stopped, this->FreshFrame(backend)).worst, 0.05) << "but not the rest";
+      }
+      // The next frame, not aborted, is whole.
+      progress->window = nullptr;
+      stage.window->Render();
+      EXPECT_FALSE(mapper->GetLastFrameStopped());
+      EXPECT_EQ(Compare(Grab(stage.window, false), this->FreshFrame(backend)).worst, 0.0)
+        << "backend " << backend << ", abort at " << abortAt;
+      mapper->ReleaseGraphicsResources(stage.window);
+    }
+  }
+}
+
+TEST_F(MapperRobustness, AFailedReadBackIsReportedOnceAndDrawnWithOpenGL)
+{
+  // MTPT_TESTING_FAULT=cpu-read-back makes the CPU backend's read-back fail with a real
+  // OpenGL error (GL_INVALID_ENUM): the frame must be drawn by the OpenGL backend, exactly as
+  // it draws it, with one error message for the two frames.
+  vtkNew<Mapper> reference;
+  reference->SetBackendToOpenGL();
+  const auto expected = Render(SceneOf(this->Box), reference);
+  this->MapperUnderTest->SetBackendToCPU();
+  setenv("MTPT_TESTING_FAULT", "cpu-read-back", 1);
+  const auto image = Render(SceneOf(this->Box), this->MapperUnderTest, 2);
+  unsetenv("MTPT_TESTING_FAULT");
+  ASSERT_EQ(this->Observer->errors.size(), 1u);
+  EXPECT_TRUE(AnyContains(this->Observer->errors,
+    "the CPU backend failed: reading the window's colour and depth back failed "
+    "(GL_INVALID_ENUM); drawing with OpenGL instead"))
+    << this->Observer->errors[0];
+  EXPECT_EQ(this->MapperUnderTest->GetLastBackend(), Mapper::OPENGL_BACKEND);
+  EXPECT_EQ(Compare(image, expected).worst, 0.0);
+  this->Observer->Clear();
+  this->ExpectRecovers(); // and the CPU backend works again once OpenGL does
+  EXPECT_EQ(this->MapperUnderTest->GetLastBackend(), Mapper::CPU_BACKEND);
+  EXPECT_TRUE(this->Observer->errors.empty());
+}
+
+TEST_F(MapperRobustness, AVectorComponentOutOfRangeIsWarnedAbout)
+{
+  // A three-component point array coloured by its component 5: one warning, drawn with the
+  // last component (2), as with component 2 asked for.
+  vtkNew<vtkUnstructuredGrid> grid;
+  grid->ShallowCopy(this->Box);
+  vtkNew<vtkFloatArray> vectors;
+  vectors->SetName("vectors");
+  vectors->SetNumberOfComponents(3);
+  for (vtkIdType i = 0; i < grid->GetNumberOfPoints(); ++i)
+  {
+    const double* p = grid->GetPoint(i);
+    vectors->InsertNextTuple3(p[0], p[1], 0.5 * (p[2] + 1.0));
+  }
+  grid->GetPointData()->SetScalars(vectors);
+  auto componentProperty = [&](int component)
+  {
+    auto property = MakeProperty(0.0, 1.0, 0.5);
+    property->GetRGBTransferFunction()->SetVectorModeToComponent();
+    property->GetRGBTransferFunction()->SetVectorComponent(component);
+    return property;
+  };
+  Scene scene = SceneOf(grid);
+  scene.property = componentProperty(5);
+  const auto image = Render(scene, this->MapperUnderTest, 2);
+  ASSERT_EQ(this->Observer->warnings.size(), 1u) << "once, not per frame";
+  EXPECT_TRUE(AnyContains(this->Observer->warnings,
+    "the colour transfer function selects component 5 of the array 'vectors', which has "
+    "components 0 to 2; using component 2"))
+    << this->Observer->warnings[0];
+  vtkNew<Mapper> fresh;
+  scene.property = componentProperty(2);
+  EXPECT_EQ(Compare(image, Render(scene, fresh)).worst, 0.0);
+  EXPECT_GT(CoveredFraction(image, Background), 0.1);
+}
+
+TEST_F(MapperRobustness, ANonPositiveUnitDistanceIsWarnedAbout)
+{
+  auto property = MakeProperty(-0.3, 1.3, 0.0);
+  Scene scene = SceneOf(this->Box);
+  scene.property = property;
+  const auto image = Render(scene, this->MapperUnderTest, 2);
+  ASSERT_EQ(this->Observer->warnings.size(), 1u) << "once, not per frame";
+  EXPECT_TRUE(AnyContains(this->Observer->warnings,
+    "the volume property's ScalarOpacityUnitDistance is 0; it must be positive, using 1"));
+  scene.property = MakeProperty(-0.3, 1.3, 1.0);
+  vtkNew<Mapper> fresh;
+  EXPECT_EQ(Compare(image, Render(scene, fresh)).worst, 0.0) << "drawn with 1";
+  property->SetScalarOpacityUnitDistance(-2.0);
+  Render(SceneOf(this->Box), this->MapperUnderTest);
+  EXPECT_EQ(this->Observer->warnings.size(), 1u) << "the fixture's property is fine";
+  scene.property = property;
+  Render(scene, this->MapperUnderTest);
+  EXPECT_EQ(this->Observer->warnings.size(), 2u) << "a changed value is reported again";
+}
+
+TEST_F(MapperRobustness, TheDefaultThreadCountIsTheLibrarys)
+{
+  vtkNew<Mapper> mapper;
+  EXPECT_EQ(mapper->GetEffectiveNumberOfThreads(), mtpt::DefaultThreadCount());
+  mapper->SetNumberOfThreads(3);
+  EXPECT_EQ(mapper->GetEffectiveNumberOfThreads(), 3);
 }
 
 } // namespace

@@ -1,8 +1,10 @@
 //VTK::System::Dec
 //VTK::Output::Dec
 // SPDX-License-Identifier: BSD-3-Clause
-// Puts the CPU compositor's image, already composited over the colour drawn before it, into
-// the framebuffer (blending off).
+// Writes an image the size of the viewport into the framebuffer, texel for pixel (nearest
+// filtering, blending off): the CPU compositor's image, or the OpenGL backend's float
+// target, each already composited over the colour drawn before it
+// (mtpt::BlendTarget::WriteToWindow).
 in vec2 texCoord;
 uniform sampler2D image;
 

@@ -1,0 +1,165 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "BlendTarget.h"
+
+#include "RenderBackend.h"
+#include "vtkMTPTCompositeFS.h"
+
+#include "vtkOpenGLFramebufferObject.h"
+#include "vtkOpenGLQuadHelper.h"
+#include "vtkOpenGLRenderUtilities.h"
+#include "vtkOpenGLRenderWindow.h"
+#include "vtkOpenGLShaderCache.h"
+#include "vtkOpenGLState.h"
+#include "vtkShaderProgram.h"
+#include "vtkTextureObject.h"
+#include "vtk_glew.h"
+
+namespace mtpt
+{
+
+BlendTarget::BlendTarget() = default;
+BlendTarget::~BlendTarget() = default;
+
+vtkTextureObject* BlendTarget::Colour()
+{
+  return this->Framebuffer->GetColorAttachmentAsTextureObject(0);
+}
+
+bool BlendTarget::Allocate(vtkOpenGLRenderWindow* window, const int size[2], std::string& error)
+{
+  // The depth format must equal the window's for the depth copy (a blit converts no depth).
+  const int depthBits = window->GetDepthBufferSize() > 0 ? window->GetDepthBufferSize() : 24;
+  if (this->Allocated && depthBits == this->DepthBits)
+  {
+    if (size[0] != this->Size[0] || size[1] != this->Size[1])
+    {
+      this->Framebuffer->Bind();
+      this->Framebuffer->Resize(size[0], size[1]);
+      this->Size[0] = size[0];
+      this->Size[1] = size[1];
+    }
+    return true;
+  }
+  if (this->Allocated)
+  {
+    this->Framebuffer->ReleaseGraphicsResources(window);
+  }
+  this->Framebuffer->SetContext(window);
+  const bool made = this->Framebuffer->PopulateFramebuffer(size[0], size[1], /*textures*/ true,
+    /*colour attachments*/ 1, VTK_FLOAT, /*depth*/ true, depthBits, /*samples*/ 0);
+  const char* description = nullptr;
+  if (!made ||
+    !vtkOpenGLFramebufferObject::GetFrameBufferStatus(
+      vtkOpenGLFramebufferObject::GetDrawMode(), description))
+  {
+    error = std::string("no float framebuffer (") +
+      (description ? description : "allocation failed") + ")";
+    this->Allocated = false;
+    return false;
+  }
+  this->Allocated = true;
+  this->DepthBits = depthBits;
+  this->Size[0] = size[0];
+  this->Size[1] = size[1];
+  return true;
+}
+
+bool BlendTarget::Capture(
+  vtkOpenGLRenderWindow* window, const int origin[2], const int size[2], std::string& error)
+{
+  vtkOpenGLState* state = window->GetState();
+  // Read from what the renderer draws into (its draw binding), whatever is bound for reading.
+  int windowFramebuffer = 0;
+  state->vtkglGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &windowFramebuffer);
+  state->PushFramebufferBindings();
+  if (!this->Allocate(window, size, error))
+  {
+    state->PopFramebufferBindings();
+    return false;
+  }
+  state->vtkglBindFramebuffer(GL_READ_FRAMEBUFFER, static_cast<unsigned int>(windowFramebuffer));
+  if (windowFramebuffer == 0)
+  {
+    state->vtkglReadBuffer(GL_BACK);
+  }
+  this->Framebuffer->Bind(vtkOpenGLFramebufferObject::GetDrawMode());
+  this->Framebuffer->ActivateDrawBuffer(0);
+  // Equal sizes: the one blit a multisampled source allows; it resolves the samples.
+  state->vtkglBlitFramebuffer(origin[0], origin[1], origin[0] + size[0], origin[1] + size[1], 0, 0,
+    size[0], size[1], GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+  this->Framebuffer->Bind(vtkOpenGLFramebufferObject::GetReadMode());
+  this->Framebuffer->ActivateReadBuffer(0);
+  const std::string failed = TakeOpenGLErrors();
+  if (!failed.empty())
+  {
+    error =
+      "copying the window's colour and depth into a float framebuffer failed (" + failed + ")";
+    state->PopFramebufferBindings();
+    return false;
+  }
+  return true;
+}
+
+void BlendTarget::Restore(vtkOpenGLRenderWindow* window)
+{
+  window->GetState()->PopFramebufferBindings();
+}
+
+bool BlendTarget::WriteToWindow(vtkOpenGLRenderWindow* window, vtkTextureObject* texture,
+  const int origin[2], const int size[2], std::string& error)
+{
+  // Nearest filtering: texture coordinates at pixel centres hit texel centres exactly.
+  texture->SetMinificationFilter(vtkTextureObject::Nearest);
+  texture->SetMagnificationFilter(vtkTextureObject::Nearest);
+  if (!this->Quad)
+  {
+    this->Quad = std::make_unique<vtkOpenGLQuadHelper>(window,
+      vtkOpenGLRenderUtilities::GetFullScreenQuadVertexShader().c_str(), vtkMTPTCompositeFS, "");
+  }
+  else
+  {
+    window->GetShaderCache()->ReadyShaderProgram(this->Quad->Program);
+  }
+  if (!this->Quad->Program || !this->Quad->Program->GetCompiled())
+  {
+    error = "could not compile the shader that writes the image into the window";
+    return false;
+  }
+  vtkOpenGLState* state = window->GetState();
+  vtkOpenGLState::ScopedglDepthMask depthMask(state);
+  vtkOpenGLState::ScopedglEnableDisable depthTest(state, GL_DEPTH_TEST);
+  vtkOpenGLState::ScopedglEnableDisable blend(state, GL_BLEND);
+  vtkOpenGLState::ScopedglViewport viewport(state);
+  state->vtkglDepthMask(GL_FALSE);
+  state->vtkglDisable(GL_DEPTH_TEST);
+  state->vtkglDisable(GL_BLEND); // the texture already holds what was drawn below it
+  state->vtkglViewport(origin[0], origin[1], size[0], size[1]);
+  texture->Activate();
+  this->Quad->Program->SetUniformi("image", texture->GetTextureUnit());
+  this->Quad->Render();
+  texture->Deactivate();
+  const std::string failed = TakeOpenGLErrors();
+  if (!failed.empty())
+  {
+    error = "writing the image into the window failed (" + failed + ")";
+    return false;
+  }
+  return true;
+}
+
+void BlendTarget::ReleaseGraphicsResources(vtkWindow* window)
+{
+  if (window)
+  {
+    this->Framebuffer->ReleaseGraphicsResources(window);
+    if (this->Quad)
+    {
+      this->Quad->ReleaseGraphicsResources(window);
+    }
+  }
+  this->Quad.reset();
+  this->Allocated = false;
+  this->Size[0] = this->Size[1] = 0;
+}
+
+} // namespace mtpt

@@ -1,0 +1,82 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file BlendTarget.h
+ * @brief Private glue: a single-sampled float framebuffer holding a copy of what the
+ * window drew in a renderer's viewport, which a backend blends into or reads back, and the
+ * way back into the window.
+ *
+ * Why: VTK's windows are multisampled by default (8 samples asked, 4 granted by Mesa), and
+ * a multisampled framebuffer can be neither read with glReadPixels nor blitted into at
+ * another size or position. Capture resolves the window's colour and opaque depth into
+ * this target (a blit of equal size, which resolves the samples), so both backends see
+ * one sample per pixel whatever the window; WriteToWindow draws a texture back over the
+ * viewport with a full-screen quad, which writes every sample of a multisampled window
+ * (a blit into a multisampled framebuffer is not allowed everywhere). The OpenGL backend
+ * blends in the target itself, so thousands of thin layers lose no precision to 8-bit
+ * rounding at every blend, as vtkProjectedTetrahedraMapper's float framebuffer.
+ */
+#ifndef mtpt_BlendTarget_h
+#define mtpt_BlendTarget_h
+
+#include "vtkNew.h"
+
+#include <memory>
+#include <string>
+
+class vtkOpenGLFramebufferObject;
+class vtkOpenGLQuadHelper;
+class vtkOpenGLRenderWindow;
+class vtkTextureObject;
+class vtkWindow;
+
+namespace mtpt
+{
+
+class BlendTarget
+{
+public:
+  BlendTarget();
+  ~BlendTarget();
+
+  /**
+   * Makes the target the viewport's size, copies the window's colour and depth there into
+   * it (resolving multisamples) and leaves it bound for drawing and reading, with the
+   * window's framebuffer bindings pushed. Returns false with `error` set when the target
+   * cannot be made or the copy fails; the bindings are then restored already.
+   */
+  bool Capture(
+    vtkOpenGLRenderWindow* window, const int origin[2], const int size[2], std::string& error);
+
+  /// Pops the bindings Capture pushed: the window's framebuffer is bound again.
+  void Restore(vtkOpenGLRenderWindow* window);
+
+  /**
+   * Replaces the colour of the viewport (origin, size) of the framebuffer bound for drawing
+   * with `texture` (the viewport's size, RGBA): no blending, no depth test or write, every
+   * sample. Returns false with `error` set when the shader cannot be made or OpenGL fails.
+   */
+  bool WriteToWindow(vtkOpenGLRenderWindow* window, vtkTextureObject* texture, const int origin[2],
+    const int size[2], std::string& error);
+
+  /// The target's colour (RGBA float), valid after a successful Capture.
+  vtkTextureObject* Colour();
+
+  /// Frees the framebuffer and the quad; `window` owns them and is current.
+  void ReleaseGraphicsResources(vtkWindow* window);
+
+private:
+  BlendTarget(const BlendTarget&) = delete;
+  void operator=(const BlendTarget&) = delete;
+
+  bool Allocate(vtkOpenGLRenderWindow* window, const int size[2], std::string& error);
+
+  vtkNew<vtkOpenGLFramebufferObject> Framebuffer;
+  std::unique_ptr<vtkOpenGLQuadHelper> Quad;
+  bool Allocated = false;
+  int Size[2] = { 0, 0 };
+  int DepthBits = 0;
+};
+
+} // namespace mtpt
+
+#endif

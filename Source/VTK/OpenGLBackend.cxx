@@ -1,0 +1,305 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "OpenGLBackend.h"
+
+#include "TransferFunctionTables.h"
+#include "vtkMTPTTetrahedraFS.h"
+#include "vtkMTPTTetrahedraVS.h"
+
+#include "mtpt/FramePipeline.h"
+#include "mtpt/Timing.h"
+
+#include "vtkOpenGLBufferObject.h"
+#include "vtkOpenGLIndexBufferObject.h"
+#include "vtkOpenGLRenderWindow.h"
+#include "vtkOpenGLShaderCache.h"
+#include "vtkOpenGLState.h"
+#include "vtkOpenGLVertexArrayObject.h"
+#include "vtkOpenGLVertexBufferObject.h"
+#include "vtkShaderProgram.h"
+#include "vtkTextureObject.h"
+#include "vtk_glew.h"
+
+#include <algorithm>
+#include <climits>
+#include <vector>
+
+namespace mtpt
+{
+
+namespace
+{
+
+/// A float RGBA texture of `width` x 1 texels, clamped, with the given filter.
+void MakeTableTexture(vtkTextureObject* texture, vtkOpenGLRenderWindow* window, int width,
+  const float* values, bool linear)
+{
+  texture->SetContext(window);
+  texture->SetWrapS(vtkTextureObject::ClampToEdge);
+  texture->SetWrapT(vtkTextureObject::ClampToEdge);
+  const int filter = linear ? vtkTextureObject::Linear : vtkTextureObject::Nearest;
+  texture->SetMinificationFilter(filter);
+  texture->SetMagnificationFilter(filter);
+  texture->Create2DFromRaw(width, 1, 4, VTK_FLOAT, const_cast<float*>(values));
+}
+
+} // namespace
+
+OpenGLBackend::OpenGLBackend() = default;
+OpenGLBackend::~OpenGLBackend() = default;
+
+bool OpenGLBackend::SamplesPixelCentresOnly(vtkOpenGLRenderWindow*, bool floatFramebuffer) const
+{
+  // The float target is single-sampled; without it the window's own framebuffer is drawn.
+  return (floatFramebuffer && !this->FloatTargetFailed) || !DrawFramebufferIsMultisampled();
+}
+
+vtkShaderProgram* OpenGLBackend::ReadyProgram(vtkOpenGLRenderWindow* window)
+{
+  vtkShaderProgram* program = this->Triangles.Program;
+  if (program)
+  {
+    window->GetShaderCache()->ReadyShaderProgram(program);
+    return program;
+  }
+  program =
+    window->GetShaderCache()->ReadyShaderProgram(vtkMTPTTetrahedraVS, vtkMTPTTetrahedraFS, "");
+  if (program)
+  {
+    this->Triangles.Program = program;
+    this->Triangles.VAO->ShaderProgramChanged();
+    this->Triangles.ShaderSourceTime.Modified();
+  }
+  return program;
+}
+
+void OpenGLBackend::UploadTables(const BackendFrame& frame)
+{
+  const TransferFunctionTables& tables = *frame.tables;
+  if (this->UploadedTables == tables.Version() && this->TransferFunction->GetHandle() != 0)
+  {
+    return;
+  }
+  const TransferFunctionTable table = tables.Table();
+  MakeTableTexture(this->TransferFunction, frame.window, table.size, table.table, true);
+  // The prefix integrals as float high + low parts, so that differences of nearby entries
+  // keep their precision in the shader.
+  const std::vector<double>& integrals = tables.PreIntegration().integrals;
+  std::vector<float> high(integrals.size()), low(integrals.size());
+  for (std::size_t i = 0; i < integrals.size(); ++i)
+  {
+    high[i] = static_cast<float>(integrals[i]);
+    low[i] = static_cast<float>(integrals[i] - high[i]);
+  }
+  MakeTableTexture(this->IntegralsHigh, frame.window, table.size, high.data(), false);
+  MakeTableTexture(this->IntegralsLow, frame.window, table.size, low.data(), false);
+  this->UploadedTables = tables.Version();
+}
+
+void OpenGLBackend::SetUniforms(const BackendFrame& frame, vtkShaderProgram* program)
+{
+  const bool preIntegrated = frame.shading == Shading::PreIntegrated;
+  const TransferFunctionTable table = frame.tables->Table();
+  program->SetUniformi("transferFunction", this->TransferFunction->GetTextureUnit());
+  program->SetUniformi("shadingMode", preIntegrated ? 1 : 0);
+  program->SetUniformi("tableSize", table.size);
+  if (preIntegrated)
+  {
+    program->SetUniformi("integralsHigh", this->IntegralsHigh->GetTextureUnit());
+    program->SetUniformi("integralsLow", this->IntegralsLow->GetTextureUnit());
+  }
+  // Texel centres: scalar `low` at 0.5/N, `high` at (N-0.5)/N.
+  const double n = table.size, low = table.low, high = table.high;
+  const double scale = (n - 1.0) / n / (high - low);
+  program->SetUniformf("scalarScale", static_cast<float>(scale));
+  program->SetUniformf("scalarShift", static_cast<float>(0.5 / n - low * scale));
+  const double entryScale = (n - 1.0) / (high - low);
+  program->SetUniformf("entryScale", static_cast<float>(entryScale));
+  program->SetUniformf("entryShift", static_cast<float>(-low * entryScale));
+  const PerspectiveInterpolation& view = frame.interpolation;
+  program->SetUniformi("perspectiveExact", preIntegrated && view.perspective ? 1 : 0);
+  program->SetUniformf("inverseDepthScale", static_cast<float>(view.inverseWScale));
+  program->SetUniformf("inverseDepthOffset", static_cast<float>(view.inverseWOffset));
+  const float rayScale[2] = { static_cast<float>(view.scaleX), static_cast<float>(view.scaleY) };
+  const float rayShift[2] = { static_cast<float>(view.shiftX), static_cast<float>(view.shiftY) };
+  program->SetUniform2f("rayScale", rayScale);
+  program->SetUniform2f("rayShift", rayShift);
+  program->SetUniformf("inverseUnitDistance", static_cast<float>(1.0 / frame.unitDistance));
+}
+
+bool OpenGLBackend::Draw(const BackendFrame& frame, BackendTimes& times)
+{
+  this->ErrorMessage.clear();
+  this->WarningMessage.clear();
+  TakeOpenGLErrors(); // errors left by others are not this backend's to report
+  vtkOpenGLRenderWindow* window = frame.window;
+  vtkShaderProgram* program = this->ReadyProgram(window);
+  if (!program)
+  {
+    this->ErrorMessage = "could not compile the MTPT shaders";
+    return false;
+  }
+  this->UploadTables(frame);
+  this->FloatTargetUsed = false;
+  if (frame.floatFramebuffer && !this->FloatTargetFailed)
+  {
+    std::string error;
+    this->FloatTargetUsed = this->Target.Capture(window, frame.origin, frame.size, error);
+    if (!this->FloatTargetUsed)
+    {
+      this->FloatTargetFailed = true; // in this context: not tried again every frame
+      this->WarningMessage = error + "; blending in the window's own framebuffer";
+    }
+  }
+  bool drawn = this->DrawBatches(frame, program, times);
+  if (this->FloatTargetUsed)
+  {
+    this->Target.Restore(window);
+    const auto start = Clock::now();
+    drawn = drawn &&
+      this->Target.WriteToWindow(
+        window, this->Target.Colour(), frame.origin, frame.size, this->ErrorMessage);
+    times.draw += SecondsSince(start);
+  }
+  return drawn;
+}
+
+bool OpenGLBackend::DrawBatches(
+  const BackendFrame& frame, vtkShaderProgram* program, BackendTimes& times)
+{
+  vtkOpenGLState* state = frame.window->GetState();
+  vtkOpenGLState::ScopedglDepthMask depthMask(state);
+  vtkOpenGLState::ScopedglBlendFuncSeparate blendFunction(state);
+  vtkOpenGLState::ScopedglEnableDisable depthTest(state, GL_DEPTH_TEST);
+  vtkOpenGLState::ScopedglEnableDisable blend(state, GL_BLEND);
+  vtkOpenGLState::ScopedglEnableDisable cull(state, GL_CULL_FACE);
+  vtkOpenGLState::ScopedglViewport viewport(state);
+  vtkOpenGLState::ScopedglScissor scissor(state);
+  if (this->FloatTargetUsed)
+  {
+    state->vtkglViewport(0, 0, frame.size[0], frame.size[1]);
+    state->vtkglScissor(0, 0, frame.size[0], frame.size[1]);
+  }
+  // VTK's PT state: depth test against opaque geometry without depth writes, back-to-front
+  // "over" blending of non-premultiplied colour.
+  state->vtkglDepthMask(GL_FALSE);
+  state->vtkglEnable(GL_DEPTH_TEST);
+  state->vtkglEnable(GL_BLEND);
+  state->vtkglDisable(GL_CULL_FACE);
+  state->vtkglBlendFuncSeparate(
+    GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
+  this->TransferFunction->Activate();
+  this->IntegralsHigh->Activate();
+  this->IntegralsLow->Activate();
+  this->SetUniforms(frame, program);
+
+  // Batch after batch: decompose, upload, draw. Draw calls return before the rasterizer is
+  // done, so the next batch's decomposition overlaps the previous batch's drawing.
+  FramePipeline& pipeline = *frame.pipeline;
+  const std::size_t total = pipeline.SortedCount();
+  const std::size_t batch = std::max<std::size_t>(1, frame.batchSize);
+  bool drawn = true;
+  for (std::size_t first = 0; first < total; first += batch)
+  {
+    auto start = Clock::now();
+    pipeline.DecomposeBatch(first, batch, frame.threads);
+    times.decompose += SecondsSince(start);
+    this->Upload(frame, times);
+    start = Clock::now();
+    this->DrawUploaded(program);
+    if (frame.synchronizedTiming)
+    {
+      glFinish();
+    }
+    times.draw += SecondsSince(start);
+    ++times.batches;
+    const std::string failed = TakeOpenGLErrors();
+    if (!failed.empty())
+    {
+      this->ErrorMessage = "drawing the tetrahedra failed (" + failed + ")";
+      drawn = false;
+      break;
+    }
+    const std::size_t done = std::min(total, first + batch);
+    if (done < total && frame.afterBatch &&
+      !frame.afterBatch(static_cast<double>(done) / static_cast<double>(total)))
+    {
+      times.stopped = true;
+      break;
+    }
+  }
+  this->TransferFunction->Deactivate();
+  this->IntegralsHigh->Deactivate();
+  this->IntegralsLow->Deactivate();
+  return drawn;
+}
+
+void OpenGLBackend::Upload(const BackendFrame& frame, BackendTimes& times)
+{
+  const FramePipeline& pipeline = *frame.pipeline;
+  if (pipeline.BufferVersion() == this->UploadedBuffers)
+  {
+    return; // the buffers hold this decomposition already
+  }
+  const auto start = Clock::now();
+  const std::size_t count = pipeline.TetrahedronCount();
+  this->VertexBuffer->SetStride(static_cast<unsigned int>(sizeof(TetVertex)));
+  this->VertexBuffer->Upload(reinterpret_cast<const float*>(pipeline.Vertices().data()),
+    count * VerticesPerTetrahedron * 6, vtkOpenGLBufferObject::ArrayBuffer);
+  this->Triangles.IBO->Upload(pipeline.Indices().data(), count * IndicesPerTetrahedron,
+    vtkOpenGLBufferObject::ElementArrayBuffer);
+  this->Triangles.IBO->IndexCount = count * IndicesPerTetrahedron;
+  if (frame.synchronizedTiming)
+  {
+    glFinish();
+  }
+  this->UploadedBuffers = pipeline.BufferVersion();
+  times.upload += SecondsSince(start);
+}
+
+void OpenGLBackend::DrawUploaded(vtkShaderProgram* program)
+{
+  this->VertexBuffer->Bind();
+  this->Triangles.VAO->Bind();
+  if (this->Triangles.ShaderSourceTime > this->Triangles.AttributeUpdateTime)
+  {
+    // The layout of mtpt::TetVertex.
+    const auto stride = sizeof(TetVertex);
+    this->Triangles.VAO->AddAttributeArray(
+      program, this->VertexBuffer, "vertexNDC", 0, stride, VTK_FLOAT, 3, false);
+    this->Triangles.VAO->AddAttributeArray(
+      program, this->VertexBuffer, "scalarFrontBack", 12, stride, VTK_FLOAT, 2, false);
+    this->Triangles.VAO->AddAttributeArray(
+      program, this->VertexBuffer, "thickness", 20, stride, VTK_FLOAT, 1, false);
+    this->Triangles.AttributeUpdateTime.Modified();
+  }
+  this->Triangles.IBO->Bind();
+  // GLsizei is 32-bit: draw in chunks of whole tetrahedra below that limit.
+  const std::size_t indices = this->Triangles.IBO->IndexCount;
+  const std::size_t chunk = (static_cast<std::size_t>(INT_MAX) / 12) * 12;
+  for (std::size_t offset = 0; offset < indices; offset += chunk)
+  {
+    const std::size_t size = std::min(chunk, indices - offset);
+    glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(size), GL_UNSIGNED_INT,
+      reinterpret_cast<const void*>(offset * sizeof(std::uint32_t)));
+  }
+  this->Triangles.IBO->Release();
+  this->Triangles.VAO->Release();
+  this->VertexBuffer->Release();
+}
+
+void OpenGLBackend::ReleaseGraphicsResources(vtkWindow* window)
+{
+  this->VertexBuffer->ReleaseGraphicsResources();
+  this->Triangles.ReleaseGraphicsResources(window);
+  if (window)
+  {
+    this->TransferFunction->ReleaseGraphicsResources(window);
+    this->IntegralsHigh->ReleaseGraphicsResources(window);
+    this->IntegralsLow->ReleaseGraphicsResources(window);
+  }
+  this->Target.ReleaseGraphicsResources(window);
+  this->UploadedBuffers = this->UploadedTables = 0;
+  this->FloatTargetFailed = false;
+}
+
+} // namespace mtpt

@@ -1,0 +1,77 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file OpenGLBackend.h
+ * @brief Private glue: the paper's way to the screen. Batch after batch, the pipeline
+ * decomposes the sorted tetrahedra into its fixed-stride vertex and index buffers, which
+ * are uploaded and drawn with one call, blended back to front (VTK's PT blending:
+ * glBlendFuncSeparate(SRC_ALPHA, ONE_MINUS_SRC_ALPHA, ONE, ONE_MINUS_SRC_ALPHA), depth test
+ * against the opaque geometry, no depth writes), in a float target (BlendTarget) unless
+ * that is turned off or unavailable.
+ *
+ * What it keeps between frames, and what makes it stale:
+ * - the vertex and index buffers: FramePipeline::BufferVersion() at upload (any new
+ *   decomposition or batch of any frame changes it, whichever backend caused it);
+ * - the transfer-function textures: TransferFunctionTables::Version() at upload;
+ * - all of them, the shader program and the float target belong to one context: released
+ *   in ReleaseGraphicsResources, after which everything is uploaded again.
+ */
+#ifndef mtpt_OpenGLBackend_h
+#define mtpt_OpenGLBackend_h
+
+#include "BlendTarget.h"
+#include "RenderBackend.h"
+
+#include "vtkNew.h"
+#include "vtkOpenGLHelper.h"
+
+#include <cstdint>
+
+class vtkOpenGLVertexBufferObject;
+class vtkShaderProgram;
+class vtkTextureObject;
+
+namespace mtpt
+{
+
+class OpenGLBackend : public RenderBackend
+{
+public:
+  OpenGLBackend();
+  ~OpenGLBackend() override;
+
+  bool SamplesPixelCentresOnly(vtkOpenGLRenderWindow* window, bool floatFramebuffer) const override;
+  bool Draw(const BackendFrame& frame, BackendTimes& times) override;
+  void ReleaseGraphicsResources(vtkWindow* window) override;
+
+  /// Whether the last Draw blended in a float target (false: in the window's framebuffer).
+  bool UsedFloatTarget() const { return this->FloatTargetUsed; }
+  /// A warning from the last Draw that did not stop it (no float target); empty if none.
+  const std::string& Warning() const { return this->WarningMessage; }
+
+private:
+  OpenGLBackend(const OpenGLBackend&) = delete;
+  void operator=(const OpenGLBackend&) = delete;
+
+  vtkShaderProgram* ReadyProgram(vtkOpenGLRenderWindow* window);
+  void UploadTables(const BackendFrame& frame);
+  void SetUniforms(const BackendFrame& frame, vtkShaderProgram* program);
+  bool DrawBatches(const BackendFrame& frame, vtkShaderProgram* program, BackendTimes& times);
+  void Upload(const BackendFrame& frame, BackendTimes& times);
+  void DrawUploaded(vtkShaderProgram* program);
+
+  vtkNew<vtkOpenGLVertexBufferObject> VertexBuffer;
+  vtkOpenGLHelper Triangles;
+  vtkNew<vtkTextureObject> TransferFunction;
+  vtkNew<vtkTextureObject> IntegralsHigh, IntegralsLow; // pre-integrated shading
+  BlendTarget Target;
+
+  std::uint64_t UploadedBuffers = 0; ///< FramePipeline::BufferVersion() in the buffers
+  std::uint64_t UploadedTables = 0;  ///< TransferFunctionTables::Version() in the textures
+  bool FloatTargetFailed = false;    ///< no float target in this context: do not retry
+  bool FloatTargetUsed = false;
+  std::string WarningMessage;
+};
+
+} // namespace mtpt
+
+#endif

@@ -1,0 +1,111 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file RenderBackend.h
+ * @brief Private glue: how the sorted tetrahedra of a prepared frame reach the window.
+ *
+ * The mapper validates its input, runs the core's frame pipeline (transform, culling, keys,
+ * order) and hands the prepared frame to one backend:
+ * - OpenGLBackend: decomposes batch after batch into the fixed-stride buffers, uploads them
+ *   and draws them with OpenGL blending (the paper's path; right with a GPU);
+ * - CPUBackend: composites the same triangles with the same per-fragment math on the CPU
+ *   and puts the image into the window (right where OpenGL is itself a CPU rasterizer).
+ * Each backend owns its OpenGL objects (they belong to the context of the window it last
+ * drew in) and keeps its own record of what they hold, keyed on every input they depend
+ * on; see Documentation/architecture.md.
+ */
+#ifndef mtpt_RenderBackend_h
+#define mtpt_RenderBackend_h
+
+#include "mtpt/Compositor.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+
+class vtkOpenGLRenderWindow;
+class vtkRenderer;
+class vtkWindow;
+
+namespace mtpt
+{
+
+class FramePipeline;
+class TransferFunctionTables;
+
+/// What a backend needs to draw one frame that FramePipeline::Prepare has sorted.
+struct BackendFrame
+{
+  vtkRenderer* renderer = nullptr;
+  vtkOpenGLRenderWindow* window = nullptr;
+  int origin[2] = { 0, 0 }; ///< the renderer's tiled viewport in window pixels
+  int size[2] = { 0, 0 };
+  FramePipeline* pipeline = nullptr;
+  const TransferFunctionTables* tables = nullptr;
+  Shading shading = Shading::VTKCompatible;
+  PerspectiveInterpolation interpolation; ///< of this frame's projection
+  double unitDistance = 1.0;              ///< ScalarOpacityUnitDistance, positive
+  std::size_t batchSize = 1;              ///< tetrahedra decomposed per batch (>= 1)
+  int threads = 0;                        ///< OpenMP threads (<= 0: the default)
+  bool floatFramebuffer = true;           ///< blend in a float target (OpenGL backend)
+  bool synchronizedTiming = false;        ///< glFinish after upload and draw
+  /**
+   * Called after each batch with the fraction of the sorted tetrahedra drawn so far;
+   * returning false stops the frame there (what was drawn stays). Empty: never stops.
+   */
+  std::function<bool(double)> afterBatch;
+};
+
+/// Seconds spent by the last Draw, and how it ended.
+struct BackendTimes
+{
+  double upload = 0;    ///< OpenGL: buffer upload; CPU: read-back of depth and colour, image upload
+  double draw = 0;      ///< OpenGL: the draw calls; CPU: the quad that writes the image
+  double composite = 0; ///< CPU: compositing on the CPU
+  double decompose = 0; ///< decomposition of the batches (included in the pipeline's times)
+  int batches = 0;      ///< batches drawn
+  bool stopped = false; ///< afterBatch stopped the frame
+};
+
+class RenderBackend
+{
+public:
+  virtual ~RenderBackend() = default;
+
+  /**
+   * Whether every fragment this backend draws into `window` (with `floatFramebuffer` as the
+   * frame will ask) is sampled at a pixel centre only, so that the pipeline may cull cells
+   * whose projection covers no pixel centre. Ask with the window's framebuffer bound.
+   */
+  virtual bool SamplesPixelCentresOnly(
+    vtkOpenGLRenderWindow* window, bool floatFramebuffer) const = 0;
+
+  /**
+   * Draws the prepared frame over what the renderer drew so far (the colour there, and the
+   * depth of its opaque geometry). Returns false, with a message in Error(), when an OpenGL
+   * call failed; the window's framebuffer is then left as it was whenever the failure came
+   * before the backend wrote to it (the CPU backend checks every read before it writes).
+   */
+  virtual bool Draw(const BackendFrame& frame, BackendTimes& times) = 0;
+
+  /// Frees the OpenGL objects; `window` is the window whose context owns them, current.
+  virtual void ReleaseGraphicsResources(vtkWindow* window) = 0;
+
+  const std::string& Error() const { return this->ErrorMessage; }
+
+protected:
+  std::string ErrorMessage;
+};
+
+/**
+ * The pending OpenGL errors as one string of names ("GL_INVALID_OPERATION, ..."), and the
+ * error state cleared; empty when there was none.
+ */
+std::string TakeOpenGLErrors();
+
+/// Whether the framebuffer bound for drawing is multisampled.
+bool DrawFramebufferIsMultisampled();
+
+} // namespace mtpt
+
+#endif

@@ -1,0 +1,154 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "VolumeInput.h"
+
+#include "vtkAbstractVolumeMapper.h"
+#include "vtkCamera.h"
+#include "vtkColorTransferFunction.h"
+#include "vtkDataArray.h"
+#include "vtkMatrix4x4.h"
+#include "vtkNew.h"
+#include "vtkRenderer.h"
+#include "vtkUnstructuredGridBase.h"
+#include "vtkVolume.h"
+#include "vtkVolumeProperty.h"
+
+#include <sstream>
+
+namespace mtpt
+{
+
+namespace
+{
+
+/// " (selected: the point array named 'x', which the input does not have)" for field-data
+/// selections; empty for the default and the active-scalars modes.
+std::string DescribeSelection(int scalarMode, int accessMode, int arrayId, const char* name)
+{
+  const bool pointField = scalarMode == VTK_SCALAR_MODE_USE_POINT_FIELD_DATA;
+  if (!pointField && scalarMode != VTK_SCALAR_MODE_USE_CELL_FIELD_DATA)
+  {
+    return {};
+  }
+  std::ostringstream selection;
+  selection << " (selected: the " << (pointField ? "point" : "cell") << " array ";
+  if (accessMode == VTK_GET_ARRAY_BY_NAME)
+  {
+    selection << "named '" << (name ? name : "") << "'";
+  }
+  else
+  {
+    selection << "number " << arrayId;
+  }
+  selection << ", which the input does not have)";
+  return selection.str();
+}
+
+/// The component the property asks for (-1: magnitude), checked against the array.
+void ChooseComponent(vtkVolumeProperty* property, ScalarSelection& selected)
+{
+  const int components = selected.array->GetNumberOfComponents();
+  bool byComponent = false;
+  int wanted = 0;
+  if (property && property->GetColorChannels(0) == 1)
+  {
+    byComponent = true; // a gray transfer function maps the first component
+  }
+  else if (property &&
+    property->GetRGBTransferFunction(0)->GetVectorMode() == vtkScalarsToColors::COMPONENT)
+  {
+    byComponent = true;
+    wanted = property->GetRGBTransferFunction(0)->GetVectorComponent();
+  }
+  if (components == 1 || !byComponent)
+  {
+    selected.component = components == 1 ? 0 : -1;
+    return;
+  }
+  if (wanted < 0 || wanted >= components)
+  {
+    const int used = wanted < 0 ? 0 : components - 1;
+    std::ostringstream warning;
+    const char* name = selected.array->GetName();
+    warning << "the colour transfer function selects component " << wanted << " of the array '"
+            << (name ? name : "") << "', which has components 0 to " << components - 1
+            << "; using component " << used;
+    selected.warning = warning.str();
+    wanted = used;
+  }
+  selected.component = wanted;
+}
+
+} // namespace
+
+ScalarSelection SelectScalars(
+  vtkUnstructuredGridBase* input, vtkAbstractVolumeMapper* mapper, vtkVolumeProperty* property)
+{
+  const int mode = mapper ? mapper->GetScalarMode() : VTK_SCALAR_MODE_DEFAULT;
+  const int access = mapper ? mapper->GetArrayAccessMode() : VTK_GET_ARRAY_BY_ID;
+  const int id = mapper ? mapper->GetArrayId() : -1;
+  const char* name = mapper ? mapper->GetArrayName() : nullptr;
+  ScalarSelection selected;
+  int cellFlag = 0;
+  selected.array = vtkAbstractMapper::GetScalars(input, mode, access, id, name, cellFlag);
+  if (!selected.array)
+  {
+    selected.error = "the input has no scalars to map" + DescribeSelection(mode, access, id, name) +
+      ": give it point or cell scalars, or select an existing array with "
+      "SelectScalarArray() and SetScalarMode()";
+    return selected;
+  }
+  selected.cellData = cellFlag != 0;
+  const vtkIdType needed = cellFlag ? input->GetNumberOfCells() : input->GetNumberOfPoints();
+  if (selected.array->GetNumberOfTuples() < needed)
+  {
+    std::ostringstream error;
+    const char* arrayName = selected.array->GetName();
+    error << "the scalar array '" << (arrayName ? arrayName : "") << "' has "
+          << selected.array->GetNumberOfTuples() << " tuples for " << needed
+          << (cellFlag ? " cells" : " points");
+    selected.error = error.str();
+    selected.array = nullptr;
+    return selected;
+  }
+  ChooseComponent(property, selected);
+  return selected;
+}
+
+void ViewMatrices(vtkRenderer* renderer, vtkVolume* volume, Matrix4& modelView, Matrix4& projection)
+{
+  auto copy = [](vtkMatrix4x4* m, Matrix4& out)
+  {
+    for (int r = 0; r < 4; ++r)
+    {
+      for (int c = 0; c < 4; ++c)
+      {
+        out[4 * r + c] = m->GetElement(r, c);
+      }
+    }
+  };
+  vtkCamera* camera = renderer->GetActiveCamera();
+  vtkNew<vtkMatrix4x4> eye;
+  vtkMatrix4x4::Multiply4x4(camera->GetModelViewTransformMatrix(), volume->GetMatrix(), eye);
+  copy(eye, modelView);
+  copy(
+    camera->GetProjectionTransformMatrix(renderer->GetTiledAspectRatio(), -1.0, 1.0), projection);
+}
+
+double UnitDistance(vtkVolumeProperty* property, std::string* warning)
+{
+  const double unitDistance = property->GetScalarOpacityUnitDistance(0);
+  if (unitDistance > 0)
+  {
+    return unitDistance;
+  }
+  if (warning)
+  {
+    std::ostringstream message;
+    message << "the volume property's ScalarOpacityUnitDistance is " << unitDistance
+            << "; it must be positive, using 1";
+    *warning = message.str();
+  }
+  return 1.0;
+}
+
+} // namespace mtpt

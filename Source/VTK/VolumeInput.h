@@ -1,0 +1,63 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file VolumeInput.h
+ * @brief Private glue: what a frame reads from a VTK scene, written once for the mapper and
+ * the reference renderer so that both see the same scalars, camera and opacity scale.
+ */
+#ifndef mtpt_VolumeInput_h
+#define mtpt_VolumeInput_h
+
+#include "mtpt/MeshView.h"
+
+#include <string>
+
+class vtkAbstractVolumeMapper;
+class vtkDataArray;
+class vtkRenderer;
+class vtkUnstructuredGridBase;
+class vtkVolume;
+class vtkVolumeProperty;
+
+namespace mtpt
+{
+
+/// The scalars a volume colours by, chosen by VTK's rules (see SelectScalars).
+struct ScalarSelection
+{
+  vtkDataArray* array = nullptr; ///< null: nothing usable (Error says why)
+  bool cellData = false;         ///< one value per cell rather than per point
+  int component = -1;            ///< the component used; -1: the magnitude
+  std::string error;             ///< why no array was selected; empty when one was
+  std::string warning;           ///< a request that could not be honoured as made
+};
+
+/**
+ * The scalars of `input` that `mapper` (null: VTK's defaults) selects with its scalar mode
+ * and array selection (point or cell data, by name or id), as every VTK mapper selects
+ * them, and the component to use: the colour transfer function's vector component in
+ * COMPONENT vector mode, component 0 for a gray transfer function, otherwise the magnitude
+ * (single-component arrays: the value). A component the array does not have is replaced
+ * by the nearest one with a warning. No array, or one shorter than the points or cells it
+ * should cover, is an error naming the selection (a misspelt array name is the usual
+ * cause).
+ */
+ScalarSelection SelectScalars(
+  vtkUnstructuredGridBase* input, vtkAbstractVolumeMapper* mapper, vtkVolumeProperty* property);
+
+/**
+ * The matrices of a frame of `volume` in `renderer`, as the mapper draws it: model-view =
+ * the active camera's view transform times the volume's matrix; projection = the camera's
+ * for the renderer's tiled aspect ratio with OpenGL's depth range.
+ */
+void ViewMatrices(
+  vtkRenderer* renderer, vtkVolume* volume, Matrix4& modelView, Matrix4& projection);
+
+/**
+ * The property's ScalarOpacityUnitDistance, or 1 when it is not positive (then `warning`
+ * says so; VTK's own mappers divide by it unchecked).
+ */
+double UnitDistance(vtkVolumeProperty* property, std::string* warning = nullptr);
+
+} // namespace mtpt
+
+#endif
