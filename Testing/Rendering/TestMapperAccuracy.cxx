@@ -145,6 +145,7 @@ TEST_F(MapperAccuracy, PreIntegrationCapturesNarrowOpacityPeaks)
   Errors ours, theirs;
   Measure(s, "box-narrow-peak", Mapper::PRE_INTEGRATED_SHADING, ours, theirs);
   EXPECT_LT(ours.rmse, 0.005);           // measured 0.0016
+  EXPECT_LT(ours.worst, 0.03);           // measured 0.007
   EXPECT_LT(ours.rmse, theirs.rmse / 4); // measured VTK PT 0.073 (worst pixel 0.45)
 }
 

@@ -286,6 +286,7 @@ TEST_P(MapperCellTypes, RenderAsTheGridSplitBeforehand)
               << ": RMSE against the grid split beforehand " << d.rmse << " (bound "
               << SplitRMSEBound << "), worst channel " << d.worst << "\n";
     EXPECT_LE(d.rmse, SplitRMSEBound);
+    EXPECT_LE(d.worst, 0.01) << "measured 0: the same tetrahedra";
   }
   EXPECT_TRUE(this->Observer->errors.empty());
   EXPECT_TRUE(this->Observer->warnings.empty());

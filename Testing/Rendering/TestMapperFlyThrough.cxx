@@ -30,7 +30,8 @@ using Mapper = vtkMultiThreadedProjectedTetrahedraMapper;
 struct FrameError
 {
   double rmse = 1;
-  int holes = 0; ///< pixels the reference covers (> 0.05 from the background) left empty
+  double worst = 1; ///< largest channel difference
+  int holes = 0;    ///< pixels the reference covers (> 0.05 from the background) left empty
 };
 
 /// One frame of `mapper` from `eye` looking along -z (slightly tilted) with the given near
@@ -65,6 +66,7 @@ FrameError Frame(vtkUnstructuredGridVolumeMapper* mapper, vtkUnstructuredGrid* g
   EXPECT_TRUE(vtkMTPTReferenceRenderer::ReadPixels(renderer, drawn));
   EXPECT_TRUE(vtkMTPTReferenceRenderer::CompareImages(drawn, exact, result));
   e.rmse = result[0];
+  e.worst = result[2];
   for (vtkIdType p = 0; p < exact->GetNumberOfTuples(); ++p)
   {
     double exactOff = 0, drawnOff = 0;
@@ -95,8 +97,9 @@ TEST(MapperFlyThrough, NoHolesAndTheReferenceImageAllTheWayThrough)
       mapper->SetBackendToCPU();
       mapper->SetShadingMode(shading);
       const FrameError ours = Frame(mapper, grid, property, eyeZ, 0.01, exact);
-      std::printf("eye z %5.2f %-14s: RMSE %.4f, holes %d, cells cut by the near plane %lld\n",
-        eyeZ, mapper->GetShadingModeAsString(), ours.rmse, ours.holes,
+      std::printf("eye z %5.2f %-14s: RMSE %.4f, worst %.3f, holes %d, cells cut by the near "
+                  "plane %lld\n",
+        eyeZ, mapper->GetShadingModeAsString(), ours.rmse, ours.worst, ours.holes,
         static_cast<long long>(mapper->GetNumberOfNearClippedCells()));
       EXPECT_EQ(ours.holes, 0) << eyeZ;
       if (eyeZ < 1.0 && eyeZ > -1.0)
@@ -105,7 +108,11 @@ TEST(MapperFlyThrough, NoHolesAndTheReferenceImageAllTheWayThrough)
       }
       // Pre-integrated shading is perspective-exact; VTK-compatible interpolates lengths
       // linearly in screen space, as VTK's PT does, which errs most in cells at the eye.
-      EXPECT_LT(ours.rmse, shading == Mapper::PRE_INTEGRATED_SHADING ? 0.006 : 0.04) << eyeZ;
+      // Measured: pre-integrated RMSE 0.0012-0.0019, worst 0.003-0.004; VTK-compatible up
+      // to 0.037 and 0.071 (the eye inside the box).
+      const bool exact = shading == Mapper::PRE_INTEGRATED_SHADING;
+      EXPECT_LT(ours.rmse, exact ? 0.006 : 0.04) << eyeZ;
+      EXPECT_LT(ours.worst, exact ? 0.02 : 0.12) << eyeZ;
     }
     vtkNew<vtkProjectedTetrahedraMapper> pt;
     const FrameError theirs = Frame(pt, grid, property, eyeZ, 0.01, exact);
