@@ -105,7 +105,7 @@ run_asan() {
   local t0 t1 t2
   t0=$(now)
   if ! configure "$asan_dir" gcc g++ -DMTPT_SANITIZER=address -DMTPT_BUILD_FUZZERS=OFF ||
-    ! step build 1200 cmake --build "$asan_dir" --parallel "$jobs" --target mtpt_core_tests; then
+    ! step build 1200 cmake --build "$asan_dir" --parallel "$jobs"; then
     finish asan FAIL "build failed after $(($(now) - t0)) s"
     return
   fi
@@ -137,7 +137,7 @@ run_tsan() {
     return
   fi
   if ! configure "$tsan_dir" clang clang++ -DMTPT_SANITIZER=thread -DMTPT_BUILD_FUZZERS=OFF ||
-    ! step build 1200 cmake --build "$tsan_dir" --parallel "$jobs" --target mtpt_core_tests; then
+    ! step build 1200 cmake --build "$tsan_dir" --parallel "$jobs"; then
     finish tsan FAIL "build failed after $(($(now) - t0)) s"
     return
   fi
