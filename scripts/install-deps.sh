@@ -10,6 +10,8 @@ packages=(
   xvfb xauth                              # headless OpenGL (Mesa llvmpipe) for image tests
   paraview paraview-dev openmpi-bin       # ParaView 5.11 plugin (its own VTK 9.2), MPI pvbatch
   clang libomp-dev libclang-rt-14-dev     # ThreadSanitizer with an OpenMP runtime it can see, libFuzzer
+  libhwy-dev                              # Google Highway: SIMD compositor, run-time dispatch
+  libcli11-dev                            # command-line parsing of the benchmarks and the example
 )
 
 missing=()

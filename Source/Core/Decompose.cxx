@@ -3,6 +3,7 @@
 
 #include "detail/MeshAccess.h"
 #include "detail/Parallel.h"
+#include "detail/PixelCoverage.h"
 
 #if defined(__x86_64__) || defined(_M_X64)
 #include <immintrin.h>
@@ -171,35 +172,33 @@ inline bool Drawable(const ProjectedPoint* const c[4], const float scalars[4])
   return AllUsable(c) && std::isfinite(scalars[0] + scalars[1] + scalars[2] + scalars[3]);
 }
 
-/// The decomposition of one tetrahedron into a slot whose indices start at `base`.
-inline Projection Decompose(const ProjectedPoint* const c[4], const float scalars[4],
-  TetVertex out[5], std::uint32_t indices[12], std::uint32_t base)
+/**
+ * The geometry of one projected tetrahedron: its classification, the record of its thick
+ * vertex (the ray through it enters and leaves the tetrahedron at two points, both found in
+ * eye space with perspective-correct parameters, so their distance is the exact eye-space
+ * segment length; no lookup table), and its silhouette as a cyclic list of corners. Both
+ * the OpenGL slot and the CPU compositor's fan are written from it, so the two backends
+ * draw the same triangles with the same values.
+ */
+struct FanGeometry
 {
-  Projection p;
-  if (!Drawable(c, scalars))
-  {
-    WriteDegenerateSlot(out, indices, base);
-    return p;
-  }
-  const double x[4] = { c[0]->x, c[1]->x, c[2]->x, c[3]->x };
-  const double y[4] = { c[0]->y, c[1]->y, c[2]->y, c[3]->y };
-  p = ClassifyProjection(x, y);
+  Projection projection;
+  TetVertex thick;
+  int boundary[4] = { 0, 0, 0, 0 }; ///< corners in cyclic order around the thick vertex
+  int count = 0;                    ///< 3 (triangle projection) or 4 (quadrilateral)
+  int thickSlot = 4;                ///< the slot vertex the thick vertex takes
+};
+
+/// False (with projection NotDrawable) when the tetrahedron cannot be drawn.
+inline bool ComputeFanGeometry(const ProjectedPoint* const c[4], const float scalars[4],
+  const double x[4], const double y[4], FanGeometry& g)
+{
+  const Projection& p = g.projection = ClassifyProjection(x, y);
   if (p.kind == ProjectionClass::NotDrawable)
   {
-    WriteDegenerateSlot(out, indices, base);
-    return p;
+    return false;
   }
-  for (int i = 0; i < 4; ++i)
-  {
-    out[i] = TetVertex{ static_cast<float>(x[i]), static_cast<float>(y[i]),
-      static_cast<float>(c[i]->z), scalars[i], scalars[i], 0.0f };
-  }
-
-  // The thick vertex: the ray through it enters the tetrahedron at one point and leaves
-  // at another. Both are found in eye space with perspective-correct parameters, so their
-  // distance is the exact eye-space ray segment length (no lookup table).
   double first[3], second[3], firstZ, secondZ, firstScalar, secondScalar, thickX, thickY;
-  int thickSlot;
   if (p.kind == ProjectionClass::Quadrilateral)
   {
     const int a = p.vertex[0], b = p.vertex[1], d0 = p.vertex[2], d1 = p.vertex[3];
@@ -219,14 +218,13 @@ inline Projection Decompose(const ProjectedPoint* const c[4], const float scalar
     secondZ = c[d0]->z + p.beta * (c[d1]->z - c[d0]->z);
     thickX = x[a] + p.alpha * (x[b] - x[a]);
     thickY = y[a] + p.alpha * (y[b] - y[a]);
-    thickSlot = 4;
-    // The quadrilateral's boundary runs a, d0, b, d1; fan it around the crossing.
-    const std::uint32_t fan[12] = { 0u + a, 0u + d0, 4u, 0u + d0, 0u + b, 4u, 0u + b, 0u + d1, 4u,
-      0u + d1, 0u + a, 4u };
-    for (int i = 0; i < 12; ++i)
-    {
-      indices[i] = base + fan[i];
-    }
+    g.thickSlot = 4;
+    // The quadrilateral's boundary runs a, d0, b, d1.
+    g.count = 4;
+    g.boundary[0] = a;
+    g.boundary[1] = d0;
+    g.boundary[2] = b;
+    g.boundary[3] = d1;
   }
   else
   {
@@ -249,26 +247,90 @@ inline Projection Decompose(const ProjectedPoint* const c[4], const float scalar
     secondZ = p.weights[0] * c[j0]->z + p.weights[1] * c[j1]->z + p.weights[2] * c[j2]->z;
     thickX = x[t];
     thickY = y[t];
-    thickSlot = t;
-    const std::uint32_t fan[12] = { 0u + j0, 0u + j1, 0u + t, 0u + j1, 0u + j2, 0u + t, 0u + j2,
-      0u + j0, 0u + t, 0u + t, 0u + t, 0u + t };
-    for (int i = 0; i < 12; ++i)
-    {
-      indices[i] = base + fan[i];
-    }
+    g.thickSlot = t;
+    g.count = 3;
+    g.boundary[0] = j0;
+    g.boundary[1] = j1;
+    g.boundary[2] = j2;
   }
   const double dx = first[0] - second[0], dy = first[1] - second[1], dz = first[2] - second[2];
   const bool firstInFront = firstZ <= secondZ;
-  out[thickSlot] = TetVertex{ static_cast<float>(thickX), static_cast<float>(thickY),
+  g.thick = TetVertex{ static_cast<float>(thickX), static_cast<float>(thickY),
     static_cast<float>(firstInFront ? firstZ : secondZ),
     static_cast<float>(firstInFront ? firstScalar : secondScalar),
     static_cast<float>(firstInFront ? secondScalar : firstScalar),
     static_cast<float>(std::sqrt(dx * dx + dy * dy + dz * dz)) };
-  if (thickSlot != 4)
+  return true;
+}
+
+/// The projected (x, y) of the corners, and whether the tetrahedron can be drawn at all.
+inline bool Corners(
+  const ProjectedPoint* const c[4], const float scalars[4], double x[4], double y[4])
+{
+  for (int i = 0; i < 4; ++i)
   {
-    out[4] = out[thickSlot];
+    x[i] = c[i]->x;
+    y[i] = c[i]->y;
   }
-  return p;
+  return Drawable(c, scalars);
+}
+
+/// The decomposition of one tetrahedron into a slot whose indices start at `base`.
+inline Projection Decompose(const ProjectedPoint* const c[4], const float scalars[4],
+  TetVertex out[5], std::uint32_t indices[12], std::uint32_t base)
+{
+  double x[4], y[4];
+  FanGeometry g;
+  if (!Corners(c, scalars, x, y) || !ComputeFanGeometry(c, scalars, x, y, g))
+  {
+    WriteDegenerateSlot(out, indices, base);
+    return g.projection;
+  }
+  for (int i = 0; i < 4; ++i)
+  {
+    out[i] = TetVertex{ static_cast<float>(x[i]), static_cast<float>(y[i]),
+      static_cast<float>(c[i]->z), scalars[i], scalars[i], 0.0f };
+  }
+  out[g.thickSlot] = g.thick;
+  if (g.thickSlot != 4)
+  {
+    out[4] = g.thick; // an unused copy: every slot vertex holds a finite record
+  }
+  // Triangle i is (boundary[i], boundary[i+1], thick); a triangle projection pads its
+  // fourth triangle as degenerate (all three indices on the thick vertex).
+  const auto thick = static_cast<std::uint32_t>(g.thickSlot);
+  for (int i = 0; i < 4; ++i)
+  {
+    const bool real = i < g.count;
+    indices[3 * i + 0] = base + (real ? static_cast<std::uint32_t>(g.boundary[i]) : thick);
+    indices[3 * i + 1] =
+      base + (real ? static_cast<std::uint32_t>(g.boundary[(i + 1) % g.count]) : thick);
+    indices[3 * i + 2] = base + thick;
+  }
+  return g.projection;
+}
+
+/// The decomposition of one tetrahedron into a fan (Decompose.h).
+inline Projection DecomposeToFan(
+  const ProjectedPoint* const c[4], const float scalars[4], Fan& fan)
+{
+  double x[4], y[4];
+  FanGeometry g;
+  fan = Fan{};
+  if (!Corners(c, scalars, x, y) || !ComputeFanGeometry(c, scalars, x, y, g))
+  {
+    return g.projection;
+  }
+  fan.centre = g.thick;
+  for (int i = 0; i < g.count; ++i)
+  {
+    const int k = g.boundary[i];
+    fan.boundary[i] = TetVertex{ static_cast<float>(x[k]), static_cast<float>(y[k]),
+      static_cast<float>(c[k]->z), scalars[k], scalars[k], 0.0f };
+  }
+  fan.count = static_cast<std::uint8_t>(g.count);
+  fan.closed = 1;
+  return g.projection;
 }
 
 /**
@@ -322,27 +384,6 @@ inline bool CanStream(const TetVertex* vertices, const std::uint32_t* indices)
            7u) == 0;
 }
 
-/// Whether the window-space bounding box of the corners contains a pixel centre of the
-/// viewport. Conservative by 1e-6 pixel, so rounding never culls a covering cell.
-inline bool CoversPixelCentre(const ProjectedPoint* const c[4], int width, int height)
-{
-  double minX = c[0]->x, maxX = c[0]->x, minY = c[0]->y, maxY = c[0]->y;
-  for (int i = 1; i < 4; ++i)
-  {
-    minX = std::min(minX, c[i]->x);
-    maxX = std::max(maxX, c[i]->x);
-    minY = std::min(minY, c[i]->y);
-    maxY = std::max(maxY, c[i]->y);
-  }
-  constexpr double Margin = 1e-6;
-  // Pixel centres x + 0.5 for x in [0, width): window x = (ndc + 1) / 2 * width.
-  const double x0 = std::max(0.0, std::ceil((minX + 1.0) * 0.5 * width - 0.5 - Margin));
-  const double x1 = std::min(width - 1.0, std::floor((maxX + 1.0) * 0.5 * width - 0.5 + Margin));
-  const double y0 = std::max(0.0, std::ceil((minY + 1.0) * 0.5 * height - 0.5 - Margin));
-  const double y1 = std::min(height - 1.0, std::floor((maxY + 1.0) * 0.5 * height - 0.5 + Margin));
-  return x0 <= x1 && y0 <= y1;
-}
-
 /// The tetrahedron `corners` into slot-local records with global index base `base`,
 /// culled when it covers no pixel centre of the viewport.
 inline ProjectionClass DecomposeCorners(const DecomposeInput& input,
@@ -350,7 +391,7 @@ inline ProjectionClass DecomposeCorners(const DecomposeInput& input,
   TetVertex slotVertices[5], std::uint32_t slotIndices[12])
 {
   const bool cull = input.viewportWidth > 0 && input.viewportHeight > 0 && AllUsable(corners) &&
-    !CoversPixelCentre(corners, input.viewportWidth, input.viewportHeight);
+    !detail::CoversPixelCentre(corners, input.viewportWidth, input.viewportHeight);
   if (cull)
   {
     WriteDegenerateSlot(slotVertices, slotIndices, base);
@@ -359,15 +400,89 @@ inline ProjectionClass DecomposeCorners(const DecomposeInput& input,
   return Decompose(corners, scalars, slotVertices, slotIndices, base).kind;
 }
 
-/// Slot k, holding `cell`.
-template <typename Access>
-inline void DecomposeSlot(const Access& cells, const DecomposeInput& input,
-  const float* cellScalars, std::uint32_t cell, std::int64_t k, TetVertex* vertices,
-  std::uint32_t* indices, ProjectionClass* classes, bool streaming)
+/// Writes slots (the OpenGL buffers): slot k at vertices[5k], indices[12k].
+struct SlotWriter
 {
-  const auto base = static_cast<std::uint32_t>(5 * k);
-  TetVertex slotVertices[5];
-  std::uint32_t slotIndices[12];
+  TetVertex* vertices;
+  std::uint32_t* indices;
+  bool streaming;
+
+  ProjectionClass Cell(const DecomposeInput& input, const ProjectedPoint* const corners[4],
+    const float scalars[4], std::int64_t k) const
+  {
+    TetVertex slotVertices[5];
+    std::uint32_t slotIndices[12];
+    const ProjectionClass kind = DecomposeCorners(
+      input, corners, scalars, static_cast<std::uint32_t>(5 * k), slotVertices, slotIndices);
+    StoreSlot(slotVertices, slotIndices, vertices + 5 * k, indices + 12 * k, streaming);
+    return kind;
+  }
+  void NotDrawable(std::int64_t k) const
+  {
+    TetVertex slotVertices[5];
+    std::uint32_t slotIndices[12];
+    WriteDegenerateSlot(slotVertices, slotIndices, static_cast<std::uint32_t>(5 * k));
+    StoreSlot(slotVertices, slotIndices, vertices + 5 * k, indices + 12 * k, streaming);
+  }
+};
+
+/// The tetrahedron `corners` as a fan, count 0 when it covers no pixel centre.
+inline ProjectionClass DecomposeFanCorners(const DecomposeInput& input,
+  const ProjectedPoint* const corners[4], const float scalars[4], Fan& fan)
+{
+  const bool cull = input.viewportWidth > 0 && input.viewportHeight > 0 && AllUsable(corners) &&
+    !detail::CoversPixelCentre(corners, input.viewportWidth, input.viewportHeight);
+  if (cull)
+  {
+    fan = Fan{};
+    return ProjectionClass::CoversNoPixel;
+  }
+  return DecomposeToFan(corners, scalars, fan).kind;
+}
+
+/// Copies a fan to its place with non-temporal stores where available (see StoreSlot).
+inline void StoreFan(const Fan& source, Fan* target, bool streaming)
+{
+#if defined(__x86_64__) || defined(_M_X64)
+  if (streaming)
+  {
+    long long words[sizeof(Fan) / 8];
+    std::memcpy(words, &source, sizeof(Fan));
+    auto* targetWords = reinterpret_cast<long long*>(target);
+    for (std::size_t i = 0; i < sizeof(Fan) / 8; ++i)
+    {
+      _mm_stream_si64(targetWords + i, words[i]);
+    }
+    return;
+  }
+#endif
+  (void)streaming;
+  *target = source;
+}
+
+/// Writes fans (the CPU compositor's input): fan k at fans[k].
+struct FanWriter
+{
+  Fan* fans;
+  bool streaming;
+
+  ProjectionClass Cell(const DecomposeInput& input, const ProjectedPoint* const corners[4],
+    const float scalars[4], std::int64_t k) const
+  {
+    Fan fan;
+    const ProjectionClass kind = DecomposeFanCorners(input, corners, scalars, fan);
+    StoreFan(fan, fans + k, streaming);
+    return kind;
+  }
+  void NotDrawable(std::int64_t k) const { StoreFan(Fan{}, fans + k, streaming); }
+};
+
+/// Slot (or fan) k, holding `cell`.
+template <typename Access, typename Writer>
+inline void DecomposeCell(const Access& cells, const DecomposeInput& input,
+  const float* cellScalars, std::uint32_t cell, std::int64_t k, const Writer& writer,
+  ProjectionClass* classes)
+{
   std::int64_t ids[4];
   ProjectionClass kind = ProjectionClass::NotDrawable;
   if (cells.TetrahedronPoints(cell, ids))
@@ -379,13 +494,12 @@ inline void DecomposeSlot(const Access& cells, const DecomposeInput& input,
     {
       scalars[i] = cellScalars ? cellScalars[cell] : corners[i]->scalar;
     }
-    kind = DecomposeCorners(input, corners, scalars, base, slotVertices, slotIndices);
+    kind = writer.Cell(input, corners, scalars, k);
   }
   else
   {
-    WriteDegenerateSlot(slotVertices, slotIndices, base);
+    writer.NotDrawable(k);
   }
-  StoreSlot(slotVertices, slotIndices, vertices + 5 * k, indices + 12 * k, streaming);
   if (classes)
   {
     classes[k] = kind;
@@ -421,22 +535,18 @@ void DecomposeAll(const Access& cells, const DecomposeInput& input, const SortKe
   int threads)
 {
   const float* cellScalars = CellScalars(input);
-  const bool streaming = CanStream(vertices, indices);
+  const SlotWriter writer{ vertices, indices, CanStream(vertices, indices) };
   ParallelSlots(static_cast<std::int64_t>(count), threads,
     [&](std::int64_t k)
-    {
-      DecomposeSlot(
-        cells, input, cellScalars, CellOfKey(order[k]), k, vertices, indices, classes, streaming);
-    });
+    { DecomposeCell(cells, input, cellScalars, CellOfKey(order[k]), k, writer, classes); });
 }
 
-template <typename Access>
+template <typename Access, typename Writer>
 void DecomposeAllByRank(const Access& cells, const DecomposeInput& input, const std::uint32_t* rank,
-  std::size_t firstRank, std::size_t count, TetVertex* vertices, std::uint32_t* indices,
-  ProjectionClass* classes, int threads)
+  std::size_t firstRank, std::size_t count, const Writer& writer, ProjectionClass* classes,
+  int threads)
 {
   const float* cellScalars = CellScalars(input);
-  const bool streaming = CanStream(vertices, indices);
   ParallelSlots(static_cast<std::int64_t>(input.cells.cellCount), threads,
     [&](std::int64_t c)
     {
@@ -444,8 +554,8 @@ void DecomposeAllByRank(const Access& cells, const DecomposeInput& input, const 
       const std::uint64_t k = static_cast<std::uint64_t>(rank[c]) - firstRank;
       if (rank[c] != NotInOrder && k < count)
       {
-        DecomposeSlot(cells, input, cellScalars, static_cast<std::uint32_t>(c),
-          static_cast<std::int64_t>(k), vertices, indices, classes, streaming);
+        DecomposeCell(cells, input, cellScalars, static_cast<std::uint32_t>(c),
+          static_cast<std::int64_t>(k), writer, classes);
       }
     });
 }
@@ -504,12 +614,32 @@ void DecomposeTetrahedraByRank(const DecomposeInput& input, const std::uint32_t*
   ProjectionClass* classes, int threads)
 {
   const int nthreads = detail::ResolveThreads(threads);
+  const SlotWriter writer{ vertices, indices, CanStream(vertices, indices) };
   detail::DispatchCells(input.cells, input.pointCount,
     [&](const auto& cells)
-    {
-      DecomposeAllByRank(
-        cells, input, rank, firstRank, count, vertices, indices, classes, nthreads);
-    });
+    { DecomposeAllByRank(cells, input, rank, firstRank, count, writer, classes, nthreads); });
+}
+
+void DecomposeFansByRank(const DecomposeInput& input, const std::uint32_t* rank,
+  std::size_t firstRank, std::size_t count, Fan* fans, ProjectionClass* classes, int threads)
+{
+  const int nthreads = detail::ResolveThreads(threads);
+  const FanWriter writer{ fans, (reinterpret_cast<std::uintptr_t>(fans) & 7u) == 0 };
+  detail::DispatchCells(input.cells, input.pointCount,
+    [&](const auto& cells)
+    { DecomposeAllByRank(cells, input, rank, firstRank, count, writer, classes, nthreads); });
+}
+
+Projection DecomposeTetrahedronToFan(
+  const ProjectedPoint* const corners[4], const float scalars[4], Fan& fan)
+{
+  return DecomposeToFan(corners, scalars, fan);
+}
+
+ProjectionClass DecomposeIntoFan(const DecomposeInput& input,
+  const ProjectedPoint* const corners[4], const float scalars[4], Fan& fan)
+{
+  return DecomposeFanCorners(input, corners, scalars, fan);
 }
 
 } // namespace mtpt

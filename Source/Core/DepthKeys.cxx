@@ -3,6 +3,7 @@
 
 #include "detail/MeshAccess.h"
 #include "detail/Parallel.h"
+#include "detail/PixelCoverage.h"
 
 #include <cmath>
 #include <cstring>
@@ -37,11 +38,18 @@ inline unsigned OutCode(const ProjectedPoint& p)
     (p.y > 1.0 ? 8u : 0u) | (p.z < -1.0 ? 16u : 0u) | (p.z > 1.0 ? 32u : 0u);
 }
 
-/// The key of `cell`; false if `cullFrustum` and all four points are usable and beyond one
-/// clip plane (the cell lies entirely outside the view volume).
+/// Why a cell was left out of the keys.
+enum class Verdict
+{
+  Kept,
+  OutsideFrustum,
+  CoversNoPixel
+};
+
+/// The key of `cell`, or why it is culled (see KeyCulling; null `culling`: none).
 template <typename Access>
-inline bool CellKey(const Access& cells, const ProjectedPoint* points, std::uint32_t cell,
-  bool perspective, bool cullFrustum, SortKey& key)
+inline Verdict CellKey(const Access& cells, const ProjectedPoint* points, std::uint32_t cell,
+  bool perspective, const KeyCulling* culling, SortKey& key)
 {
   std::int64_t ids[4];
   float depth = std::numeric_limits<float>::infinity();
@@ -59,9 +67,19 @@ inline bool CellKey(const Access& cells, const ProjectedPoint* points, std::uint
       outside &= OutCode(p);
       usable += p.usable;
     }
-    if (cullFrustum && usable == 4 && outside != 0)
+    if (culling && usable == 4)
     {
-      return false;
+      if (culling->frustum && outside != 0)
+      {
+        return Verdict::OutsideFrustum;
+      }
+      const ProjectedPoint* corners[4] = { points + ids[0], points + ids[1], points + ids[2],
+        points + ids[3] };
+      if (culling->viewportWidth > 0 && culling->viewportHeight > 0 &&
+        !detail::CoversPixelCentre(corners, culling->viewportWidth, culling->viewportHeight))
+      {
+        return Verdict::CoversNoPixel;
+      }
     }
     x *= 0.25;
     y *= 0.25;
@@ -71,7 +89,7 @@ inline bool CellKey(const Access& cells, const ProjectedPoint* points, std::uint
     depth = static_cast<float>(perspective ? x * x + y * y + z * z : -z);
   }
   key = MakeSortKey(depth, cell);
-  return true;
+  return Verdict::Kept;
 }
 
 } // namespace
@@ -87,33 +105,40 @@ void ComputeDepthKeys(const ProjectedPoint* points, std::size_t pointCount, cons
 #pragma omp parallel for num_threads(nthreads) schedule(static)
       for (std::int64_t c = 0; c < count; ++c)
       {
-        CellKey(access, points, static_cast<std::uint32_t>(c), perspective, false, keys[c]);
+        CellKey(access, points, static_cast<std::uint32_t>(c), perspective, nullptr, keys[c]);
       }
     });
 }
 
-std::size_t ComputeVisibleDepthKeys(const ProjectedPoint* points, std::size_t pointCount,
+KeyCounts ComputeVisibleDepthKeys(const ProjectedPoint* points, std::size_t pointCount,
   const CellsView& cells, const std::uint32_t* list, std::size_t listCount, bool perspective,
-  bool cullFrustum, SortKey* keys, int threads)
+  const KeyCulling& culling, SortKey* keys, int threads)
 {
   const std::size_t n = list ? listCount : cells.cellCount;
-  std::size_t kept = 0;
+  KeyCounts counts;
+  std::size_t pixelCulled = 0;
   detail::DispatchCells(cells, pointCount,
     [&](const auto& access)
     {
-      kept = detail::CompactInOrder(n, detail::ResolveThreads(threads), keys,
+      counts.kept = detail::CompactInOrder(n, detail::ResolveThreads(threads), keys,
         [&](std::size_t begin, std::size_t end, SortKey* out)
         {
-          std::size_t written = 0;
+          std::size_t written = 0, noPixel = 0;
           for (std::size_t i = begin; i < end; ++i)
           {
             const auto cell = list ? list[i] : static_cast<std::uint32_t>(i);
-            written += CellKey(access, points, cell, perspective, cullFrustum, out[written]);
+            const Verdict verdict = CellKey(access, points, cell, perspective, &culling, out[written]);
+            written += verdict == Verdict::Kept ? 1 : 0;
+            noPixel += verdict == Verdict::CoversNoPixel ? 1 : 0;
           }
+#pragma omp atomic
+          pixelCulled += noPixel;
           return written;
         });
     });
-  return kept;
+  counts.pixelCulled = pixelCulled;
+  counts.frustumCulled = n - counts.kept - pixelCulled;
+  return counts;
 }
 
 } // namespace mtpt

@@ -78,7 +78,8 @@ std::size_t FramePipeline::MemoryBytes() const
 {
   return Bytes(this->ProjectedPoints) + Bytes(this->CellRanges) + Bytes(this->Visible) +
     Bytes(this->NewVisible) + Bytes(this->SortedKeys) + Bytes(this->Scratch) + Bytes(this->Rank) +
-    Bytes(this->VertexBuffer) + Bytes(this->IndexBuffer) + Bytes(this->Classes) +
+    Bytes(this->VertexBuffer) + Bytes(this->IndexBuffer) + Bytes(this->FanBuffer) +
+    Bytes(this->Classes) +
     Bytes(this->Pieces) + Bytes(this->PieceKeys) + Bytes(this->Crossing) +
     this->Order->MemoryBytes();
 }
@@ -94,15 +95,18 @@ void FramePipeline::Release()
   std::vector<SortKey>().swap(this->SortedKeys);
   std::vector<SortKey>().swap(this->Scratch);
   std::vector<TetVertex>().swap(this->VertexBuffer);
+  std::vector<Fan>().swap(this->FanBuffer);
   std::vector<ProjectionClass>().swap(this->Classes);
   std::vector<NearPiece>().swap(this->Pieces);
   std::vector<SortKey>().swap(this->PieceKeys);
   std::vector<std::uint8_t>().swap(this->Crossing);
   this->Order = MakeVisibilityOrder(this->Order->Method(), this->MaxSubArraySize);
   this->HaveTransform = this->HaveRanges = this->HaveVisible = this->HaveOrder = false;
-  this->HaveDecomposition = false;
-  this->SortedSize = this->BatchCount = 0;
+  this->SlotWindow.valid = this->FanWindow.valid = false;
+  this->SortedSize = this->BatchCount = this->FanBatchCount = 0;
+  this->SlotWindow = this->FanWindow = Window{};
   ++this->BuffersVersion;
+  ++this->FansVersion;
 }
 
 void FramePipeline::SetOrderMutationForTesting(OrderMutation mutation)
@@ -126,12 +130,13 @@ bool FramePipeline::Prepare(const FrameInput& input, int threads)
   this->LastTimes = StageTimes{};
   this->LastStats = FrameStats{};
   this->LastStats.cells = n;
-  this->BatchCount = 0;
+  this->BatchCount = this->FanBatchCount = 0;
   this->WasStopped = false;
   if (n > MaxTetrahedra())
   {
     this->SortedSize = 0;
-    this->HaveOrder = this->HaveDecomposition = false;
+    this->HaveOrder = false;
+    this->SlotWindow.valid = this->FanWindow.valid = false;
     return false;
   }
   Inputs data;
@@ -148,7 +153,7 @@ bool FramePipeline::Prepare(const FrameInput& input, int threads)
   {
     this->Data = data;
     this->HaveTransform = this->HaveRanges = this->HaveVisible = this->HaveOrder = false;
-    this->HaveDecomposition = false;
+    this->SlotWindow.valid = this->FanWindow.valid = false;
   }
 
   const bool viewChanged = !this->HaveTransform || input.modelView != this->TransformModelView ||
@@ -193,7 +198,8 @@ bool FramePipeline::Continue(Stage finished)
   {
     this->WasStopped = true;
     // Whatever was kept may be incomplete: the next frame starts from the transform.
-    this->HaveOrder = this->HaveDecomposition = false;
+    this->HaveOrder = false;
+    this->SlotWindow.valid = this->FanWindow.valid = false;
     this->SortedSize = 0;
     return false;
   }
@@ -255,11 +261,14 @@ bool FramePipeline::UpdateOrder(
   const bool valid = this->HaveOrder && this->OrderPointsVersion == this->PointsVersion &&
     this->OrderVisibleVersion == this->VisibleVersion &&
     this->OrderPerspective == input.perspective && this->OrderCullFrustum == input.cullFrustum &&
+    this->OrderViewport[0] == input.viewportWidth &&
+    this->OrderViewport[1] == input.viewportHeight &&
     this->OrderMethodUsed == this->Order->Method() && this->OrderMutationUsed == this->Mutation;
   if (valid)
   {
     this->LastStats.orderReused = true;
     this->LastStats.frustumCulled = this->OrderFrustumCulled;
+    this->LastStats.pixelCulled = this->OrderPixelCulled;
     this->LastStats.nearClipped = this->OrderNearClipped;
     this->LastStats.nearPieces = this->Pieces.size();
     this->LastStats.sorted = this->SortedSize;
@@ -270,10 +279,15 @@ bool FramePipeline::UpdateOrder(
   const std::uint32_t* list = this->CullByOpacity ? this->Visible.data() : nullptr;
   const std::size_t listCount = this->CullByOpacity ? this->Visible.size() : n;
   this->SortedKeys.resize(listCount);
-  std::size_t count =
-    ComputeVisibleDepthKeys(this->ProjectedPoints.data(), input.points.count, input.cells, list,
-      listCount, input.perspective, input.cullFrustum, this->SortedKeys.data(), threads);
-  const std::size_t frustumCulled = listCount - count;
+  KeyCulling culling;
+  culling.frustum = input.cullFrustum;
+  culling.viewportWidth = input.viewportWidth;
+  culling.viewportHeight = input.viewportHeight;
+  const KeyCounts counts = ComputeVisibleDepthKeys(this->ProjectedPoints.data(),
+    input.points.count, input.cells, list, listCount, input.perspective, culling,
+    this->SortedKeys.data(), threads);
+  const std::size_t frustumCulled = counts.frustumCulled;
+  std::size_t count = counts.kept;
   this->SortedKeys.resize(count);
   const std::size_t nearClipped = this->ClipNearPlane(input, threads);
   count = this->SortedKeys.size();
@@ -294,7 +308,8 @@ bool FramePipeline::UpdateOrder(
   const bool samePermutation = this->Reuse && this->HaveOrder && !dataChanged && viewChanged &&
     this->OrderVisibleVersion == this->VisibleVersion &&
     this->OrderPerspective == input.perspective && this->OrderFrustumCulled == 0 &&
-    frustumCulled == 0 && nearClipped == 0 && this->OrderNearClipped == 0 &&
+    frustumCulled == 0 && this->OrderPixelCulled == 0 && counts.pixelCulled == 0 &&
+    nearClipped == 0 && this->OrderNearClipped == 0 &&
     count == this->SortedSize && angle < NearlySortedMaxAngle &&
     this->Mutation == OrderMutation::None;
   bool fromPrevious = false;
@@ -344,6 +359,9 @@ bool FramePipeline::UpdateOrder(
   this->OrderVisibleVersion = this->VisibleVersion;
   this->OrderPerspective = input.perspective;
   this->OrderCullFrustum = input.cullFrustum;
+  this->OrderViewport[0] = input.viewportWidth;
+  this->OrderViewport[1] = input.viewportHeight;
+  this->OrderPixelCulled = counts.pixelCulled;
   this->OrderMethodUsed = this->Order->Method();
   this->OrderMutationUsed = this->Mutation;
   this->OrderFrustumCulled = frustumCulled;
@@ -351,6 +369,7 @@ bool FramePipeline::UpdateOrder(
   std::copy(direction, direction + 3, this->OrderDirection);
   ++this->OrderVersion;
   this->LastStats.frustumCulled = frustumCulled;
+  this->LastStats.pixelCulled = counts.pixelCulled;
   this->LastStats.nearClipped = nearClipped;
   this->LastStats.nearPieces = this->Pieces.size();
   this->LastStats.sorted = count;
@@ -470,30 +489,32 @@ std::size_t FramePipeline::ClipNearPlane(const FrameInput& input, int threads)
   return clipped;
 }
 
-void FramePipeline::DecomposeBatch(std::size_t first, std::size_t count, int threads)
+bool FramePipeline::Window::Holds(
+  std::uint64_t order, std::size_t first, std::size_t count, const DecomposeInput& in) const
+{
+  return this->valid && this->orderVersion == order && this->first == first &&
+    this->count == count && this->viewport[0] == in.viewportWidth &&
+    this->viewport[1] == in.viewportHeight;
+}
+
+template <typename Cells, typename Piece>
+bool FramePipeline::DecomposeWindow(Window& window, std::size_t& first, std::size_t& count,
+  int threads, Cells&& decomposeCells, Piece&& decomposePiece)
 {
   first = std::min(first, this->SortedSize);
   count = std::min(count, this->SortedSize - first);
   ++this->LastStats.batches;
-  this->BatchCount = count;
   const DecomposeInput& in = this->DecomposeState;
-  if (this->Reuse && this->HaveDecomposition &&
-    this->DecomposedOrderVersion == this->OrderVersion && this->DecomposedFirst == first &&
-    this->DecomposedCount == count && this->DecomposedViewport[0] == in.viewportWidth &&
-    this->DecomposedViewport[1] == in.viewportHeight)
+  if (this->Reuse && window.Holds(this->OrderVersion, first, count, in))
   {
     this->LastStats.decompositionReused = true;
-    this->LastStats.pixelCulled += this->DecomposedPixelCulled;
-    this->LastStats.notDrawable += this->DecomposedNotDrawable;
-    return;
+    this->LastStats.pixelCulled += window.pixelCulled;
+    this->LastStats.notDrawable += window.notDrawable;
+    return false;
   }
   const auto start = Clock::now();
-  ++this->BuffersVersion;
-  EnsureSize(this->VertexBuffer, VerticesPerTetrahedron * count);
-  EnsureSize(this->IndexBuffer, IndicesPerTetrahedron * count);
   EnsureSize(this->Classes, count);
-  DecomposeTetrahedraByRank(in, this->Rank.data(), first, count, this->VertexBuffer.data(),
-    this->IndexBuffer.data(), this->Classes.data(), threads);
+  decomposeCells(in, first, count);
   // Pieces of cells cut by the near plane: ranks after the cells'.
   const auto pieces = static_cast<std::int64_t>(this->Pieces.size());
 #pragma omp parallel for num_threads(detail::ResolveThreads(threads))                              \
@@ -507,8 +528,7 @@ void FramePipeline::DecomposeBatch(std::size_t first, std::size_t count, int thr
       const NearPiece& piece = this->Pieces[j];
       const ProjectedPoint* corners[4] = { &piece.corners[0], &piece.corners[1], &piece.corners[2],
         &piece.corners[3] };
-      this->Classes[k] = DecomposeIntoSlot(
-        in, corners, piece.scalars, k, this->VertexBuffer.data(), this->IndexBuffer.data());
+      this->Classes[k] = decomposePiece(in, corners, piece.scalars, k);
     }
   }
   std::size_t pixelCulled = 0, notDrawable = 0;
@@ -523,14 +543,44 @@ void FramePipeline::DecomposeBatch(std::size_t first, std::size_t count, int thr
   this->LastTimes.decompose += detail::SecondsSince(start);
   this->LastStats.pixelCulled += pixelCulled;
   this->LastStats.notDrawable += notDrawable;
-  this->HaveDecomposition = true;
-  this->DecomposedOrderVersion = this->OrderVersion;
-  this->DecomposedFirst = first;
-  this->DecomposedCount = count;
-  this->DecomposedViewport[0] = in.viewportWidth;
-  this->DecomposedViewport[1] = in.viewportHeight;
-  this->DecomposedPixelCulled = pixelCulled;
-  this->DecomposedNotDrawable = notDrawable;
+  window = Window{ true, this->OrderVersion, first, count,
+    { in.viewportWidth, in.viewportHeight }, pixelCulled, notDrawable };
+  return true;
+}
+
+void FramePipeline::DecomposeBatch(std::size_t first, std::size_t count, int threads)
+{
+  const bool decomposed = this->DecomposeWindow(this->SlotWindow, first, count, threads,
+    [&](const DecomposeInput& in, std::size_t from, std::size_t n)
+    {
+      EnsureSize(this->VertexBuffer, VerticesPerTetrahedron * n);
+      EnsureSize(this->IndexBuffer, IndicesPerTetrahedron * n);
+      DecomposeTetrahedraByRank(in, this->Rank.data(), from, n, this->VertexBuffer.data(),
+        this->IndexBuffer.data(), this->Classes.data(), threads);
+    },
+    [&](const DecomposeInput& in, const ProjectedPoint* const corners[4], const float* scalars,
+      std::uint64_t k)
+    {
+      return DecomposeIntoSlot(
+        in, corners, scalars, k, this->VertexBuffer.data(), this->IndexBuffer.data());
+    });
+  this->BatchCount = count;
+  this->BuffersVersion += decomposed ? 1 : 0;
+}
+
+void FramePipeline::DecomposeFans(std::size_t first, std::size_t count, int threads)
+{
+  const bool decomposed = this->DecomposeWindow(this->FanWindow, first, count, threads,
+    [&](const DecomposeInput& in, std::size_t from, std::size_t n)
+    {
+      EnsureSize(this->FanBuffer, n);
+      DecomposeFansByRank(
+        in, this->Rank.data(), from, n, this->FanBuffer.data(), this->Classes.data(), threads);
+    },
+    [&](const DecomposeInput& in, const ProjectedPoint* const corners[4], const float* scalars,
+      std::uint64_t k) { return DecomposeIntoFan(in, corners, scalars, this->FanBuffer[k]); });
+  this->FanBatchCount = count;
+  this->FansVersion += decomposed ? 1 : 0;
 }
 
 } // namespace mtpt

@@ -17,7 +17,10 @@
 namespace mtpt
 {
 
-BlendTarget::BlendTarget() = default;
+BlendTarget::BlendTarget(int colourType)
+  : ColourType(colourType)
+{
+}
 BlendTarget::~BlendTarget() = default;
 
 vtkTextureObject* BlendTarget::Colour()
@@ -46,13 +49,13 @@ bool BlendTarget::Allocate(vtkOpenGLRenderWindow* window, const int size[2], std
   }
   this->Framebuffer->SetContext(window);
   const bool made = this->Framebuffer->PopulateFramebuffer(size[0], size[1], /*textures*/ true,
-    /*colour attachments*/ 1, VTK_FLOAT, /*depth*/ true, depthBits, /*samples*/ 0);
+    /*colour attachments*/ 1, this->ColourType, /*depth*/ true, depthBits, /*samples*/ 0);
   const char* description = nullptr;
   if (!made ||
     !vtkOpenGLFramebufferObject::GetFrameBufferStatus(
       vtkOpenGLFramebufferObject::GetDrawMode(), description))
   {
-    error = std::string("no float framebuffer (") +
+    error = std::string("no single-sampled framebuffer (") +
       (description ? description : "allocation failed") + ")";
     this->Allocated = false;
     return false;
@@ -142,6 +145,29 @@ bool BlendTarget::WriteToWindow(vtkOpenGLRenderWindow* window, vtkTextureObject*
   if (!failed.empty())
   {
     error = "writing the image into the window failed (" + failed + ")";
+    return false;
+  }
+  return true;
+}
+
+bool BlendTarget::Read(vtkOpenGLRenderWindow* window, int x, int y, int width, int height,
+  float* depth, unsigned char* rgba, std::string& error)
+{
+  // Through VTK's state cache: VTK sets the alignment it needs only when its cached value
+  // differs, so a change behind its back makes its next read overflow.
+  window->GetState()->vtkglPixelStorei(GL_PACK_ALIGNMENT, 4);
+  if (depth)
+  {
+    glReadPixels(x, y, width, height, GL_DEPTH_COMPONENT, GL_FLOAT, depth);
+  }
+  if (rgba)
+  {
+    glReadPixels(x, y, width, height, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
+  }
+  const std::string failed = TakeOpenGLErrors();
+  if (!failed.empty())
+  {
+    error = "reading the window's colour and depth back failed (" + failed + ")";
     return false;
   }
   return true;

@@ -35,7 +35,8 @@ namespace mtpt
 class BlendTarget
 {
 public:
-  BlendTarget();
+  /// `colourType`: VTK_FLOAT (blending in the target) or VTK_UNSIGNED_CHAR (reading back).
+  explicit BlendTarget(int colourType = 10 /* VTK_FLOAT */);
   ~BlendTarget();
 
   /**
@@ -51,12 +52,20 @@ public:
   void Restore(vtkOpenGLRenderWindow* window);
 
   /**
-   * Replaces the colour of the viewport (origin, size) of the framebuffer bound for drawing
-   * with `texture` (the viewport's size, RGBA): no blending, no depth test or write, every
+   * Replaces the colour of the rectangle (origin, size) of the framebuffer bound for drawing
+   * with `texture` (the rectangle's size, RGBA): no blending, no depth test or write, every
    * sample. Returns false with `error` set when the shader cannot be made or OpenGL fails.
    */
   bool WriteToWindow(vtkOpenGLRenderWindow* window, vtkTextureObject* texture, const int origin[2],
     const int size[2], std::string& error);
+
+  /**
+   * Reads the rectangle (x, y, width, height) of the target (after Capture, before Restore)
+   * into `depth` (floats, when not null) and `rgba` (8 bits per channel, when not null),
+   * row 0 at the bottom. Returns false with `error` set when OpenGL fails.
+   */
+  bool Read(vtkOpenGLRenderWindow* window, int x, int y, int width, int height, float* depth,
+    unsigned char* rgba, std::string& error);
 
   /// The target's colour (RGBA float), valid after a successful Capture.
   vtkTextureObject* Colour();
@@ -72,6 +81,7 @@ private:
 
   vtkNew<vtkOpenGLFramebufferObject> Framebuffer;
   std::unique_ptr<vtkOpenGLQuadHelper> Quad;
+  int ColourType;
   bool Allocated = false;
   int Size[2] = { 0, 0 };
   int DepthBits = 0;

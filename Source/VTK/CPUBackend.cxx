@@ -9,6 +9,7 @@
 #include "vtkOpenGLRenderWindow.h"
 #include "vtkOpenGLState.h"
 #include "vtkTextureObject.h"
+#include "vtkType.h"
 #include "vtk_glew.h"
 
 #include <algorithm>
@@ -31,7 +32,11 @@ bool ReadBackFaultInjected()
 
 } // namespace
 
-CPUBackend::CPUBackend() = default;
+CPUBackend::CPUBackend()
+  : Target(VTK_UNSIGNED_CHAR)
+{
+}
+
 CPUBackend::~CPUBackend() = default;
 
 bool CPUBackend::SamplesPixelCentresOnly(vtkOpenGLRenderWindow*, bool) const
@@ -61,29 +66,21 @@ bool CPUBackend::ReadBack(const BackendFrame& frame, BackendTimes& times)
   const std::size_t pixels = static_cast<std::size_t>(frame.size[0]) * frame.size[1];
   this->Depth.resize(pixels);
   this->Below.resize(4 * pixels);
-  vtkOpenGLState* state = frame.window->GetState();
-  state->vtkglPixelStorei(GL_PACK_ALIGNMENT, 4);
-  glReadPixels(
-    0, 0, frame.size[0], frame.size[1], GL_DEPTH_COMPONENT, GL_FLOAT, this->Depth.data());
-  glReadPixels(0, 0, frame.size[0], frame.size[1], GL_RGBA, GL_FLOAT, this->Below.data());
   if (ReadBackFaultInjected())
   {
     glReadPixels(0, 0, frame.size[0], frame.size[1], GL_RGBA, GL_DEPTH_COMPONENT, nullptr);
   }
-  const std::string failed = TakeOpenGLErrors();
+  const bool read = this->Target.Read(frame.window, 0, 0, frame.size[0], frame.size[1],
+    this->Depth.data(), this->Below.data(), this->ErrorMessage);
   this->Target.Restore(frame.window);
   times.upload += SecondsSince(start);
-  if (!failed.empty())
-  {
-    this->ErrorMessage = "reading the window's colour and depth back failed (" + failed + ")";
-    return false;
-  }
-  return true;
+  return read;
 }
 
 void CPUBackend::Composite(const BackendFrame& frame, BackendTimes& times)
 {
-  CompositeSettings settings;
+  CompositeSettings& settings = this->Settings;
+  settings = CompositeSettings{};
   settings.width = frame.size[0];
   settings.height = frame.size[1];
   settings.transferFunction = frame.tables->Table();
@@ -93,22 +90,21 @@ void CPUBackend::Composite(const BackendFrame& frame, BackendTimes& times)
   {
     settings.UsePreIntegration(frame.tables->PreIntegration(), frame.interpolation);
   }
-  // Batch after batch, back to front, into one image. Decomposition and compositing both
-  // use every thread, so they run one after the other.
+  // Batch after batch, back to front, into one image: the tiles keep what earlier batches
+  // drew. Decomposition and compositing both use every thread, so they take turns.
   FramePipeline& pipeline = *frame.pipeline;
+  this->Compositing.Begin(settings);
   const std::size_t total = pipeline.SortedCount();
   const std::size_t batch = std::max<std::size_t>(1, frame.batchSize);
   for (std::size_t first = 0; first < total; first += batch)
   {
     auto start = Clock::now();
-    pipeline.DecomposeBatch(first, batch, frame.threads);
+    pipeline.DecomposeFans(first, batch, frame.threads);
     times.decompose += SecondsSince(start);
     start = Clock::now();
-    this->Compositing.Composite(pipeline.Vertices().data(), pipeline.Indices().data(),
-      pipeline.TetrahedronCount(), settings, this->Rgba, frame.threads);
+    this->Compositing.Composite(pipeline.Fans().data(), pipeline.FanCount(), frame.threads);
     times.composite += SecondsSince(start);
     ++times.batches;
-    settings.accumulate = true;
     const std::size_t done = std::min(total, first + batch);
     if (done < total && frame.afterBatch &&
       !frame.afterBatch(static_cast<double>(done) / static_cast<double>(total)))
@@ -121,35 +117,35 @@ void CPUBackend::Composite(const BackendFrame& frame, BackendTimes& times)
 
 bool CPUBackend::WriteBack(const BackendFrame& frame, BackendTimes& times)
 {
-  // Composite over the colour drawn so far here, in float, and write the result with
-  // blending off: blending the image in OpenGL would round it to 8 bits before the blend on
-  // an 8-bit framebuffer (llvmpipe blends unorm8 targets in 8-bit arithmetic), a second
-  // rounding the OpenGL path does not have.
-  auto start = Clock::now();
-  float* image = this->Rgba.data();
-  const float* below = this->Below.data();
-  for (std::size_t i = 0; i < this->Rgba.size(); i += 4)
+  // Only the region the volume touched changes. It is composited over the colour that was
+  // there on the CPU and written with blending off: blending it in OpenGL would round the
+  // volume's colour to 8 bits before the blend (llvmpipe blends 8-bit targets in 8-bit
+  // arithmetic), a second rounding the OpenGL path does not have.
+  const PixelRegion region = this->Compositing.TouchedRegion();
+  if (region.Empty())
   {
-    const float keep = 1.0f - image[i + 3];
-    for (int c = 0; c < 4; ++c)
-    {
-      image[i + c] += keep * below[i + c];
-    }
+    return true;
   }
+  auto start = Clock::now();
+  const int width = region.x1 - region.x0, height = region.y1 - region.y0;
+  this->Region.resize(4 * static_cast<std::size_t>(width) * height);
+  this->Compositing.Resolve(region, this->Below.data(), this->Region.data(), frame.threads);
+  times.composite += SecondsSince(start);
+  start = Clock::now();
   this->Image->SetContext(frame.window);
   this->Image->SetWrapS(vtkTextureObject::ClampToEdge);
   this->Image->SetWrapT(vtkTextureObject::ClampToEdge);
-  this->Image->SetMinificationFilter(vtkTextureObject::Nearest);
-  this->Image->SetMagnificationFilter(vtkTextureObject::Nearest);
-  this->Image->Create2DFromRaw(frame.size[0], frame.size[1], 4, VTK_FLOAT, image);
+  this->Image->Create2DFromRaw(width, height, 4, VTK_UNSIGNED_CHAR, this->Region.data());
   if (frame.synchronizedTiming)
   {
     glFinish();
   }
   times.upload += SecondsSince(start);
   start = Clock::now();
-  const bool written = this->Target.WriteToWindow(
-    frame.window, this->Image, frame.origin, frame.size, this->ErrorMessage);
+  const int origin[2] = { frame.origin[0] + region.x0, frame.origin[1] + region.y0 };
+  const int size[2] = { width, height };
+  const bool written =
+    this->Target.WriteToWindow(frame.window, this->Image, origin, size, this->ErrorMessage);
   if (frame.synchronizedTiming)
   {
     glFinish();

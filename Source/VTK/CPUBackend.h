@@ -4,15 +4,16 @@
  * @brief Private glue: the way to the screen where OpenGL is itself a CPU rasterizer.
  *
  * Reads back the colour and the opaque depth the renderer drew in its viewport (through
- * BlendTarget, so multisampled windows are resolved first), composites the sorted
- * tetrahedra over that colour on the CPU with the per-fragment math of the OpenGL path
- * (mtpt::Compositor), and writes the result into the viewport. Every OpenGL read is checked
- * before anything is written: a failed read leaves the window untouched and Draw returns
- * false, so the mapper can fall back to the OpenGL backend instead of drawing garbage.
+ * BlendTarget, so multisampled windows are resolved first), has the pipeline decompose the
+ * sorted tetrahedra into fans (no OpenGL slot buffers), composites them on the CPU with the
+ * per-fragment math of the OpenGL path (mtpt::Compositor), and writes back only the region
+ * the volume touched, composited over the colour that was there. Every OpenGL read is
+ * checked before anything is written: a failed read leaves the window untouched and Draw
+ * returns false, so the mapper can fall back to the OpenGL backend instead of drawing
+ * garbage.
  *
- * What it keeps between frames: the image texture and the target (one context; released
- * in ReleaseGraphicsResources) and its CPU buffers. Nothing it keeps is reused as a result:
- * every frame reads back and composites again.
+ * What it keeps between frames: the image texture and the target (one context; released in
+ * ReleaseGraphicsResources), the compositor's buffers, and its read-back buffers.
  */
 #ifndef mtpt_CPUBackend_h
 #define mtpt_CPUBackend_h
@@ -24,6 +25,7 @@
 
 #include "vtkNew.h"
 
+#include <cstdint>
 #include <vector>
 
 class vtkTextureObject;
@@ -37,9 +39,13 @@ public:
   CPUBackend();
   ~CPUBackend() override;
 
-  bool SamplesPixelCentresOnly(vtkOpenGLRenderWindow* window, bool floatFramebuffer) const override;
+  bool SamplesPixelCentresOnly(
+    vtkOpenGLRenderWindow* window, bool floatFramebuffer) const override;
   bool Draw(const BackendFrame& frame, BackendTimes& times) override;
   void ReleaseGraphicsResources(vtkWindow* window) override;
+
+  /// The compositor's work in the last Draw.
+  const CompositorStats& Stats() const { return this->Compositing.Stats(); }
 
 private:
   CPUBackend(const CPUBackend&) = delete;
@@ -50,9 +56,11 @@ private:
   bool WriteBack(const BackendFrame& frame, BackendTimes& times);
 
   Compositor Compositing;
+  CompositeSettings Settings;
   BlendTarget Target;
   vtkNew<vtkTextureObject> Image;
-  std::vector<float> Rgba, Depth, Below;
+  std::vector<float> Depth;
+  std::vector<std::uint8_t> Below, Region;
 };
 
 } // namespace mtpt

@@ -251,6 +251,25 @@ double vtkMultiThreadedProjectedTetrahedraMapper::GetCompositeSeconds()
 {
   return this->Internal->Times.composite;
 }
+double vtkMultiThreadedProjectedTetrahedraMapper::GetBinSeconds()
+{
+  return this->Internal->LastBackend == CPU_BACKEND ? this->Internal->CPU.Stats().binSeconds : 0;
+}
+double vtkMultiThreadedProjectedTetrahedraMapper::GetRasterSeconds()
+{
+  return this->Internal->LastBackend == CPU_BACKEND ? this->Internal->CPU.Stats().rasterSeconds
+                                                    : 0;
+}
+vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfFragments()
+{
+  return this->Internal->LastBackend == CPU_BACKEND
+    ? static_cast<vtkIdType>(this->Internal->CPU.Stats().fragments)
+    : 0;
+}
+const char* vtkMultiThreadedProjectedTetrahedraMapper::GetCompositorInstructionSet()
+{
+  return mtpt::Compositor::InstructionSet();
+}
 int vtkMultiThreadedProjectedTetrahedraMapper::GetLastBackend()
 {
   return this->Internal->LastBackend;
@@ -679,6 +698,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::PrintSelf(ostream& os, vtkIndent
      << " (last frame: " << (this->Internal->LastBackend == CPU_BACKEND ? "CPU" : "OpenGL")
      << ")\n";
   os << indent << "OrderMethod: " << this->GetOrderMethodAsString() << "\n";
+  os << indent << "CompositorInstructionSet: " << GetCompositorInstructionSet() << "\n";
   os << indent << "ShadingMode: " << this->GetShadingModeAsString() << "\n";
   os << indent << "MaxSubArraySize: " << this->MaxSubArraySize << "\n";
   os << indent << "UseFloatingPointFrameBuffer: " << this->UseFloatingPointFrameBuffer << "\n";

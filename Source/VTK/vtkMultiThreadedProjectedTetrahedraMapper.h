@@ -234,6 +234,10 @@ public:
   double GetDrawSeconds();
   /// CPU backend: compositing on the CPU (0 with the OpenGL backend).
   double GetCompositeSeconds();
+  /// CPU backend: the part of compositing that sorts fans into screen tiles.
+  double GetBinSeconds();
+  /// CPU backend: the part of compositing that sets up triangles and shades fragments.
+  double GetRasterSeconds();
   /// transform + cull + depth keys + order + decompose
   double GetCPUStageSeconds();
   ///@}
@@ -298,6 +302,12 @@ public:
 
   /// Batches the last Render decomposed and drew.
   int GetNumberOfBatches();
+
+  /// CPU backend: pixels the last Render's triangles covered and shaded (0 with OpenGL).
+  vtkIdType GetNumberOfFragments();
+
+  /// The instruction set of the CPU compositor's fragment loops here (e.g. "AVX2").
+  static const char* GetCompositorInstructionSet();
 
   /// Whether the last Render was stopped by the render window's abort check.
   bool GetLastFrameStopped();

@@ -53,7 +53,7 @@ mtpt::FrameInput Frame(const TetMesh& mesh, double azimuth, bool perspective)
 }
 
 /// The pipeline's current frame composited with `table` over [-2, 3], in batches of
-/// `batch` slots (0: one batch).
+/// `batch` fans (0: one batch), as the CPU backend composites it.
 std::vector<float> Composite(mtpt::FramePipeline& pipeline, const mtpt::FrameInput& input,
   const std::vector<float>& table, std::size_t batch = 0)
 {
@@ -63,20 +63,16 @@ std::vector<float> Composite(mtpt::FramePipeline& pipeline, const mtpt::FrameInp
   settings.transferFunction = { table.data(), static_cast<int>(table.size() / 4), -2.0, 3.0 };
   settings.unitDistance = 0.3;
   mtpt::Compositor compositor;
-  std::vector<float> image;
+  compositor.Begin(settings);
   const std::size_t total = pipeline.SortedCount();
   const std::size_t step = batch ? batch : std::max<std::size_t>(total, 1);
-  for (std::size_t first = 0; first < total || first == 0; first += step)
+  for (std::size_t first = 0; first < total; first += step)
   {
-    pipeline.DecomposeBatch(first, step, 2);
-    compositor.Composite(pipeline.Vertices().data(), pipeline.Indices().data(),
-      pipeline.TetrahedronCount(), settings, image, 2);
-    settings.accumulate = true;
-    if (total == 0)
-    {
-      break;
-    }
+    pipeline.DecomposeFans(first, step, 2);
+    compositor.Composite(pipeline.Fans().data(), pipeline.FanCount(), 2);
   }
+  std::vector<float> image(4 * static_cast<std::size_t>(settings.width) * settings.height);
+  compositor.Resolve({ 0, 0, settings.width, settings.height }, nullptr, image.data(), 2);
   return image;
 }
 
@@ -170,9 +166,11 @@ TEST(FramePipeline, OpacityAndFrustumCullingLeaveTheImageUnchanged)
     mtpt::FrameInput input = Frame(mesh, 0.4, perspective);
     input.projection = perspective ? mtpt::test::Perspective(25, 1.0, 1, 10)
                                    : mtpt::test::Ortho(-1.2, 0.8, -1, 1, 1, 10); // crops
-    input.cullFrustum = false;
+    mtpt::FrameInput unculled = input; // no culling of any kind
+    unculled.cullFrustum = false;
+    unculled.viewportWidth = unculled.viewportHeight = 0;
     mtpt::FramePipeline all;
-    ASSERT_TRUE(all.Prepare(input, 2));
+    ASSERT_TRUE(all.Prepare(unculled, 2));
     EXPECT_EQ(all.SortedCount(), mesh.CellCount());
     const std::vector<float> reference = Composite(all, input, table);
 
@@ -197,7 +195,8 @@ TEST(FramePipeline, OpacityAndFrustumCullingLeaveTheImageUnchanged)
     EXPECT_EQ(stats.opacityCulled, expectedOpacity);
     EXPECT_GT(stats.opacityCulled, mesh.CellCount() / 2);
     EXPECT_GT(stats.frustumCulled, 0u);
-    EXPECT_EQ(stats.opacityCulled + stats.frustumCulled + stats.sorted, mesh.CellCount());
+    EXPECT_EQ(stats.opacityCulled + stats.frustumCulled + stats.pixelCulled + stats.sorted,
+      mesh.CellCount());
     const std::vector<float> image = Composite(culled, input, table);
     EXPECT_TRUE(SameImage(reference, image));
     float alpha = 0;
@@ -279,7 +278,10 @@ TEST(FramePipeline, SmallRotationsSortFromThePreviousOrderWithTheSameResult)
     mtpt::FramePipeline pipeline;
     pipeline.SetReuse(true);
     double azimuth = 0.2;
+    // No pixel culling: with it, cells that start or stop covering a pixel centre change the
+    // set of sorted cells, and only the same set can be re-sorted from the previous order.
     mtpt::FrameInput input = Frame(mesh, azimuth, perspective);
+    input.viewportWidth = input.viewportHeight = 0;
     input.projection = perspective ? mtpt::test::Perspective(70, 1.0, 1, 10)
                                    : mtpt::test::Ortho(-3, 3, -3, 3, 1, 10); // all in view
     ASSERT_TRUE(pipeline.Prepare(input, 2));
@@ -289,6 +291,7 @@ TEST(FramePipeline, SmallRotationsSortFromThePreviousOrderWithTheSameResult)
       azimuth += step;
       const mtpt::Matrix4 projection = input.projection;
       input = Frame(mesh, azimuth, perspective);
+      input.viewportWidth = input.viewportHeight = 0;
       input.projection = projection;
       ASSERT_TRUE(pipeline.Prepare(input, 2));
       fromPrevious += pipeline.Stats().orderFromPrevious;
@@ -341,6 +344,7 @@ TEST(FramePipeline, BatchesReproduceTheWholeFrame)
   mtpt::FramePipeline whole;
   ASSERT_TRUE(whole.Prepare(input, 2));
   const std::vector<float> reference = Composite(whole, input, table);
+  whole.DecomposeBatch(0, whole.SortedCount(), 2); // the slots, for the batches' slices
   const std::vector<TetVertex> vertices(
     whole.Vertices().begin(), whole.Vertices().begin() + 5 * whole.SortedCount());
   const std::vector<std::uint32_t> indices(

@@ -198,7 +198,9 @@ TEST_P(MapperWork, CulledCellsAreCountedAndChangeNothing)
   auto zoomed = stage.Frame();
   EXPECT_EQ(m->GetNumberOfOpacityCulledCells(), 0);
   EXPECT_GT(m->GetNumberOfFrustumCulledCells(), cells / 20);
-  EXPECT_EQ(m->GetNumberOfFrustumCulledCells() + m->GetNumberOfTetrahedra(), cells);
+  EXPECT_EQ(m->GetNumberOfFrustumCulledCells() + m->GetNumberOfPixelCulledCells() +
+      m->GetNumberOfTetrahedra(),
+    cells);
   compareWithAllCells(zoomed);
 
   vtkPiecewiseFunction* opacity = property->GetScalarOpacity();
@@ -209,7 +211,7 @@ TEST_P(MapperWork, CulledCellsAreCountedAndChangeNothing)
   auto hidden = stage.Frame();
   EXPECT_GT(m->GetNumberOfOpacityCulledCells(), cells / 3);
   EXPECT_EQ(m->GetNumberOfOpacityCulledCells() + m->GetNumberOfFrustumCulledCells() +
-      m->GetNumberOfTetrahedra(),
+      m->GetNumberOfPixelCulledCells() + m->GetNumberOfTetrahedra(),
     cells);
   compareWithAllCells(hidden);
 }

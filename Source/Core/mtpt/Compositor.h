@@ -1,18 +1,22 @@
 // SPDX-License-Identifier: BSD-3-Clause
 /**
  * @file Compositor.h
- * @brief The CPU compositor: blends the decomposition's sorted triangles into a float RGBA
- * image with the per-fragment math of the OpenGL path, for machines where OpenGL is itself
- * a software rasterizer (DESIGN.md section 7).
+ * @brief The CPU compositor: blends the sorted tetrahedra (as fans, Decompose.h) into a
+ * float RGBA image with the per-fragment math of the OpenGL path, for machines where
+ * OpenGL is itself a software rasterizer. Its cost follows the fragments: a tetrahedron is
+ * set up once per screen tile it touches, and every pixel covered costs one SIMD lane.
  *
  * Conventions:
- * - Window coordinates: pixel (x, y) covers [x, x+1) x [y, y+1), y up (OpenGL), its
- *   sample point is the centre (x + 0.5, y + 0.5). NDC map to window coordinates as
+ * - Window coordinates: pixel (x, y) covers [x, x+1) x [y, y+1), y up (OpenGL), its sample
+ *   point is the centre (x + 0.5, y + 0.5). NDC map to window coordinates as
  *   X = (x_ndc + 1) / 2 * width, Y = (y_ndc + 1) / 2 * height; depth = (z_ndc + 1) / 2.
+ *   Vertices are snapped to a 1/256-pixel grid, as GPUs and Mesa's rasterizers snap them.
  * - Coverage: a pixel belongs to a triangle if its centre is inside, or on an edge that is
  *   a top or a left edge (the top-left rule of Direct3D and of Mesa's rasterizers), so a
- *   pixel on an edge shared by two triangles is covered exactly once.
- * - Shading, exactly as the GL path's shaders, in one of two modes (Shading):
+ *   pixel on an edge shared by two triangles is covered exactly once. Coverage is decided
+ *   exactly, on 64-bit fixed point; a triangle with a vertex beyond +-2^22 pixels is first
+ *   clipped to a guard band around the viewport, as OpenGL clips it.
+ * - Shading, exactly as the OpenGL path's shaders, in one of two modes (Shading):
  *   VTK-compatible: each vertex is classified as the mean of the transfer function at its
  *   front and back scalars (colour rgb, attenuation a); colour, attenuation and segment
  *   length are interpolated linearly in screen space; fragment opacity =
@@ -21,15 +25,23 @@
  *   (in perspective views exactly, see PerspectiveInterpolation) and each fragment is
  *   shaded by PreIntegrationTable::Segment, so transfer-function features between the
  *   vertex scalars are not missed.
- * - Threads: the image is cut into one band of rows per thread, balanced by the number of
- *   tetrahedra starting in each row; each thread streams through all slots in order,
- *   rejects whole tetrahedra by their bounding box, and rasterizes into its own rows.
  * - Blending, as glBlendFuncSeparate(SRC_ALPHA, ONE_MINUS_SRC_ALPHA, ONE,
- *   ONE_MINUS_SRC_ALPHA) starting from a transparent image: the result is premultiplied
- *   colour and coverage alpha, to be composited over the framebuffer with (ONE,
- *   ONE_MINUS_SRC_ALPHA). Slots are drawn in buffer order (back to front).
+ *   ONE_MINUS_SRC_ALPHA) starting from a transparent image: the image holds premultiplied
+ *   colour and coverage alpha; Resolve composites it over what lies below.
  * - Depth: with an opaque depth image, a fragment is kept if its depth is <= the opaque
- *   depth at that pixel (GL_LEQUAL, no depth writes).
+ *   depth at that pixel (GL_LEQUAL, no depth writes); fragments outside the near and far
+ *   planes are dropped.
+ *
+ * How the work is shared (threads never write the same pixel):
+ * 1. Binning: each thread takes a contiguous range of the fans (in visibility order) and
+ *    appends each fan that covers a pixel centre of a tile to its own list for that tile
+ *    (TileSize x TileSize pixels). Concatenated in thread order, a tile's lists are in
+ *    visibility order, whatever the thread count.
+ * 2. Rasterization: threads take tiles; a tile's fans are set up and drawn, triangle by
+ *    triangle, span by span (exact row spans, no per-pixel coverage test), a span's pixels
+ *    SIMD lanes wide (Google Highway, the widest instruction set the processor has, chosen
+ *    at run time). A tile's pixels stay in its own cache-sized buffer.
+ * The image is therefore bit-identical for any thread count.
  */
 #ifndef mtpt_Compositor_h
 #define mtpt_Compositor_h
@@ -85,9 +97,6 @@ struct CompositeSettings
   /// Optional window depth of opaque geometry in [0, 1], width * height floats, row 0 at
   /// the bottom. Null: no occlusion.
   const float* opaqueDepth = nullptr;
-  /// Blend over the image already in `rgba` (same size) instead of clearing it: a frame
-  /// drawn in batches composites batch after batch, back to front.
-  bool accumulate = false;
   /// Pre-integrated shading in perspective views: see PerspectiveInterpolation.
   PerspectiveInterpolation interpolation;
 
@@ -101,26 +110,101 @@ struct CompositeSettings
   }
 };
 
+/// What the compositor did since Begin, and how long it took.
+struct CompositorStats
+{
+  std::size_t fans = 0;        ///< fans given that touch the image
+  std::size_t binEntries = 0;  ///< (fan, tile) pairs
+  std::size_t triangles = 0;   ///< (triangle, tile) pairs set up
+  std::size_t fragments = 0;   ///< pixels covered by a triangle and shaded
+  std::size_t tiles = 0;       ///< tiles that had fans
+  double binSeconds = 0;       ///< binning
+  double rasterSeconds = 0;    ///< set-up and fragments
+  double resolveSeconds = 0;   ///< Resolve
+};
+
+/// A rectangle of pixels: [x0, x1) x [y0, y1) (empty when x0 >= x1 or y0 >= y1).
+struct PixelRegion
+{
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  bool Empty() const { return x0 >= x1 || y0 >= y1; }
+};
+
 /**
- * Composites slots [0, count) of the decomposition buffers into `rgba` (4 * width *
- * height floats, premultiplied, row 0 at the bottom), which it resizes and clears unless
- * settings.accumulate is set and it already has that size.
- *
- * Thread safety: reentrant. Determinism: every pixel is blended by one thread in slot
- * order, so the image is bit-identical for any thread count.
+ * Composites fans into an image, frame after frame; its buffers are kept and reused.
+ * Thread safety: one object per thread of control; the work inside uses OpenMP threads.
+ * Determinism: bit-identical for any thread count (see the file comment).
  */
 class Compositor
 {
 public:
+  /// Pixels per side of a tile.
+  static constexpr int TileSize = 32;
+
+  /**
+   * Starts a new image of settings.width x height, transparent. `settings` (and what it
+   * points to) must stay valid until the last Composite of the image.
+   */
+  void Begin(const CompositeSettings& settings);
+
+  /// Composites fans[0, count) in front of everything composited since Begin, the first
+  /// farthest (visibility order).
+  void Composite(const Fan* fans, std::size_t count, int threads);
+
+  /// The pixels a fan was drawn in since Begin may lie in this region; outside it the image
+  /// is transparent.
+  PixelRegion TouchedRegion() const;
+
+  /**
+   * The image composited over `below` in `region` (a sub-rectangle of the image): `below`
+   * holds the whole image's width x height RGBA values (null: transparent black, which
+   * gives the premultiplied image itself), `rgba` receives the region's, both row-major,
+   * row 0 at the bottom.
+   */
+  void Resolve(const PixelRegion& region, const float* below, float* rgba, int threads);
+  /// The same in 8 bits per channel (rounded to nearest), as a window holds it.
+  void Resolve(
+    const PixelRegion& region, const std::uint8_t* below, std::uint8_t* rgba, int threads);
+
+  /**
+   * The slot entry point: composites slots [0, count) of OpenGL decomposition buffers (each
+   * triangle with three distinct corners as a fan of one) into `rgba` (4 * width * height
+   * floats, premultiplied, row 0 at the bottom), which it resizes. Tests and the fuzzer use
+   * it to check the compositor against hand-made triangles and against the OpenGL path's
+   * buffers.
+   */
   void Composite(const TetVertex* vertices, const std::uint32_t* indices, std::size_t count,
     const CompositeSettings& settings, std::vector<float>& rgba, int threads);
 
-  /// (Triangle, band) pairs that covered at least one pixel centre in the last Composite.
-  std::size_t RasterizedTriangles() const { return this->Rasterized; }
+  const CompositorStats& Stats() const { return this->Statistics; }
+
+  /// The instruction set the fragment loops run with on this processor (e.g. "AVX2"),
+  /// chosen at run time.
+  static const char* InstructionSet();
 
 private:
-  std::vector<std::uint32_t> RowCounts; ///< per thread: slots by their first pixel row
-  std::size_t Rasterized = 0;
+  void Bin(const Fan* fans, std::size_t count, int threads);
+  void Rasterize(int threads);
+  float* Tile(int tile);
+
+  /// Tiles a fan touches (inclusive; empty when x0 > x1).
+  struct TileRange
+  {
+    std::uint16_t x0, x1, y0, y1;
+  };
+
+  CompositeSettings Settings;
+  CompositorStats Statistics;
+  int TilesX = 0, TilesY = 0;
+  std::vector<float> Image;             ///< per tile: R, G, B, A planes
+  std::vector<std::uint8_t> Cleared;    ///< per tile: cleared since Begin
+  std::vector<TileRange> Ranges;        ///< per fan of the last Composite
+  std::vector<std::uint32_t> Counts;    ///< per (block, tile): pairs, then the block's cursor
+  std::vector<std::size_t> TileStart;   ///< per tile: its first entry (tiles + 1 values)
+  std::vector<Fan> Entries;             ///< the fans, tile by tile, in visibility order
+  std::vector<int> Tiles;               ///< tiles with fans in the last Composite
+  PixelRegion Touched;
+  std::vector<Fan> SlotFans; ///< the slot entry point's fans
 };
 
 } // namespace mtpt

@@ -50,6 +50,26 @@ constexpr std::size_t VerticesPerTetrahedron = 5;
 constexpr std::size_t IndicesPerTetrahedron = 12;
 
 /**
+ * One tetrahedron's projection as the CPU compositor draws it: a fan of triangles around the
+ * thick vertex (the centre), over the silhouette's corners (the boundary) in cyclic order.
+ * Triangle i is (boundary[i], boundary[i + 1], centre), and when `closed`,
+ * (boundary[count - 1], boundary[0], centre) closes the fan. The records and their values
+ * are those of the slot DecomposeTetrahedron writes for the same tetrahedron (both are
+ * written from one computation): 128 bytes (two cache lines) against a slot's 168, and no
+ * index buffer. count 0: nothing to draw (not drawable, or culled). count 2 with `closed`
+ * 0 is a single triangle (the compositor's slot entry point makes those).
+ */
+struct Fan
+{
+  TetVertex centre;      ///< the thick vertex
+  TetVertex boundary[4]; ///< the silhouette's corners (front = back, length 0 for a cell's)
+  std::uint8_t count;    ///< boundary corners: 0, 2, 3 or 4
+  std::uint8_t closed;   ///< whether the last triangle closes the fan
+  std::uint8_t padding[6];
+};
+static_assert(sizeof(Fan) == 128, "a fan is two cache lines");
+
+/**
  * Shirley-Tuchman classes of a projected tetrahedron. Classes 3 and 4 are the limits of
  * class 1 and are drawn as class 1 with a degenerate triangle or two.
  */
@@ -146,6 +166,28 @@ void DecomposeTetrahedra(const DecomposeInput& input, const SortKey* order, std:
 ProjectionClass DecomposeIntoSlot(const DecomposeInput& input,
   const ProjectedPoint* const corners[4], const float scalars[4], std::size_t k,
   TetVertex* vertices, std::uint32_t* indices);
+
+/**
+ * The fan of one tetrahedron (see Fan and DecomposeTetrahedron); count 0 when it cannot be
+ * drawn. Thread safety: pure function of its arguments.
+ */
+Projection DecomposeTetrahedronToFan(
+  const ProjectedPoint* const corners[4], const float scalars[4], Fan& fan);
+
+/**
+ * As DecomposeIntoSlot, into a fan: `fan` receives the tetrahedron's fan, or count 0 when it
+ * is not drawable or covers no pixel centre. Returns its class.
+ */
+ProjectionClass DecomposeIntoFan(const DecomposeInput& input,
+  const ProjectedPoint* const corners[4], const float scalars[4], Fan& fan);
+
+/**
+ * As DecomposeTetrahedraByRank, into fans: rank r of the window [firstRank, firstRank +
+ * count) into fans[r - firstRank]. The CPU compositor's input; no vertex or index buffer.
+ * Thread safety and determinism: as DecomposeTetrahedraByRank.
+ */
+void DecomposeFansByRank(const DecomposeInput& input, const std::uint32_t* rank,
+  std::size_t firstRank, std::size_t count, Fan* fans, ProjectionClass* classes, int threads);
 
 /// Rank of a cell that is not in the order (InvertOrder).
 constexpr std::uint32_t NotInOrder = 0xffffffffu;

@@ -59,18 +59,35 @@ inline std::uint32_t CellOfKey(SortKey key)
 void ComputeDepthKeys(const ProjectedPoint* points, std::size_t pointCount, const CellsView& cells,
   bool perspective, SortKey* keys, int threads);
 
+/// What ComputeVisibleDepthKeys leaves out.
+struct KeyCulling
+{
+  /// Cells whose four points are usable and all beyond the same clip plane (NDC x, y or z
+  /// outside [-1, 1]): they lie outside the view volume and cannot produce a fragment.
+  bool frustum = false;
+  /// When both are > 0: cells whose four points are usable and whose window-space bounding
+  /// box holds no pixel centre of this viewport (detail/PixelCoverage.h); they produce no
+  /// fragment where every pixel is sampled at its centre only.
+  int viewportWidth = 0, viewportHeight = 0;
+};
+
+/// How many keys ComputeVisibleDepthKeys wrote and how many cells it left out, and why.
+struct KeyCounts
+{
+  std::size_t kept = 0, frustumCulled = 0, pixelCulled = 0;
+};
+
 /**
  * The keys of the cells in `list` (listCount ascending cell ids; null: every cell), written
- * compactly in list order, leaving out with `cullFrustum` the cells whose four points are
- * usable and all beyond the same clip plane (NDC x, y or z outside [-1, 1]): such a cell
- * lies outside the view volume and cannot produce a fragment. Returns the number of keys
- * written (at most listCount). Keys are those of ComputeDepthKeys.
+ * compactly in list order, leaving out the cells `culling` asks for. Keys are those of
+ * ComputeDepthKeys. Cells with a point that is not usable (behind the eye, non-finite) are
+ * never culled here: the near-plane stage decides about them.
  *
  * Thread safety: reentrant. Determinism: identical for any thread count.
  */
-std::size_t ComputeVisibleDepthKeys(const ProjectedPoint* points, std::size_t pointCount,
+KeyCounts ComputeVisibleDepthKeys(const ProjectedPoint* points, std::size_t pointCount,
   const CellsView& cells, const std::uint32_t* list, std::size_t listCount, bool perspective,
-  bool cullFrustum, SortKey* keys, int threads);
+  const KeyCulling& culling, SortKey* keys, int threads);
 
 } // namespace mtpt
 

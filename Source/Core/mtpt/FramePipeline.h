@@ -55,7 +55,7 @@ struct FrameStats
   std::size_t opacityCulled = 0;    ///< transparent over their whole scalar range
   std::size_t frustumCulled = 0;    ///< entirely outside the view volume
   std::size_t sorted = 0;           ///< cells sorted and given a slot
-  std::size_t pixelCulled = 0;      ///< slots covering no pixel centre (decomposition)
+  std::size_t pixelCulled = 0;      ///< covering no pixel centre (before the sort; pieces after)
   std::size_t notDrawable = 0;      ///< slots that cannot be drawn (bad cells, behind the eye)
   std::size_t nearClipped = 0;      ///< cells cut by the near plane (NearPlane.h)
   std::size_t nearPieces = 0;       ///< tetrahedra drawn in their place (in `sorted`)
@@ -161,6 +161,13 @@ public:
    */
   void DecomposeBatch(std::size_t first, std::size_t count, int threads);
 
+  /**
+   * As DecomposeBatch, into fans (Decompose.h), the CPU compositor's input: fan 0 is rank
+   * `first`; culled and undrawable cells have count 0. Kept apart from the slot buffers: a
+   * frame may use either, or both.
+   */
+  void DecomposeFans(std::size_t first, std::size_t count, int threads);
+
   /// Prepare, then decompose the whole order in one batch.
   bool Run(const FrameInput& input, int threads);
 
@@ -175,6 +182,12 @@ public:
   const std::vector<SortKey>& Keys() const { return SortedKeys; }
   const std::vector<TetVertex>& Vertices() const { return VertexBuffer; }
   const std::vector<std::uint32_t>& Indices() const { return IndexBuffer; }
+
+  /// Fans of the last DecomposeFans.
+  const std::vector<Fan>& Fans() const { return FanBuffer; }
+  std::size_t FanCount() const { return FanBatchCount; }
+  /// Changes whenever the fans' content changes (as BufferVersion for the slots).
+  std::uint64_t FanVersion() const { return this->FansVersion; }
 
   /**
    * Changes whenever the buffers' content changes: a new decomposition, another batch, or
@@ -203,6 +216,24 @@ private:
   bool SameTransform(const FrameInput& input) const;
   void UpdateCulling(const FrameInput& input, int threads, bool dataChanged);
   bool UpdateOrder(const FrameInput& input, int threads, bool dataChanged, bool viewChanged);
+
+  /// What a set of decomposition buffers holds: a window of which order, for which viewport.
+  struct Window
+  {
+    bool valid = false;
+    std::uint64_t orderVersion = 0;
+    std::size_t first = 0, count = 0;
+    int viewport[2] = { 0, 0 };
+    std::size_t pixelCulled = 0, notDrawable = 0;
+    bool Holds(
+      std::uint64_t order, std::size_t first, std::size_t count, const DecomposeInput& in) const;
+  };
+  /// Decomposes the window [first, first + count) with the two functions (cells by rank,
+  /// near-plane pieces) unless `window` holds it already; true when it decomposed. Clamps
+  /// first and count to the order.
+  template <typename Cells, typename Piece>
+  bool DecomposeWindow(Window& window, std::size_t& first, std::size_t& count, int threads,
+    Cells&& decomposeCells, Piece&& decomposePiece);
   void MutateOrder(std::size_t count);
   bool Continue(Stage finished);
   std::size_t ClipNearPlane(const FrameInput& input, int threads);
@@ -220,6 +251,7 @@ private:
   std::vector<SortKey> Scratch; ///< nearly-sorted attempt
   std::vector<std::uint32_t> Rank;
   std::vector<TetVertex> VertexBuffer;
+  std::vector<Fan> FanBuffer;
   std::vector<std::uint32_t> IndexBuffer;
   std::vector<ProjectionClass> Classes;
   std::vector<NearPiece> Pieces; ///< piece j has cell id cellCount + j in the order
@@ -230,7 +262,9 @@ private:
   OrderMutation Mutation = OrderMutation::None;
   StageCallback Callback;
   bool WasStopped = false;
-  std::uint64_t BuffersVersion = 0;
+  std::uint64_t BuffersVersion = 0, FansVersion = 0;
+  std::size_t FanBatchCount = 0;
+  Window SlotWindow, FanWindow;
   StageTimes LastTimes;
   FrameStats LastStats;
 
@@ -249,7 +283,6 @@ private:
   };
   Inputs Data;
   bool HaveTransform = false, HaveRanges = false, HaveVisible = false, HaveOrder = false;
-  bool HaveDecomposition = false;
   Matrix4 TransformModelView{}, TransformProjection{};
   std::uint64_t OpacityVersion = 0;
   TransferFunctionTable OpacityTable;
@@ -258,14 +291,12 @@ private:
   std::uint64_t PointsVersion = 0, VisibleVersion = 0, OrderVersion = 0;
   std::uint64_t OrderPointsVersion = 0, OrderVisibleVersion = 0;
   bool OrderPerspective = false, OrderCullFrustum = false;
+  int OrderViewport[2] = { 0, 0 };
+  std::size_t OrderPixelCulled = 0;
   OrderMethod OrderMethodUsed = OrderMethod::RadixSort;
   OrderMutation OrderMutationUsed = OrderMutation::None;
   std::size_t OrderFrustumCulled = 0, OrderOpacityCulled = 0, OrderNearClipped = 0;
   double OrderDirection[3] = { 0, 0, 0 };
-  std::uint64_t DecomposedOrderVersion = 0;
-  std::size_t DecomposedFirst = 0, DecomposedCount = 0;
-  int DecomposedViewport[2] = { 0, 0 };
-  std::size_t DecomposedPixelCulled = 0, DecomposedNotDrawable = 0;
 };
 
 } // namespace mtpt

@@ -1,0 +1,59 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Internal: the compositor's per-tile rasterizer, written once (TileRaster.cxx) and compiled
+// for every instruction set Google Highway targets, the best chosen at run time. Binning
+// and threading stay in Compositor.cxx; this is the per-pixel math only (the split of
+// Intel's MaskedOcclusionCulling).
+#ifndef mtpt_detail_TileRaster_h
+#define mtpt_detail_TileRaster_h
+
+#include "mtpt/Compositor.h"
+
+#include <cstddef>
+#include <cstdint>
+
+namespace mtpt
+{
+namespace detail
+{
+
+/// What every tile of a frame shares.
+struct RasterFrame
+{
+  int width = 0, height = 0; ///< the image
+  TransferFunctionTable transferFunction;
+  const PreIntegrationTable* preIntegration = nullptr; ///< null: VTK-compatible shading
+  PerspectiveInterpolation interpolation;
+  float inverseUnit = 1.0f; ///< 1 / ScalarOpacityUnitDistance
+};
+
+/// One tile: its pixels, its image and opaque depth (TileSize x TileSize each, row-major,
+/// row 0 at the bottom, whatever part of it lies outside the image).
+struct TileTarget
+{
+  int x0 = 0, y0 = 0;           ///< the tile's first pixel in the image
+  int width = 0, height = 0;    ///< its pixels inside the image
+  float* rgba = nullptr;        ///< R, G, B, A planes of TileSize * TileSize floats
+  const float* depth = nullptr; ///< opaque depth; null: none
+};
+
+/// Work counted while rasterizing.
+struct RasterCounts
+{
+  std::size_t triangles = 0; ///< triangles set up in the tile
+  std::size_t fragments = 0; ///< pixels covered and shaded
+};
+
+/**
+ * Draws fans[0, count), in that order, into the tile.
+ * Thread safety: writes only the tile's image and `counts`.
+ */
+void RasterizeTile(const RasterFrame& frame, const TileTarget& tile, const Fan* fans,
+  std::size_t count, RasterCounts& counts);
+
+/// The instruction set RasterizeTile runs with here (e.g. "AVX2"), for reports.
+const char* RasterTargetName();
+
+} // namespace detail
+} // namespace mtpt
+
+#endif
