@@ -1,325 +1,251 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// mtpt_bench_frames: whole frames of vtkMultiThreadedProjectedTetrahedraMapper (CPU
-// compositor and OpenGL backends) against VTK's projected tetrahedra, ray-cast and Z-sweep
-// unstructured mappers, on the same scenes, measured in one run, with every time printed
-// beside the image's difference from VTK's PT. Run under a display (xvfb-run on machines
-// without one: there OpenGL is Mesa llvmpipe and its rasterization is CPU work too).
-#include "MeshLoader.h"
-#include "TetrahedralGrid.h"
+// mtpt_bench_frames: whole frames of vtkMultiThreadedProjectedTetrahedraMapper (CPU and
+// OpenGL backends) against VTK's projected tetrahedra, ray-cast and Z-sweep unstructured
+// mappers, on the same scenes in one run, with the camera turning before every timed frame
+// (Harness.h states the rules). Per measurement: the median frame, for MTPT its stages and
+// the CPU compositor's work (fragments, nanoseconds per fragment and core, binning against
+// fragment work), and each image's difference from VTK's PT at the same final view.
+// --unchanged also times frames whose view does not change, as a separate column.
+// --csv writes every figure; run under a display (Testing/xvfb-launch.sh without one).
+#include "Harness.h"
 
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
 
-#include "vtkCamera.h"
-#include "vtkCellArray.h"
-#include "vtkColorTransferFunction.h"
-#include "vtkFloatArray.h"
-#include "vtkIdTypeArray.h"
 #include "vtkImageData.h"
-#include "vtkNew.h"
-#include "vtkPiecewiseFunction.h"
-#include "vtkPointData.h"
-#include "vtkPoints.h"
-#include "vtkProjectedTetrahedraMapper.h"
-#include "vtkRenderWindow.h"
-#include "vtkRenderer.h"
-#include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
-#include "vtkUnstructuredGridVolumeRayCastMapper.h"
-#include "vtkUnstructuredGridVolumeZSweepMapper.h"
-#include "vtkVolume.h"
+#include "vtkUnstructuredGridVolumeMapper.h"
 #include "vtkVolumeProperty.h"
-#include "vtkWindowToImageFilter.h"
+
+#include <CLI/CLI.hpp>
 
 #include <algorithm>
-#include <chrono>
-#include <cmath>
 #include <cstdio>
-#include <cstdlib>
-#include <sstream>
+#include <fstream>
+#include <map>
 #include <string>
 #include <vector>
 
 namespace
 {
-using mtpt::bench::TetMesh;
+using namespace mtpt::bench;
 using Mapper = vtkMultiThreadedProjectedTetrahedraMapper;
 
 struct Options
 {
-  std::vector<int> sizes{ 16, 512, 1024 };
-  std::size_t tets = 1200000;
-  std::string data = MTPT_SHARED_DATA_DIR;
-  std::vector<std::string> meshes; // empty: all
-  int repeat = 3;
-  double slowLimit = 30;
-  bool quick = false;
+  CommonOptions common;
+  std::string meshes = "wavelet,bluntfin";
+  std::string sizes = "16,512,1024";
+  std::string contenders = "mtpt-cpu,mtpt-gl,vtk-pt,raycast,zsweep";
+  std::string shading = "vtk";
+  bool unchanged = false;
+  std::string csv;
 };
 
-std::vector<std::string> Split(const std::string& s)
+/// A window size "512" (square) or "1920x1080".
+bool ParseSize(const std::string& text, int& width, int& height)
 {
-  std::vector<std::string> out;
-  std::stringstream in(s);
-  for (std::string item; std::getline(in, item, ',');)
+  const std::size_t x = text.find('x');
+  try
   {
-    out.push_back(item);
-  }
-  return out;
-}
-
-struct Result
-{
-  double ms = 0;
-  bool slow = false; ///< one frame only: it took longer than the slow limit
-  vtkSmartPointer<vtkImageData> image;
-  double stages[8] = {}; // transform, keys, order, decompose, composite, upload, draw, cpu
-};
-
-double Median(std::vector<double> v)
-{
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
-
-Result Measure(vtkUnstructuredGrid* grid, vtkUnstructuredGridVolumeMapper* mapper, int size,
-  const double range[2], const Options& o)
-{
-  vtkNew<vtkColorTransferFunction> color;
-  color->AddRGBPoint(range[0], 0.23, 0.30, 0.75);
-  color->AddRGBPoint(0.5 * (range[0] + range[1]), 0.87, 0.87, 0.87);
-  color->AddRGBPoint(range[1], 0.71, 0.02, 0.15);
-  vtkNew<vtkPiecewiseFunction> opacity;
-  opacity->AddPoint(range[0], 0.0);
-  opacity->AddPoint(range[1], 1.0);
-  vtkNew<vtkVolumeProperty> property;
-  property->SetColor(color);
-  property->SetScalarOpacity(opacity);
-  property->SetScalarOpacityUnitDistance(grid->GetLength() / 50);
-  mapper->SetInputData(grid);
-  vtkNew<vtkVolume> volume;
-  volume->SetMapper(mapper);
-  volume->SetProperty(property);
-  vtkNew<vtkRenderer> renderer;
-  renderer->SetBackground(1, 1, 1);
-  renderer->AddVolume(volume);
-  vtkNew<vtkRenderWindow> window;
-  window->SetOffScreenRendering(1);
-  window->SetMultiSamples(0);
-  window->SetSize(size, size);
-  window->AddRenderer(renderer);
-  renderer->ResetCamera();
-  renderer->GetActiveCamera()->Azimuth(30);
-  renderer->GetActiveCamera()->Elevation(20);
-  renderer->GetActiveCamera()->OrthogonalizeViewUp();
-  renderer->ResetCameraClippingRange();
-  auto frame = [&]
-  {
-    const auto start = std::chrono::steady_clock::now();
-    window->Render();
-    window->WaitForCompletion();
-    return 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  };
-  Result r;
-  const double first = frame(); // warm-up: input analysis, shaders, buffers
-  std::vector<double> times;
-  std::vector<std::vector<double>> stages(8);
-  if (first > 1e3 * o.slowLimit)
-  {
-    r.slow = true;
-    times.push_back(first);
-  }
-  else
-  {
-    for (int i = 0; i < o.repeat; ++i)
+    std::size_t used = 0;
+    width = std::stoi(text.substr(0, x), &used);
+    if (used != (x == std::string::npos ? text.size() : x))
     {
-      times.push_back(frame());
-      if (auto* m = Mapper::SafeDownCast(mapper))
+      return false;
+    }
+    height = x == std::string::npos ? width : std::stoi(text.substr(x + 1), &used);
+    return (x == std::string::npos || used == text.size() - x - 1) && width > 0 && height > 0;
+  }
+  catch (const std::exception&)
+  {
+    return false;
+  }
+}
+
+/// What one contender measured on one scene and size.
+struct Measurement
+{
+  FrameTiming moving, unchanged;
+  vtkSmartPointer<vtkImageData> image; ///< at the end of the moving frames
+  // MTPT only, of the median moving frame:
+  double cpuStages = 0, composite = 0, bin = 0, raster = 0, upload = 0, draw = 0;
+  double fragments = 0;
+  long long sorted = 0, pixelCulled = 0;
+};
+
+Measurement Measure(const Scene& scene, vtkVolumeProperty* property, const std::string& name,
+  int width, int height, const Options& o)
+{
+  Measurement m;
+  auto mapper = MakeMapper(name, o.common.threads, o.shading);
+  Stage stage(scene, property, mapper, width, height);
+  auto* ours = Mapper::SafeDownCast(mapper);
+  struct Record
+  {
+    double cpu, composite, bin, raster, upload, draw, fragments;
+    long long sorted, pixelCulled;
+  };
+  std::vector<Record> records;
+  m.moving = TimeFrames(stage, o.common.timing,
+    [&](std::size_t)
+    {
+      if (ours)
       {
-        const double s[8] = { m->GetTransformSeconds(), m->GetDepthKeySeconds(),
-          m->GetOrderSeconds(), m->GetDecomposeSeconds(), m->GetCompositeSeconds(),
-          m->GetUploadSeconds(), m->GetDrawSeconds(), m->GetCPUStageSeconds() };
-        for (int k = 0; k < 8; ++k)
-        {
-          stages[k].push_back(1e3 * s[k]);
-        }
+        records.push_back({ ours->GetCPUStageSeconds(), ours->GetCompositeSeconds(),
+          ours->GetBinSeconds(), ours->GetRasterSeconds(), ours->GetUploadSeconds(),
+          ours->GetDrawSeconds(), static_cast<double>(ours->GetNumberOfFragments()),
+          static_cast<long long>(ours->GetNumberOfTetrahedra()),
+          static_cast<long long>(ours->GetNumberOfPixelCulledCells()) });
       }
+    });
+  m.image = stage.Image();
+  if (ours && !records.empty())
+  {
+    const Record& r = records[std::min(m.moving.medianFrame, records.size() - 1)];
+    m.cpuStages = 1e3 * r.cpu;
+    m.composite = 1e3 * r.composite;
+    m.bin = 1e3 * r.bin;
+    m.raster = 1e3 * r.raster;
+    m.upload = 1e3 * r.upload;
+    m.draw = 1e3 * r.draw;
+    m.fragments = r.fragments;
+    m.sorted = r.sorted;
+    m.pixelCulled = r.pixelCulled;
+  }
+  if (o.unchanged && !m.moving.slow)
+  {
+    TimingOptions still = o.common.timing;
+    still.step = 0;
+    m.unchanged = TimeFrames(stage, still);
+  }
+  return m;
+}
+
+std::string Ms(const FrameTiming& t)
+{
+  char text[32];
+  std::snprintf(text, sizeof(text), t.median < 100 ? "%.1f%s" : "%.0f%s", t.median,
+    t.slow ? "*" : "");
+  return text;
+}
+
+void PrintScene(const Scene& scene, int width, int height, const std::vector<std::string>& names,
+  std::map<std::string, Measurement>& results, const Options& o, std::ofstream& csv)
+{
+  const Measurement* pt = results.count("vtk-pt") ? &results["vtk-pt"] : nullptr;
+  std::printf("\n%s, %lld tetrahedra, %dx%d, camera turning %.2f degrees per frame, median of %d "
+              "(* one frame, slower than %.0f s)\n",
+    scene.name.c_str(), static_cast<long long>(scene.grid->GetNumberOfCells()), width, height,
+    o.common.timing.step, o.common.timing.repeat, o.common.timing.slowLimit);
+  std::printf("| contender | ms (moving) |%s VTK PT / this | RMSE vs VTK PT | MTPT: CPU stages | "
+              "composite (bin + raster) | upload + draw | fragments | ns per fragment x core |\n",
+    o.unchanged ? " ms (unchanged view) |" : "");
+  std::printf("|---|---:|%s---:|---:|---:|---:|---:|---:|---:|\n", o.unchanged ? "---:|" : "");
+  vtkNew<Mapper> probe;
+  const int threads = probe->GetEffectiveNumberOfThreads();
+  for (const std::string& name : names)
+  {
+    Measurement& m = results[name];
+    const double ratio = pt ? pt->moving.median / m.moving.median : 0;
+    const ImageError e = pt ? CompareImages(m.image, pt->image) : ImageError{};
+    const double nsPerFragment = m.fragments > 0 ? 1e6 * m.raster * threads / m.fragments : 0;
+    std::printf("| %s | %s |%s %.2fx | %.4f | %.1f | %.1f (%.1f + %.1f) | %.1f | %.0f | %.1f |\n",
+      name.c_str(), Ms(m.moving).c_str(),
+      o.unchanged ? (" " + Ms(m.unchanged) + " |").c_str() : "", ratio, e.rmse, m.cpuStages,
+      m.composite, m.bin, m.raster, m.upload + m.draw, m.fragments, nsPerFragment);
+    if (csv)
+    {
+      csv << scene.name << ',' << scene.grid->GetNumberOfCells() << ',' << width << ',' << height
+          << ',' << name << ',' << o.shading << ',' << m.moving.median << ','
+          << (m.moving.slow ? 1 : 0) << ',' << m.unchanged.median << ',' << ratio << ','
+          << e.rmse << ',' << e.worst << ',' << m.cpuStages << ',' << m.composite << ',' << m.bin
+          << ',' << m.raster << ',' << m.upload << ',' << m.draw << ',' << m.fragments << ','
+          << nsPerFragment << ',' << m.sorted << ',' << m.pixelCulled << ',' << threads << '\n';
     }
   }
-  r.ms = Median(times);
-  for (int k = 0; k < 8; ++k)
-  {
-    r.stages[k] = stages[k].empty() ? 0 : Median(stages[k]);
-  }
-  vtkNew<vtkWindowToImageFilter> grab;
-  grab->SetInput(window);
-  grab->SetInputBufferTypeToRGB();
-  grab->ReadFrontBufferOff();
-  grab->Update();
-  r.image = vtkSmartPointer<vtkImageData>::New();
-  r.image->DeepCopy(grab->GetOutput());
-  mapper->ReleaseGraphicsResources(window);
-  return r;
-}
-
-double Rmse(vtkImageData* a, vtkImageData* b)
-{
-  auto* pa = vtkUnsignedCharArray::SafeDownCast(a->GetPointData()->GetScalars());
-  auto* pb = vtkUnsignedCharArray::SafeDownCast(b->GetPointData()->GetScalars());
-  double sum = 0;
-  for (vtkIdType i = 0; i < pa->GetNumberOfValues(); ++i)
-  {
-    const double d = (pa->GetValue(i) - pb->GetValue(i)) / 255.0;
-    sum += d * d;
-  }
-  return std::sqrt(sum / pa->GetNumberOfValues());
-}
-
-std::string Ms(const Result& r)
-{
-  char text[64];
-  std::snprintf(text, sizeof(text), r.slow ? "%.0f*" : "%.1f", r.ms);
-  return text;
 }
 
 } // namespace
 
-int main(int argc, char** argv)
+int main(int argc, char* argv[])
 {
   Options o;
-  for (int i = 1; i < argc; ++i)
-  {
-    const std::string a = argv[i];
-    auto next = [&] { return i + 1 < argc ? std::string(argv[++i]) : std::string(); };
-    if (a == "--sizes")
-    {
-      o.sizes.clear();
-      for (const auto& s : Split(next()))
-      {
-        o.sizes.push_back(std::atoi(s.c_str()));
-      }
-    }
-    else if (a == "--tets")
-      o.tets = std::strtoull(next().c_str(), nullptr, 10);
-    else if (a == "--data")
-      o.data = next();
-    else if (a == "--meshes")
-      o.meshes = Split(next());
-    else if (a == "--repeat")
-      o.repeat = std::max(1, std::atoi(next().c_str()));
-    else if (a == "--slow-limit")
-      o.slowLimit = std::atof(next().c_str());
-    else if (a == "--quick")
-      o.quick = true;
-    else
-    {
-      std::printf("usage: mtpt_bench_frames [--sizes 16,512,1024] [--tets N] [--data DIR]\n"
-                  "  [--meshes grid,bluntfin,...] [--repeat R] [--slow-limit S] [--quick]\n");
-      return a == "--help" ? 0 : 2;
-    }
-  }
-  if (o.quick)
-  {
-    o.tets = 200000;
-    o.meshes = { "grid", "bluntfin" };
-    o.sizes = { 16, 512 };
-  }
-  auto wanted = [&](const std::string& name) {
-    return o.meshes.empty() || std::find(o.meshes.begin(), o.meshes.end(), name) != o.meshes.end();
-  };
+  CLI::App app{ "Whole frames of MTPT's backends against VTK's unstructured-grid mappers, "
+                "the camera turning before every timed frame." };
+  AddCommonOptions(app, o.common);
+  app.add_option("--meshes", o.meshes, "scenes (Harness.h: wavelet, grid:N, bluntfin, cubes, "
+                                       "blocks, comb, kiefer, ...)");
+  app.add_option("--sizes", o.sizes, "window sizes: 512 (square) or 1920x1080, comma-separated");
+  app.add_option("--contenders", o.contenders, "mtpt-cpu, mtpt-gl, vtk-pt, raycast, zsweep");
+  app.add_option("--shading", o.shading, "MTPT's shading")
+    ->check(CLI::IsMember({ "vtk", "pre-integrated" }));
+  app.add_flag("--unchanged", o.unchanged, "also time frames whose view does not change");
+  app.add_option("--csv", o.csv, "append every figure to this CSV file");
+  CLI11_PARSE(app, argc, argv);
 
-  std::vector<TetMesh> meshes;
-  if (wanted("grid"))
+  std::vector<std::pair<int, int>> sizes;
+  for (const std::string& text : SplitList(o.sizes))
   {
-    mtpt::bench::GridOptions grid;
-    grid.cells = mtpt::bench::GridCellsForTetrahedra(o.tets, mtpt::bench::HexSplit::Five);
-    grid.jitter = 0.2;
-    meshes.push_back(mtpt::bench::GenerateTetrahedralGrid(grid));
-    meshes.back().name = "grid";
-  }
-  for (const auto& entry : mtpt::bench::SharedDataSets())
-  {
-    if (!wanted(entry.name))
+    int w = 0, h = 0;
+    if (!ParseSize(text, w, h))
     {
-      continue;
+      std::fprintf(stderr, "mtpt_bench_frames: not a window size: '%s'\n", text.c_str());
+      return 2;
     }
-    TetMesh mesh;
+    sizes.emplace_back(w, h);
+  }
+  const std::vector<std::string> names = SplitList(o.contenders);
+  for (const std::string& name : names)
+  {
+    if (!MakeMapper(name))
+    {
+      std::fprintf(stderr, "mtpt_bench_frames: unknown contender '%s'\n", name.c_str());
+      return 2;
+    }
+  }
+  std::ofstream csv;
+  if (!o.csv.empty())
+  {
+    std::ifstream existing(o.csv);
+    const bool header = !existing.good() || existing.peek() == std::ifstream::traits_type::eof();
+    csv.open(o.csv, std::ios::app);
+    if (header)
+    {
+      csv << "mesh,tetrahedra,width,height,contender,shading,ms,slow,ms_unchanged,"
+             "vtkpt_over_this,rmse_vs_vtkpt,worst_vs_vtkpt,cpu_stages_ms,composite_ms,bin_ms,"
+             "raster_ms,upload_ms,draw_ms,fragments,ns_per_fragment_core,sorted,pixel_culled,"
+             "threads\n";
+    }
+  }
+  std::printf("MTPT's CPU compositor runs %s here.\n", Mapper::GetCompositorInstructionSet());
+  for (const std::string& meshName : SplitList(o.meshes))
+  {
+    Scene scene;
     std::string error;
-    if (mtpt::bench::LoadTetMesh(o.data + "/" + entry.relativePath, entry.scalarName, mesh, error))
+    if (!LoadScene(meshName, o.common.dataFolder, scene, error))
     {
-      mesh.name = entry.name;
-      meshes.push_back(std::move(mesh));
+      std::fprintf(stderr, "mtpt_bench_frames: %s\n", error.c_str());
+      return 1;
     }
-    else
+    auto property = MakeProperty(scene);
+    for (const auto& size : sizes)
     {
-      std::fprintf(stderr, "skipping %s: %s\n", entry.name, error.c_str());
-    }
-  }
-
-  std::printf("# Frames: MTPT against VTK's unstructured-grid volume mappers\n\n");
-  {
-    vtkNew<vtkRenderWindow> probe;
-    probe->SetOffScreenRendering(1);
-    probe->Render();
-    const std::string caps = probe->ReportCapabilities();
-    const auto at = caps.find("OpenGL renderer string:");
-    std::printf("OpenGL renderer: %s\n",
-      at == std::string::npos ? "unknown"
-                              : caps.substr(at + 24, caps.find('\n', at) - at - 24).c_str());
-  }
-  std::printf("Median of %d frames after one warm-up (ms, whole window->Render() with "
-              "WaitForCompletion); * = one frame only, slower than %.0f s. RMSE: RGB in [0, 1] "
-              "against VTK's PT image of the same scene.\n\n",
-    o.repeat, o.slowLimit);
-  std::printf("| mesh | tets | size | MTPT CPU | MTPT GL | VTK PT | ray cast | Z-sweep | PT / "
-              "MTPT CPU | ray cast / MTPT CPU | Z-sweep / MTPT CPU | RMSE CPU | RMSE GL |\n"
-              "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
-  std::vector<std::string> stageRows;
-  for (const TetMesh& mesh : meshes)
-  {
-    auto grid = mtpt::bench::ToUnstructuredGrid(mesh);
-    double range[2];
-    grid->GetPointData()->GetScalars()->GetRange(range);
-    for (int size : o.sizes)
-    {
-      std::fprintf(stderr, "%s %d\n", mesh.name.c_str(), size);
-      vtkNew<Mapper> cpu, gl;
-      cpu->SetBackendToCPU();
-      gl->SetBackendToOpenGL();
-      cpu->SynchronizedTimingOn();
-      gl->SynchronizedTimingOn();
-      vtkNew<vtkProjectedTetrahedraMapper> pt;
-      vtkNew<vtkUnstructuredGridVolumeRayCastMapper> rayCast;
-      vtkNew<vtkUnstructuredGridVolumeZSweepMapper> zsweep;
-      const Result rc = Measure(grid, cpu, size, range, o);
-      const Result rg = Measure(grid, gl, size, range, o);
-      const Result rp = Measure(grid, pt, size, range, o);
-      const Result rr = Measure(grid, rayCast, size, range, o);
-      const Result rz = Measure(grid, zsweep, size, range, o);
-      std::printf(
-        "| %s | %zu | %d | %s | %s | %s | %s | %s | %.1fx | %.1fx | %.1fx | %.4f | %.4f |\n",
-        mesh.name.c_str(), mesh.CellCount(), size, Ms(rc).c_str(), Ms(rg).c_str(), Ms(rp).c_str(),
-        Ms(rr).c_str(), Ms(rz).c_str(), rp.ms / rc.ms, rr.ms / rc.ms, rz.ms / rc.ms,
-        Rmse(rc.image, rp.image), Rmse(rg.image, rp.image));
-      std::fflush(stdout);
-      for (const Result* r : { &rc, &rg })
+      std::map<std::string, Measurement> results;
+      // VTK's PT first: the others' images are compared with it.
+      if (results.count("vtk-pt") == 0 && std::find(names.begin(), names.end(), "vtk-pt") != names.end())
       {
-        char row[512];
-        const double triangles = 4.0 * mesh.CellCount();
-        std::snprintf(row, sizeof(row),
-          "| %s | %d | %s | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.0f |\n",
-          mesh.name.c_str(), size, r == &rc ? "CPU" : "GL", r->stages[0], r->stages[1],
-          r->stages[2], r->stages[3], r->stages[4], r->stages[5], r->stages[6], r->stages[7],
-          1e6 * (r == &rc ? r->stages[4] : r->stages[6]) / triangles);
-        stageRows.push_back(row);
+        results["vtk-pt"] = Measure(scene, property, "vtk-pt", size.first, size.second, o);
       }
+      for (const std::string& name : names)
+      {
+        if (!results.count(name))
+        {
+          results[name] = Measure(scene, property, name, size.first, size.second, o);
+        }
+      }
+      PrintScene(scene, size.first, size.second, names, results, o, csv);
+      std::fflush(stdout);
     }
-  }
-  std::printf(
-    "\n## MTPT stages (ms, medians)\n\n| mesh | size | backend | transform | depth keys "
-    "| order | decompose | composite | upload | draw | CPU stages | ns per triangle "
-    "(composite or draw) |\n|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
-  for (const auto& row : stageRows)
-  {
-    std::printf("%s", row.c_str());
   }
   return 0;
 }

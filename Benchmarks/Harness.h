@@ -1,0 +1,172 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file Harness.h
+ * @brief What every benchmark program shares: scenes and windows, the camera path, the
+ * contenders (MTPT's backends and VTK's unstructured-grid mappers), frame timing with
+ * correct medians, image errors, and command-line options (CLI11).
+ *
+ * The rules every figure follows:
+ * - Windows are as VTK makes them by default (multisampled; off-screen), for every mapper.
+ * - Timed frames move the camera: before every frame (the warm-up frame included) it turns
+ *   by a small azimuth step (FrameTiming::step, 1 degree unless an option says otherwise),
+ *   so that no mapper re-uses a previous frame's result. Frames with an unchanged view are
+ *   timed separately and labelled so.
+ * - A frame is vtkRenderWindow::Render followed by WaitForCompletion (the rasterizer done).
+ * - The result of N frames is their median (the mean of the two middle values for even N);
+ *   per-stage figures are those of the frame whose time is that median (the lower of the
+ *   two middle frames for even N), so stage times add up to a frame that happened.
+ * - VTK's ray caster and Z-sweep use a fixed image sample distance of 1 (auto-adjustment
+ *   off), so every mapper draws every pixel.
+ */
+#ifndef mtpt_bench_Harness_h
+#define mtpt_bench_Harness_h
+
+#include "vtkNew.h"
+#include "vtkSmartPointer.h"
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace CLI
+{
+class App;
+}
+class vtkImageData;
+class vtkRenderWindow;
+class vtkRenderer;
+class vtkUnstructuredGrid;
+class vtkUnstructuredGridVolumeMapper;
+class vtkVolume;
+class vtkVolumeProperty;
+
+namespace mtpt
+{
+namespace bench
+{
+
+/// The median of `values` (the mean of the two middle ones for an even count; 0 for none).
+double Median(std::vector<double> values);
+
+/// Index of the value at the median (the lower middle one for an even count).
+std::size_t MedianIndex(const std::vector<double>& values);
+
+/// A benchmark scene: a grid of tetrahedra and the scalar range its transfer function spans.
+struct Scene
+{
+  std::string name;
+  vtkSmartPointer<vtkUnstructuredGrid> grid;
+  double range[2] = { 0, 1 };
+  std::shared_ptr<void> storage; ///< arrays the grid uses in place, if not VTK's own
+};
+
+/**
+ * Scenes by name: "wavelet" (vtkRTAnalyticSource over [-30, 30]^3 tetrahedralized:
+ * 1,080,000 tetrahedra), "grid:N" (a generated jittered grid of at least N tetrahedra),
+ * "bluntfin" (the repository's data set, 187,395), "cubes" (two cubes of 5 tetrahedra, as
+ * VTK's small PT tests), "blocks" (a 10^3 block source of 6,000 tetrahedra, as VTK's
+ * vector-component test), and the real meshes of a data folder ("comb", "kiefer",
+ * "pulley", "fire_ug", "ironProt"; see `SharedDataSets`). Returns false with `error` set
+ * when the name is unknown or its file cannot be read.
+ */
+bool LoadScene(const std::string& name, const std::string& dataFolder, Scene& scene,
+  std::string& error);
+
+/// The benchmark's transfer functions: a cool-warm colour map and opacity rising linearly
+/// over `range`, unit distance a fiftieth of the grid's diagonal.
+vtkSmartPointer<vtkVolumeProperty> MakeProperty(const Scene& scene);
+
+/**
+ * Contenders by name: "mtpt-cpu" and "mtpt-gl" (vtkMultiThreadedProjectedTetrahedraMapper
+ * with the CPU or the OpenGL backend, `threads` threads, `shading` "vtk" or
+ * "pre-integrated"), "vtk-pt" (vtkProjectedTetrahedraMapper), "raycast"
+ * (vtkUnstructuredGridVolumeRayCastMapper) and "zsweep"
+ * (vtkUnstructuredGridVolumeZSweepMapper). Null for an unknown name.
+ */
+vtkSmartPointer<vtkUnstructuredGridVolumeMapper> MakeMapper(
+  const std::string& name, int threads = 0, const std::string& shading = "vtk");
+
+/// Every contender name MakeMapper knows.
+const std::vector<std::string>& ContenderNames();
+
+/// A volume in a renderer in a window as VTK makes it by default, off-screen.
+class Stage
+{
+public:
+  Stage(const Scene& scene, vtkVolumeProperty* property, vtkUnstructuredGridVolumeMapper* mapper,
+    int width, int height);
+  ~Stage();
+
+  /// The starting view: the camera reset on the volume, turned 30 degrees in azimuth and 20
+  /// in elevation.
+  void StartView();
+  /// Turns the camera by `degrees` of azimuth about the volume.
+  void Turn(double degrees);
+  /// One frame: Render and WaitForCompletion; milliseconds.
+  double Frame();
+  /// The window's RGB image as drawn by the last frame.
+  vtkSmartPointer<vtkImageData> Image();
+
+  vtkRenderer* GetRenderer() { return this->Renderer; }
+  vtkRenderWindow* GetWindow() { return this->Window; }
+
+private:
+  vtkNew<vtkVolume> Volume;
+  vtkNew<vtkRenderer> Renderer;
+  vtkNew<vtkRenderWindow> Window;
+  vtkUnstructuredGridVolumeMapper* Mapper;
+};
+
+/// The frames of one measurement.
+struct FrameTiming
+{
+  std::vector<double> frames; ///< milliseconds of each timed frame
+  double median = 0;          ///< their median
+  std::size_t medianFrame = 0;
+  bool slow = false; ///< the warm-up frame took longer than the slow limit: it is the result
+};
+
+/// How frames are timed (see the file comment).
+struct TimingOptions
+{
+  int repeat = 5;          ///< timed frames
+  double step = 1.0;       ///< degrees of azimuth before each frame; 0: unchanged view
+  double slowLimit = 20.0; ///< seconds: a slower warm-up frame ends the measurement
+};
+
+/**
+ * Times frames of `stage` from its start view. `afterFrame(i)` runs after timed frame i
+ * (to record a mapper's stage timers).
+ */
+FrameTiming TimeFrames(Stage& stage, const TimingOptions& options,
+  const std::function<void(std::size_t)>& afterFrame = {});
+
+/// RMSE over RGB in [0, 1] and largest channel difference of two images of equal size.
+struct ImageError
+{
+  double rmse = 1, worst = 1;
+};
+ImageError CompareImages(vtkImageData* a, vtkImageData* b);
+
+/// Options every frame benchmark takes.
+struct CommonOptions
+{
+  TimingOptions timing;
+  int threads = 0;         ///< MTPT's threads (0: the default)
+  std::string dataFolder;  ///< real meshes beyond the repository's (optional)
+};
+
+/// Adds --repeat, --step, --slow-limit, --threads and --data to `app`.
+void AddCommonOptions(CLI::App& app, CommonOptions& options);
+
+/// The folder of real meshes next to the repository, if it exists ("" otherwise).
+std::string DefaultDataFolder();
+
+/// A comma-separated list as its items ("a,b" -> {"a", "b"}).
+std::vector<std::string> SplitList(const std::string& list);
+
+} // namespace bench
+} // namespace mtpt
+
+#endif
