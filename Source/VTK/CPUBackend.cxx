@@ -52,8 +52,47 @@ bool CPUBackend::Draw(const BackendFrame& frame, BackendTimes& times)
   {
     return false; // nothing was written
   }
-  this->Composite(frame, times);
+  const ImageKey key = ImageKey::Of(frame);
+  times.imageReused = this->HaveImage && key == this->Kept && this->Depth == this->KeptDepth;
+  if (times.imageReused)
+  {
+    this->LastStats = CompositorStats{};
+  }
+  else
+  {
+    this->Composite(frame, times);
+    this->LastStats = this->Compositing.Stats();
+    // A stopped frame's image is incomplete: never reused.
+    this->HaveImage = !times.stopped;
+    this->Kept = key;
+    this->Depth.swap(this->KeptDepth); // read into the other buffer next frame
+  }
   return this->WriteBack(frame, times);
+}
+
+CPUBackend::ImageKey CPUBackend::ImageKey::Of(const BackendFrame& frame)
+{
+  ImageKey key;
+  key.pipeline = frame.pipeline;
+  key.order = frame.pipeline->OrderVersionNumber();
+  key.tables = frame.tables->Version();
+  key.batch = frame.batchSize;
+  key.size[0] = frame.size[0];
+  key.size[1] = frame.size[1];
+  key.shading = frame.shading;
+  key.unitDistance = frame.unitDistance;
+  key.interpolation = frame.interpolation;
+  return key;
+}
+
+bool CPUBackend::ImageKey::operator==(const ImageKey& o) const
+{
+  const PerspectiveInterpolation &a = this->interpolation, &b = o.interpolation;
+  return pipeline == o.pipeline && order == o.order && tables == o.tables && batch == o.batch &&
+    size[0] == o.size[0] && size[1] == o.size[1] && shading == o.shading &&
+    unitDistance == o.unitDistance && a.perspective == b.perspective &&
+    a.inverseWScale == b.inverseWScale && a.inverseWOffset == b.inverseWOffset &&
+    a.scaleX == b.scaleX && a.shiftX == b.shiftX && a.scaleY == b.scaleY && a.shiftY == b.shiftY;
 }
 
 bool CPUBackend::ReadBack(const BackendFrame& frame, BackendTimes& times)
@@ -156,6 +195,7 @@ bool CPUBackend::WriteBack(const BackendFrame& frame, BackendTimes& times)
 
 void CPUBackend::ReleaseGraphicsResources(vtkWindow* window)
 {
+  this->HaveImage = false;
   if (window)
   {
     this->Image->ReleaseGraphicsResources(window);

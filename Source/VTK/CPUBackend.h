@@ -13,7 +13,11 @@
  * garbage.
  *
  * What it keeps between frames: the image texture and the target (one context; released in
- * ReleaseGraphicsResources), the compositor's buffers, and its read-back buffers.
+ * ReleaseGraphicsResources), the compositor's buffers, and its read-back buffers. The
+ * composited image itself is reused by a frame whose ImageKey and opaque depth equal those
+ * it was made with (an unchanged view, data, transfer function, window size and opaque
+ * geometry): that frame only reads back, resolves the image over the new colour beneath it
+ * and writes it, which is what keeps an unchanged frame cheap.
  */
 #ifndef mtpt_CPUBackend_h
 #define mtpt_CPUBackend_h
@@ -44,12 +48,31 @@ public:
   bool Draw(const BackendFrame& frame, BackendTimes& times) override;
   void ReleaseGraphicsResources(vtkWindow* window) override;
 
-  /// The compositor's work in the last Draw.
-  const CompositorStats& Stats() const { return this->Compositing.Stats(); }
+  /// The compositor's work in the last Draw (zero counts when it reused its image).
+  const CompositorStats& Stats() const { return this->LastStats; }
 
 private:
   CPUBackend(const CPUBackend&) = delete;
   void operator=(const CPUBackend&) = delete;
+
+  /**
+   * Everything the composited image depends on besides the opaque depth. The order's
+   * version stands for the view, the projection (and so the interpolation), the data, the
+   * culling and the viewport; the tables' version for the transfer functions.
+   */
+  struct ImageKey
+  {
+    const FramePipeline* pipeline = nullptr;
+    std::uint64_t order = 0, tables = 0;
+    std::size_t batch = 0;
+    int size[2] = { 0, 0 };
+    Shading shading = Shading::VTKCompatible;
+    double unitDistance = 0;
+    PerspectiveInterpolation interpolation;
+
+    static ImageKey Of(const BackendFrame& frame);
+    bool operator==(const ImageKey& other) const;
+  };
 
   bool ReadBack(const BackendFrame& frame, BackendTimes& times);
   void Composite(const BackendFrame& frame, BackendTimes& times);
@@ -57,6 +80,10 @@ private:
 
   Compositor Compositing;
   CompositeSettings Settings;
+  CompositorStats LastStats;
+  bool HaveImage = false; ///< the compositor holds the complete image of Kept
+  ImageKey Kept;
+  std::vector<float> KeptDepth; ///< the opaque depth the kept image was composited with
   BlendTarget Target;
   vtkNew<vtkTextureObject> Image;
   std::vector<float> Depth;

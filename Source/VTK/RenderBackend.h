@@ -65,6 +65,7 @@ struct BackendTimes
   double decompose = 0; ///< decomposition of the batches (included in the pipeline's times)
   int batches = 0;      ///< batches drawn
   bool stopped = false; ///< afterBatch stopped the frame
+  bool imageReused = false; ///< CPU: the previous frame's composited image served
 };
 
 class RenderBackend

@@ -330,9 +330,11 @@ int vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfBatches()
 int vtkMultiThreadedProjectedTetrahedraMapper::GetLastFrameReuse()
 {
   const mtpt::FrameStats& stats = this->Internal->Pipeline.Stats();
+  const bool imageReused = this->Internal->Times.imageReused; // nothing decomposed either
   return (stats.transformReused ? REUSED_TRANSFORM : 0) | (stats.orderReused ? REUSED_ORDER : 0) |
     (stats.orderFromPrevious ? ORDER_FROM_PREVIOUS : 0) |
-    (stats.decompositionReused ? REUSED_DECOMPOSITION : 0);
+    (stats.decompositionReused || imageReused ? REUSED_DECOMPOSITION : 0) |
+    (imageReused ? REUSED_IMAGE : 0);
 }
 vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetMemoryBytes()
 {

@@ -46,19 +46,22 @@
  * Per-frame work follows what the view shows, never changing the image:
  * - culling: cells whose opacity is zero over their whole scalar range (recomputed only
  *   when the opacity function or the data change) and cells entirely outside the view
- *   volume are left out before the sort; cells whose projection covers no pixel centre
- *   (sub-pixel cells in a small image) are culled before decomposition (not for
- *   multisampled OpenGL targets, which sample elsewhere too). The counts of each are
- *   available after every Render;
+ *   volume are left out before the sort, and so are cells whose projection covers no pixel
+ *   centre (sub-pixel cells in a small image; not for multisampled OpenGL targets, which
+ *   sample elsewhere too). The counts of each are available after every Render;
+ * - the CPU backend's compositing work follows the covered pixels: each tetrahedron is
+ *   binned into the 32x32 screen tiles it touches and rasterized there, several pixels at a
+ *   time with the widest SIMD instructions of the processor (chosen at run time);
  * - reuse (ReuseResults, on by default): an unchanged view, volume matrix and input redraw
- *   without any CPU stage or buffer upload; a colour-only change of the transfer functions
- *   redoes nothing either; an opacity change redoes culling, sort and decomposition but not
- *   the transform; after a small rotation the cells are re-sorted from the previous order
- *   when that is cheaper than a full sort. Reuse relies on VTK's modification times: data
- *   changed in place must be marked Modified(), as for every VTK filter;
- * - bounded memory: BatchSize tetrahedra are decomposed, uploaded and drawn at a time,
- *   so the vertex and index buffers hold one batch (168 bytes per tetrahedron) instead of
- *   the whole mesh.
+ *   without any CPU stage or buffer upload (the CPU backend reuses its composited image too
+ *   while the opaque geometry's depth is unchanged); a colour-only change of the transfer
+ *   functions skips the CPU stages; an opacity change redoes culling, sort and decomposition
+ *   but not the transform; after a small rotation the cells are re-sorted from the previous
+ *   order when that is cheaper than a full sort. Reuse relies on VTK's modification times:
+ *   data changed in place must be marked Modified(), as for every VTK filter;
+ * - bounded memory: BatchSize tetrahedra are decomposed and drawn at a time, so the
+ *   buffers hold one batch (OpenGL: 168 bytes per tetrahedron; CPU: 128) instead of the
+ *   whole mesh.
  *
  * Cells other than tetrahedra (hexahedra, voxels, wedges, pyramids, polyhedra, higher-order
  * cells, mixed grids) are split into tetrahedra with vtkDataSetTriangleFilter once per input
@@ -318,7 +321,8 @@ public:
     REUSED_TRANSFORM = 1,    ///< projected points of the previous frame
     REUSED_ORDER = 2,        ///< no key computed and nothing sorted
     ORDER_FROM_PREVIOUS = 4, ///< sorted starting from the previous order
-    REUSED_DECOMPOSITION = 8 ///< no tetrahedron decomposed (and, in OpenGL, no upload)
+    REUSED_DECOMPOSITION = 8, ///< no tetrahedron decomposed (and, in OpenGL, no upload)
+    REUSED_IMAGE = 16 ///< CPU backend: nothing composited; the previous frame's image served
   };
   int GetLastFrameReuse();
 

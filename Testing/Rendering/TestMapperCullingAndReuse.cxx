@@ -6,14 +6,18 @@
 
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
 
+#include "vtkActor.h"
 #include "vtkCamera.h"
 #include "vtkColorTransferFunction.h"
 #include "vtkDataArray.h"
 #include "vtkImageData.h"
 #include "vtkPiecewiseFunction.h"
 #include "vtkPointData.h"
+#include "vtkPolyDataMapper.h"
+#include "vtkProperty.h"
 #include "vtkRenderWindow.h"
 #include "vtkRenderer.h"
+#include "vtkSphereSource.h"
 #include "vtkUnstructuredGrid.h"
 #include "vtkVolume.h"
 #include "vtkVolumeProperty.h"
@@ -63,6 +67,7 @@ struct Stage
     vtkNew<Mapper> fresh;
     fresh->SetInputData(this->mapper->GetInput());
     fresh->SetBackend(this->mapper->GetBackend());
+    fresh->SetShadingMode(this->mapper->GetShadingMode());
     this->volume->SetMapper(fresh);
     auto image = this->Frame();
     fresh->ReleaseGraphicsResources(this->window);
@@ -82,12 +87,14 @@ TEST_P(MapperWork, FramesReuseExactlyWhatDidNotChange)
   Stage stage(box, property, GetParam());
   Mapper* m = stage.mapper;
   const int all = Mapper::REUSED_TRANSFORM | Mapper::REUSED_ORDER | Mapper::REUSED_DECOMPOSITION;
+  // The CPU backend also keeps its composited image for a frame that changes nothing.
+  const int unchanged = all | (GetParam() == Mapper::CPU_BACKEND ? Mapper::REUSED_IMAGE : 0);
 
   auto first = stage.Frame();
   EXPECT_EQ(m->GetLastFrameReuse(), 0);
   // Unchanged: no CPU stage runs, the image is the same.
   auto again = stage.Frame();
-  EXPECT_EQ(m->GetLastFrameReuse(), all);
+  EXPECT_EQ(m->GetLastFrameReuse(), unchanged);
   EXPECT_EQ(m->GetCPUStageSeconds(), 0.0);
   EXPECT_EQ(Compare(first, again).worst, 0.0);
 
@@ -102,7 +109,8 @@ TEST_P(MapperWork, FramesReuseExactlyWhatDidNotChange)
   EXPECT_FALSE(m->GetLastFrameReuse() & Mapper::ORDER_FROM_PREVIOUS);
   EXPECT_EQ(Compare(rotatedFar, stage.Fresh()).worst, 0.0);
 
-  // Colour only: the same visible cells, nothing recomputed, the new colours drawn.
+  // Colour only: the same visible cells, no CPU stage, the new colours drawn (composited
+  // again by the CPU backend).
   property->GetRGBTransferFunction()->AddRGBPoint(0.5, 0.1, 0.9, 0.2);
   auto recoloured = stage.Frame();
   EXPECT_EQ(m->GetLastFrameReuse(), all);
@@ -214,6 +222,93 @@ TEST_P(MapperWork, CulledCellsAreCountedAndChangeNothing)
       m->GetNumberOfPixelCulledCells() + m->GetNumberOfTetrahedra(),
     cells);
   compareWithAllCells(hidden);
+}
+
+TEST(MapperImageReuse, OnlyAFrameThatChangesNothingReusesTheCompositedImage)
+{
+  // The CPU backend's composited image depends on the view, the data, the transfer
+  // functions, the window size and the depth of the opaque geometry; the colour beneath it
+  // (background, opaque surfaces) is blended in every frame. Each change below must draw
+  // exactly what a fresh mapper draws, and only unchanged frames may reuse the image.
+  auto box = MakeTetrahedralBox(10);
+  auto property = MakeProperty(-0.3, 1.3, 0.5);
+  Stage stage(box, property, Mapper::CPU_BACKEND);
+  Mapper* m = stage.mapper;
+  vtkNew<vtkSphereSource> ball;
+  ball->SetCenter(0.5, 0.5, 0.5);
+  ball->SetRadius(0.3);
+  ball->SetThetaResolution(24);
+  ball->SetPhiResolution(24);
+  vtkNew<vtkPolyDataMapper> ballMapper;
+  ballMapper->SetInputConnection(ball->GetOutputPort());
+  vtkNew<vtkActor> opaque;
+  opaque->SetMapper(ballMapper);
+  opaque->GetProperty()->SetColor(0.9, 0.8, 0.1);
+  stage.renderer->AddActor(opaque);
+  auto isReused = [m] { return (m->GetLastFrameReuse() & Mapper::REUSED_IMAGE) != 0; };
+
+  auto first = stage.Frame();
+  EXPECT_FALSE(isReused());
+  EXPECT_GT(m->GetNumberOfFragments(), 1000);
+  auto again = stage.Frame();
+  EXPECT_TRUE(isReused());
+  EXPECT_EQ(m->GetNumberOfFragments(), 0);
+  EXPECT_EQ(m->GetBinSeconds(), 0.0); // no binning, no rasterization: only the resolve
+  EXPECT_EQ(m->GetRasterSeconds(), 0.0);
+  EXPECT_EQ(Compare(first, again).worst, 0.0);
+
+  // The colour beneath changes: the image is reused, blended over the new colour.
+  stage.renderer->SetBackground(0.3, 0.1, 0.2);
+  auto background = stage.Frame();
+  EXPECT_TRUE(isReused());
+  EXPECT_GT(Compare(background, first).worst, 0.05);
+  EXPECT_EQ(Compare(background, stage.Fresh()).worst, 0.0);
+  opaque->GetProperty()->SetColor(0.1, 0.3, 0.9);
+  auto recolouredBall = stage.Frame();
+  EXPECT_TRUE(isReused());
+  EXPECT_EQ(Compare(recolouredBall, stage.Fresh()).worst, 0.0);
+
+  // The opaque geometry moves: its depth differs, so the volume is composited again.
+  opaque->SetPosition(0.15, 0.0, 0.0);
+  auto moved = stage.Frame();
+  EXPECT_FALSE(isReused());
+  EXPECT_GT(Compare(moved, recolouredBall).worst, 0.05);
+  EXPECT_EQ(Compare(moved, stage.Fresh()).worst, 0.0);
+  stage.Frame();
+  EXPECT_TRUE(isReused());
+
+  // The transfer function's colour and the unit distance.
+  property->GetRGBTransferFunction()->AddRGBPoint(0.5, 0.1, 0.9, 0.2);
+  auto recoloured = stage.Frame();
+  EXPECT_FALSE(isReused());
+  EXPECT_EQ(Compare(recoloured, stage.Fresh()).worst, 0.0);
+  property->SetScalarOpacityUnitDistance(0.2);
+  auto denser = stage.Frame();
+  EXPECT_FALSE(isReused());
+  EXPECT_GT(Compare(denser, recoloured).worst, 0.05);
+  EXPECT_EQ(Compare(denser, stage.Fresh()).worst, 0.0);
+
+  // Shading mode, window size and a view change.
+  m->SetShadingModeToPreIntegrated();
+  auto integrated = stage.Frame();
+  EXPECT_FALSE(isReused());
+  EXPECT_EQ(Compare(integrated, stage.Fresh()).worst, 0.0);
+  m->SetShadingModeToVTKCompatible();
+  stage.window->SetSize(130, 150);
+  auto resized = stage.Frame();
+  EXPECT_FALSE(isReused());
+  EXPECT_EQ(Compare(resized, stage.Fresh()).worst, 0.0);
+  stage.renderer->GetActiveCamera()->Azimuth(0.5);
+  auto turned = stage.Frame();
+  EXPECT_FALSE(isReused());
+  EXPECT_EQ(Compare(turned, stage.Fresh()).worst, 0.0);
+
+  // Reuse off: composited every frame.
+  m->ReuseResultsOff();
+  stage.Frame();
+  EXPECT_FALSE(isReused());
+  stage.Frame();
+  EXPECT_FALSE(isReused());
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, MapperWork,
