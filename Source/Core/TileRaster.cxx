@@ -367,6 +367,18 @@ inline TileRow RowOf(const TileTarget& tile, int y)
 /// The vector type of the fragment loops: 8 lanes where the processor has them (AVX2 and
 /// AVX-512 alike: wider vectors only add idle lanes to the short spans of small triangles).
 using FragmentTag = hn::CappedTag<float, 8>;
+constexpr std::size_t MaxLanes = 8;
+
+/**
+ * A fragment's opacity 1 - exp(-density), as -expm1(-density): no cancellation for thin
+ * segments. Highway's Expm1 is a polynomial approximation of bounded error (tested against
+ * std::expm1 by the core tests through OpacitiesOfDensities).
+ */
+template <class D, class V>
+HWY_INLINE V OpacityOfDensity(D d, V density)
+{
+  return hn::Neg(hn::Expm1(d, hn::Neg(density)));
+}
 
 /// VTK-compatible shading of the lanes `keep` of the vector at tile column x of `row`, with
 /// the OpenGL path's fragment math. start[k]: plane k at the row's column 0.
@@ -385,9 +397,8 @@ void ShadeVector(D d, const RasterFrame& f, const TileRow& row, const Planes& p,
   }
   const auto attenuation = hn::MulAdd(hn::Set(d, p.dx[3]), i, hn::Set(d, start[3]));
   const auto length = hn::MulAdd(hn::Set(d, p.dx[4]), i, hn::Set(d, start[4]));
-  // 1 - exp(-a L / unit) as -expm1(-x): no cancellation for thin segments.
-  const auto density = hn::Mul(hn::Mul(attenuation, length), hn::Set(d, f.inverseUnit));
-  const auto opacity = hn::Neg(hn::Expm1(d, hn::Neg(density)));
+  const auto opacity =
+    OpacityOfDensity(d, hn::Mul(hn::Mul(attenuation, length), hn::Set(d, f.inverseUnit)));
   keep = hn::And(keep, hn::Gt(opacity, hn::Zero(d)));
   const auto rest = hn::Sub(one, opacity);
   float* planes[3] = { row.r, row.g, row.b };
@@ -635,6 +646,21 @@ const char* TargetName()
   return hwy::TargetName(HWY_TARGET);
 }
 
+void OpacitiesOfDensitiesImpl(const float* density, float* opacity, std::size_t count)
+{
+  const FragmentTag d;
+  const std::size_t lanes = hn::Lanes(d);
+  float in[MaxLanes], out[MaxLanes];
+  for (std::size_t i = 0; i < count; i += lanes)
+  {
+    const std::size_t n = std::min(lanes, count - i);
+    std::fill(in, in + lanes, 0.0f);
+    std::copy(density + i, density + i + n, in);
+    hn::StoreU(OpacityOfDensity(d, hn::LoadU(d, in)), d, out);
+    std::copy(out, out + n, opacity + i);
+  }
+}
+
 } // namespace HWY_NAMESPACE
 } // namespace detail
 } // namespace mtpt
@@ -648,6 +674,7 @@ namespace detail
 
 HWY_EXPORT(RasterizeTileImpl);
 HWY_EXPORT(TargetName);
+HWY_EXPORT(OpacitiesOfDensitiesImpl);
 
 void RasterizeTile(const RasterFrame& frame, const TileTarget& tile, const Fan* fans,
   std::size_t count, RasterCounts& counts)
@@ -658,6 +685,11 @@ void RasterizeTile(const RasterFrame& frame, const TileTarget& tile, const Fan* 
 const char* RasterTargetName()
 {
   return HWY_DYNAMIC_DISPATCH(TargetName)();
+}
+
+void OpacitiesOfDensities(const float* density, float* opacity, std::size_t count)
+{
+  HWY_DYNAMIC_DISPATCH(OpacitiesOfDensitiesImpl)(density, opacity, count);
 }
 
 } // namespace detail

@@ -1,14 +1,21 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// The CPU compositor: coverage rule, fragment math, occlusion, and determinism.
+// The CPU compositor: coverage rule, fragment math, occlusion, and determinism. The tests
+// of the per-pixel code run once for every instruction set it is compiled for and this
+// processor has (CompositorSimd), each chosen in turn through Highway's test hook.
 #include "TestHelpers.h"
 
 #include "mtpt/Compositor.h"
 #include "mtpt/FramePipeline.h"
 
+#include "detail/TileRaster.h"
+
 #include <gtest/gtest.h>
+#include <hwy/targets.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <string>
 #include <vector>
 
 namespace
@@ -56,7 +63,15 @@ void SquareSlot(double x0, double y0, double x1, double y1, int w, int h, float 
   }
 }
 
-TEST(Compositor, SharedEdgesAreCoveredExactlyOnce)
+/// The tests of the fragment loops, run with each instruction set in turn.
+class CompositorSimd : public ::testing::TestWithParam<std::int64_t>
+{
+protected:
+  void SetUp() override { hwy::SetSupportedTargetsForTest(this->GetParam()); }
+  void TearDown() override { hwy::SetSupportedTargetsForTest(0); }
+};
+
+TEST_P(CompositorSimd, SharedEdgesAreCoveredExactlyOnce)
 {
   const int w = 16, h = 12;
   const auto table = ConstantTable(1.0f, 0.5f, 0.25f, 1.0f);
@@ -97,7 +112,7 @@ TEST(Compositor, SharedEdgesAreCoveredExactlyOnce)
   }
 }
 
-TEST(Compositor, FragmentMathMatchesTheShader)
+TEST_P(CompositorSimd, FragmentMathMatchesTheShader)
 {
   // One triangle with different attributes at its vertices; check one pixel by hand.
   const int w = 8, h = 8;
@@ -131,7 +146,7 @@ TEST(Compositor, FragmentMathMatchesTheShader)
   EXPECT_EQ(rgba[4 * (7 * w + 7) + 3], 0.0f);
 }
 
-TEST(Compositor, BlendsBackToFrontInSlotOrder)
+TEST_P(CompositorSimd, BlendsBackToFrontInSlotOrder)
 {
   const int w = 4, h = 4;
   // Slot 0 red behind, slot 1 blue in front, both covering the whole window.
@@ -154,7 +169,7 @@ TEST(Compositor, BlendsBackToFrontInSlotOrder)
   EXPECT_NEAR(rgba[3], a + (1 - a) * a, 1e-6);
 }
 
-TEST(Compositor, OpaqueDepthOccludesFragmentsBehindIt)
+TEST_P(CompositorSimd, OpaqueDepthOccludesFragmentsBehindIt)
 {
   const int w = 8, h = 8;
   const auto table = ConstantTable(1, 1, 1, 1);
@@ -312,7 +327,7 @@ void TriangleSlot(const double (&x)[3], const double (&y)[3], const float (&fron
 
 } // namespace
 
-TEST(Compositor, TrianglesBeyondTheFixedPointRangeAreClippedNotDropped)
+TEST_P(CompositorSimd, TrianglesBeyondTheFixedPointRangeAreClippedNotDropped)
 {
   // A triangle with one vertex 10^8 pixels off screen (a near-plane piece seen from inside
   // the mesh): the fixed-point rasterizer cannot hold it, so it is clipped to a guard band.
@@ -372,3 +387,42 @@ TEST(Compositor, TrianglesBeyondTheFixedPointRangeAreClippedNotDropped)
     EXPECT_LT(worst, 1e-5) << (preIntegrated ? "pre-integrated" : "VTK-compatible");
   }
 }
+
+TEST_P(CompositorSimd, FragmentOpacityApproximationIsWithinFourUlpOfTheExactExponential)
+{
+  // The SIMD fragment loop computes 1 - exp(-density) with Highway's polynomial Expm1. Its
+  // error, over densities from the thinnest segments (1e-30) to saturation (1e4), must stay
+  // within 4 units in the last place of the float result (relative 4 * 2^-24), so that thin
+  // segments keep their tiny opacities and thick ones reach 1.
+  std::vector<float> density;
+  for (double e = -30; e <= 4; e += 0.001)
+  {
+    density.push_back(static_cast<float>(std::pow(10.0, e)));
+  }
+  density.push_back(0.0f);
+  std::vector<float> opacity(density.size());
+  mtpt::detail::OpacitiesOfDensities(density.data(), opacity.data(), density.size());
+  double worst = 0;
+  float worstAt = 0;
+  for (std::size_t i = 0; i < density.size(); ++i)
+  {
+    const double exact = -std::expm1(-static_cast<double>(density[i]));
+    ASSERT_GE(opacity[i], 0.0f) << density[i];
+    ASSERT_LE(opacity[i], 1.0f) << density[i];
+    const double error = exact > 0 ? std::fabs(opacity[i] - exact) / exact : opacity[i];
+    if (error > worst)
+    {
+      worst = error;
+      worstAt = density[i];
+    }
+  }
+  EXPECT_LE(worst, 4.0 * std::ldexp(1.0, -24)) << "at density " << worstAt;
+  EXPECT_STREQ(mtpt::detail::RasterTargetName(), hwy::TargetName(GetParam()));
+  std::printf("fragment opacity: worst relative error %.3g (%.2f ulp) at density %g, %s\n", worst,
+    worst / std::ldexp(1.0, -24), worstAt, mtpt::detail::RasterTargetName());
+}
+
+INSTANTIATE_TEST_SUITE_P(InstructionSets, CompositorSimd,
+  ::testing::ValuesIn(hwy::SupportedAndGeneratedTargets()),
+  [](const ::testing::TestParamInfo<std::int64_t>& info)
+  { return std::string(hwy::TargetName(info.param)); });

@@ -53,6 +53,12 @@ void RasterizeTile(const RasterFrame& frame, const TileTarget& tile, const Fan* 
 /// The instruction set RasterizeTile runs with here (e.g. "AVX2"), for reports.
 const char* RasterTargetName();
 
+/**
+ * opacity[i] = 1 - exp(-density[i]) computed exactly as RasterizeTile's VTK-compatible
+ * fragments compute it (the SIMD approximation), for tests of its error.
+ */
+void OpacitiesOfDensities(const float* density, float* opacity, std::size_t count);
+
 } // namespace detail
 } // namespace mtpt
 
