@@ -27,7 +27,11 @@
  *   buffers;
  * - the Compositor (VTK-compatible or pre-integrated shading, perspective-exact in
  *   perspective views, with or without an opaque depth image) gives every pixel finite and
- *   in [0, 1], bit-identical for two thread counts.
+ *   in [0, 1], bit-identical for two thread counts;
+ * - the CPU backend's path (DecomposeFans in batches of 1 to all, binned into tiles by
+ *   Compositor::Composite, Resolve) gives bit-identically the slots' image, draws nothing
+ *   outside its touched region, and resolves over a colour beneath in float and in 8 bits
+ *   alike (within half a step of 8 bits).
  */
 #include "mtpt/Compositor.h"
 #include "mtpt/FramePipeline.h"
@@ -447,11 +451,13 @@ void CheckFrame(const mtpt::FramePipeline& pipeline, const mtpt::FrameInput& fra
     s.frustumCulled, n);
   FUZZ_CHECK(
     s.nearPieces <= 3 * s.nearClipped, "%zu pieces of %zu cut cells", s.nearPieces, s.nearClipped);
-  FUZZ_CHECK(count + s.nearClipped <= n - s.opacityCulled - s.frustumCulled + s.nearPieces,
-    "sorted %zu, cut %zu, pieces %zu, cells %zu, culled %zu + %zu", count, s.nearClipped,
-    s.nearPieces, n, s.opacityCulled, s.frustumCulled);
-  FUZZ_CHECK(s.pixelCulled + s.notDrawable <= count, "pixel culled %zu + not drawable %zu of %zu",
-    s.pixelCulled, s.notDrawable, count);
+  // Every cell is sorted, cut by the near plane, or culled once; pixelCulled counts cells
+  // culled before the sort and near-plane pieces (in the order) culled after it.
+  FUZZ_CHECK(count + s.nearClipped + s.pixelCulled <=
+      n - s.opacityCulled - s.frustumCulled + 2 * s.nearPieces,
+    "sorted %zu, cut %zu, pixel culled %zu, pieces %zu, cells %zu, culled %zu + %zu", count,
+    s.nearClipped, s.pixelCulled, s.nearPieces, n, s.opacityCulled, s.frustumCulled);
+  FUZZ_CHECK(s.notDrawable <= count, "not drawable %zu of %zu", s.notDrawable, count);
   FUZZ_CHECK(s.batches == 1, "batches %zu", s.batches);
 
   // Keys: strictly ascending (back to front), distinct cells or pieces, and each cell's key
@@ -781,5 +787,60 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   compositor.Composite(
     a.Vertices().data(), a.Indices().data(), a.TetrahedronCount(), settings, imageB, threadsB);
   FUZZ_CHECK(imageA == imageB, "compositor: %d and %d threads differ", threadsA, threadsB);
+
+  // The CPU backend's path: the order decomposed into fans, batch after batch, binned into
+  // tiles and rasterized there. The same triangles in the same order as the slots: the same
+  // image, bit for bit, whatever the batch size and thread count.
+  const std::size_t batch = in.PickValueInArray<std::size_t>({ 1, 3, 7, 1u << 20 });
+  std::vector<float> fanImage(imageA.size());
+  mtpt::Compositor tiles;
+  tiles.Begin(settings);
+  for (std::size_t first = 0; first < b.SortedCount(); first += batch)
+  {
+    b.DecomposeFans(first, batch, threadsB);
+    FUZZ_CHECK(b.FanCount() == std::min(batch, b.SortedCount() - first), "%zu fans in a batch",
+      b.FanCount());
+    for (std::size_t k = 0; k < b.FanCount(); ++k)
+    {
+      const mtpt::Fan& fan = b.Fans()[k];
+      FUZZ_CHECK(fan.count == 0 || ((fan.count == 3 || fan.count == 4) && fan.closed == 1),
+        "fan %zu: %d corners, closed %d", first + k, fan.count, fan.closed);
+    }
+    tiles.Composite(b.Fans().data(), b.FanCount(), threadsA);
+  }
+  const mtpt::PixelRegion touched = tiles.TouchedRegion();
+  FUZZ_CHECK(touched.Empty() || (touched.x0 >= 0 && touched.y0 >= 0 && touched.x1 <= width &&
+                                  touched.y1 <= height),
+    "touched region [%d, %d) x [%d, %d) outside %dx%d", touched.x0, touched.x1, touched.y0,
+    touched.y1, width, height);
+  tiles.Resolve({ 0, 0, width, height }, nullptr, fanImage.data(), threadsB);
+  CheckImage(fanImage, width, height);
+  FUZZ_CHECK(fanImage == imageA, "fans in batches of %zu differ from the slots", batch);
+  for (int y = 0; y < height; ++y) // nothing drawn outside the touched region
+  {
+    for (int x = 0; x < width; ++x)
+    {
+      const bool inside = !touched.Empty() && x >= touched.x0 && x < touched.x1 &&
+        y >= touched.y0 && y < touched.y1;
+      FUZZ_CHECK(inside || fanImage[4 * (static_cast<std::size_t>(y) * width + x) + 3] == 0.0f,
+        "pixel %d,%d drawn outside the touched region", x, y);
+    }
+  }
+  // Resolved over a colour beneath, in float and in 8 bits, as the CPU backend writes it.
+  std::vector<float> below(imageA.size()), over(imageA.size());
+  std::vector<std::uint8_t> below8(imageA.size()), over8(imageA.size());
+  for (std::size_t i = 0; i < below.size(); ++i)
+  {
+    below8[i] = in.ConsumeIntegral<std::uint8_t>();
+    below[i] = below8[i] / 255.0f;
+  }
+  tiles.Resolve({ 0, 0, width, height }, below.data(), over.data(), threadsA);
+  CheckImage(over, width, height);
+  tiles.Resolve({ 0, 0, width, height }, below8.data(), over8.data(), threadsA);
+  for (std::size_t i = 0; i < over8.size(); ++i)
+  {
+    FUZZ_CHECK(std::fabs(over8[i] / 255.0f - over[i]) <= 0.5f / 255.0f + 1e-6f,
+      "8-bit resolve %u against %g at value %zu", over8[i], over[i], i);
+  }
   return 0;
 }
