@@ -168,7 +168,7 @@ void Compositor::Bin(const Fan* fans, std::size_t count, int threads)
   // place in one array, tile by tile and block by block within a tile, and each block copies
   // its fans there. A tile's fans are then contiguous and in visibility order, whatever the
   // thread count, and rasterization reads them sequentially.
-  const int blocks = detail::ResolveThreads(threads);
+  const int blocks = ThreadsForWork(count, detail::FansPerThread, threads);
   const std::size_t tiles = static_cast<std::size_t>(this->TilesX) * this->TilesY;
   this->Counts.assign(static_cast<std::size_t>(blocks) * tiles, 0);
   if (this->Ranges.size() < count)
@@ -276,7 +276,9 @@ void Compositor::Rasterize(int threads)
   frame.inverseUnit = static_cast<float>(1.0 / s.unitDistance);
   const auto jobs = static_cast<std::int64_t>(this->Tiles.size());
   std::size_t triangles = 0, fragments = 0;
-#pragma omp parallel num_threads(detail::ResolveThreads(threads)) reduction(+ : triangles, fragments)
+  // Threads take tiles; a tile's work is worth a thread.
+  const int team = ThreadsForWork(this->Tiles.size(), 1, threads);
+#pragma omp parallel num_threads(team) reduction(+ : triangles, fragments)
   {
     std::vector<float> depth(s.opaqueDepth ? TilePixels : 0);
 #pragma omp for schedule(dynamic, 1)
@@ -330,7 +332,10 @@ void ForEachPixel(const PixelRegion& region, int imageWidth, int tilesX,
   const std::vector<std::uint8_t>& cleared, const float* image, int threads, Pixel&& pixel)
 {
   const int width = region.x1 - region.x0;
-#pragma omp parallel for num_threads(detail::ResolveThreads(threads)) schedule(static)
+  const std::size_t pixels = static_cast<std::size_t>(std::max(width, 0)) *
+    static_cast<std::size_t>(std::max(region.y1 - region.y0, 0));
+  const int team = ThreadsForWork(pixels, detail::PixelsPerThread, threads);
+#pragma omp parallel for num_threads(team) schedule(static)
   for (int y = region.y0; y < region.y1; ++y)
   {
     for (int x = region.x0; x < region.x1; ++x)

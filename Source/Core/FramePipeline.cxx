@@ -127,6 +127,7 @@ bool FramePipeline::Run(const FrameInput& input, int threads)
 bool FramePipeline::Prepare(const FrameInput& input, int threads)
 {
   const std::size_t n = input.cells.cellCount;
+  threads = ThreadsForWork(std::max(n, input.points.count), detail::CellsPerThread, threads);
   this->LastTimes = StageTimes{};
   this->LastStats = FrameStats{};
   this->LastStats.cells = n;
@@ -503,6 +504,8 @@ bool FramePipeline::DecomposeWindow(Window& window, std::size_t& first, std::siz
 {
   first = std::min(first, this->SortedSize);
   count = std::min(count, this->SortedSize - first);
+  // The decomposition by rank visits every cell of the mesh (DecomposeTetrahedraByRank).
+  threads = ThreadsForWork(this->LastStats.cells + count, detail::CellsPerThread, threads);
   ++this->LastStats.batches;
   const DecomposeInput& in = this->DecomposeState;
   if (this->Reuse && window.Holds(this->OrderVersion, first, count, in))

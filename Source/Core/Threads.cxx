@@ -97,4 +97,23 @@ int ResolveThreadCount(int requested)
   return requested > 0 ? requested : DefaultThreadCount();
 }
 
+int ThreadsForWork(std::size_t items, std::size_t itemsPerThread, int requested)
+{
+  const std::size_t worth = items / std::max<std::size_t>(itemsPerThread, 1);
+  const auto resolved = static_cast<std::size_t>(ResolveThreadCount(requested));
+  return static_cast<int>(std::max<std::size_t>(1, std::min(worth, resolved)));
+}
+
+bool ReleaseIdleThreads()
+{
+  // OpenMP 5.0's pause API: GCC's libgomp has it from GCC 10 on while still announcing
+  // OpenMP 4.5 in _OPENMP.
+#if defined(_OPENMP) &&                                                                            \
+  (_OPENMP >= 201811 || (defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 10))
+  return omp_in_parallel() == 0 && omp_pause_resource_all(omp_pause_soft) == 0;
+#else
+  return false;
+#endif
+}
+
 } // namespace mtpt

@@ -543,6 +543,12 @@ void vtkMultiThreadedProjectedTetrahedraMapper::ReportProgress(
 
 void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vtkVolume* volume)
 {
+  // However the frame ends, OpenMP's idle workers stop busy-waiting when it does, so they
+  // leave the cores to the OpenGL rasterizer (llvmpipe draws on the same cores).
+  struct ReleaseThreadsAtEnd
+  {
+    ~ReleaseThreadsAtEnd() { mtpt::ReleaseIdleThreads(); }
+  } releaseThreads;
   Internals& in = *this->Internal;
   in.Times = mtpt::BackendTimes{};
   in.Tetrahedra = 0;

@@ -4,6 +4,7 @@
 #ifndef mtpt_detail_Parallel_h
 #define mtpt_detail_Parallel_h
 
+#include "mtpt/Threads.h"
 #include "mtpt/Timing.h"
 
 #include <omp.h>
@@ -19,6 +20,12 @@ namespace detail
 
 /// The OpenMP thread count for a requested count: <= 0 means the default (mtpt/Threads.h).
 int ResolveThreads(int requested);
+
+/// Work per thread below which waking another thread does not pay (ThreadsForWork): about
+/// a tenth of a millisecond of each stage's work.
+constexpr std::size_t CellsPerThread = 8192;
+constexpr std::size_t FansPerThread = 4096;
+constexpr std::size_t PixelsPerThread = 16384;
 
 using mtpt::SecondsSince;
 

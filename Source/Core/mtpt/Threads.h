@@ -19,6 +19,8 @@
 #ifndef mtpt_Threads_h
 #define mtpt_Threads_h
 
+#include <cstddef>
+
 namespace mtpt
 {
 
@@ -47,6 +49,27 @@ int DefaultThreadCount();
 
 /// `requested` when positive, otherwise DefaultThreadCount().
 int ResolveThreadCount(int requested);
+
+/**
+ * The threads worth waking for `items` items of work that cost about the same each:
+ * ResolveThreadCount(requested), but at most one per `itemsPerThread` items (at least 1).
+ * Waking OpenMP's workers costs tens of microseconds, and after a parallel region they
+ * busy-wait for a while (see ReleaseIdleThreads): small work is done by the calling thread.
+ * Pure function of its arguments and DefaultThreadCount().
+ */
+int ThreadsForWork(std::size_t items, std::size_t itemsPerThread, int requested);
+
+/**
+ * Ends the busy-waiting of this thread's idle OpenMP workers: after a parallel region they
+ * spin for milliseconds (GCC's libgomp by default) before they sleep, and on a machine
+ * where OpenGL is itself a CPU rasterizer (Mesa llvmpipe) that spinning takes cores from
+ * the rasterizer's threads while they draw the rest of the frame. Implemented with
+ * omp_pause_resource_all(omp_pause_soft) (OpenMP 5.0): the workers are released and the
+ * next parallel region starts new ones (about 0.1 ms). Does nothing inside a parallel
+ * region or where the runtime does not support it. Returns whether it released them.
+ * Thread safety: call from the thread that ran the parallel regions, outside any.
+ */
+bool ReleaseIdleThreads();
 
 } // namespace mtpt
 
