@@ -54,10 +54,13 @@ int AttributeCount(Mode mode)
   return mode == Mode::Compatible ? 6 : (mode == Mode::Integrated ? 4 : 7);
 }
 
-/// A fan vertex as the rasterizer uses it.
+/// A fan vertex as the rasterizer uses it. Its attribute values are computed when the
+/// first triangle that uses it covers a pixel (most triangles of a fine mesh cover none).
 struct Corner
 {
   double X = 0, Y = 0; ///< window coordinates, snapped
+  const TetVertex* vertex = nullptr;
+  bool valued = false; ///< `values` hold the vertex's attributes
   double values[MaxAttributes] = {};
 };
 
@@ -75,15 +78,21 @@ inline double Snap(float ndc, int size)
     SubpixelScale;
 }
 
-/// `v` as a corner; false if its position is not finite.
-bool MakeCorner(const RasterFrame& f, Mode mode, const TetVertex& v, Corner& c)
+/// `v` as a corner, its position only; false if that is not finite.
+bool PlaceCorner(const RasterFrame& f, const TetVertex& v, Corner& c)
 {
   c.X = Snap(v.x, f.width);
   c.Y = Snap(v.y, f.height);
-  if (!std::isfinite(c.X) || !std::isfinite(c.Y))
-  {
-    return false;
-  }
+  c.vertex = &v;
+  c.valued = false;
+  return std::isfinite(c.X) && std::isfinite(c.Y);
+}
+
+/// The attribute values of a placed corner, per shading mode (see Mode).
+void ValueCorner(const RasterFrame& f, Mode mode, Corner& c)
+{
+  const TetVertex& v = *c.vertex;
+  c.valued = true;
   if (mode == Mode::Compatible)
   {
     // Vertex classification: the mean of the transfer function at the front and back
@@ -104,7 +113,7 @@ bool MakeCorner(const RasterFrame& f, Mode mode, const TetVertex& v, Corner& c)
     }
     c.values[4] = v.thickness;
     c.values[5] = v.z;
-    return true;
+    return;
   }
   if (mode == Mode::Integrated)
   {
@@ -112,7 +121,7 @@ bool MakeCorner(const RasterFrame& f, Mode mode, const TetVertex& v, Corner& c)
     c.values[1] = v.scalarBack;
     c.values[2] = v.thickness;
     c.values[3] = v.z;
-    return true;
+    return;
   }
   // Perspective-exact: 1 / w of the front and back faces and the eye ray are affine in
   // screen space over each triangle (PerspectiveInterpolation).
@@ -129,7 +138,6 @@ bool MakeCorner(const RasterFrame& f, Mode mode, const TetVertex& v, Corner& c)
   c.values[4] = rayX;
   c.values[5] = rayY;
   c.values[6] = v.z;
-  return true;
 }
 
 /// The planes of the triangle (a, b, c) over the tile; false for a triangle without area.
@@ -450,8 +458,9 @@ constexpr std::int64_t SmallTriangle = 8 * 256;
  * such a triangle every edge function value is an integer below 2^24 in magnitude, which
  * float holds exactly, so the float sums and comparisons decide as the 64-bit ones do.
  */
-void ShadeSmall(const RasterFrame& f, const TileTarget& tile, const Edges& edges, const Planes& p,
-  int x0, int x1, int y0, int y1, RasterCounts& counts)
+template <typename GetPlanes>
+void ShadeSmall(const RasterFrame& f, const TileTarget& tile, const Edges& edges,
+  GetPlanes&& planes, int x0, int x1, int y0, int y1, RasterCounts& counts)
 {
   const FragmentTag d;
   const int lanes = static_cast<int>(hn::Lanes(d));
@@ -471,7 +480,7 @@ void ShadeSmall(const RasterFrame& f, const TileTarget& tile, const Edges& edges
   {
     const TileRow row = RowOf(tile, y);
     float start[6];
-    RowStart(p, y - tile.y0, start);
+    const Planes* p = nullptr; // set up when the row has a covered pixel
     for (int x = begin; x <= last; x += lanes)
     {
       const auto i = hn::Iota(d, static_cast<float>(x));
@@ -482,8 +491,21 @@ void ShadeSmall(const RasterFrame& f, const TileTarget& tile, const Edges& edges
         const auto e = hn::MulAdd(hn::Set(d, stepX[k]), offset, hn::Set(d, edgeRow[k]));
         keep = hn::And(keep, hn::Ge(e, hn::Set(d, least[k])));
       }
+      if (hn::AllFalse(d, keep))
+      {
+        continue;
+      }
+      if (!p)
+      {
+        p = planes();
+        if (!p)
+        {
+          return; // no area: nothing to draw
+        }
+        RowStart(*p, y - tile.y0, start);
+      }
       counts.fragments += hn::CountTrue(d, keep);
-      ShadeVector(d, f, row, p, start, x, keep);
+      ShadeVector(d, f, row, *p, start, x, keep);
     }
     for (int k = 0; k < 3; ++k)
     {
@@ -539,9 +561,12 @@ void ShadeIntegrated(const RasterFrame& f, const TileTarget& tile, Mode mode, co
   }
 }
 
-/// Rasterizes the triangle of corners v into the tile.
-void DrawTriangle(const RasterFrame& f, const TileTarget& tile, Mode mode,
-  const Corner* const v[3], RasterCounts& counts)
+/**
+ * Rasterizes the triangle of corners v into the tile. Coverage comes first: the corners'
+ * values and the attribute planes are set up only once a pixel is known to be covered.
+ */
+void DrawTriangle(const RasterFrame& f, const TileTarget& tile, Mode mode, Corner* const v[3],
+  RasterCounts& counts)
 {
   double minX = v[0]->X, maxX = minX, minY = v[0]->Y, maxY = minY;
   for (int k = 1; k < 3; ++k)
@@ -561,21 +586,39 @@ void DrawTriangle(const RasterFrame& f, const TileTarget& tile, Mode mode,
     return;
   }
   Planes planes;
-  if (!SetUpPlanes(tile, AttributeCount(mode), v, planes))
+  int state = 0; // 0: not set up yet, 1: set up, -1: no area
+  auto getPlanes = [&]() -> const Planes*
   {
-    return;
-  }
-  ++counts.triangles;
+    if (state == 0)
+    {
+      for (int k = 0; k < 3; ++k)
+      {
+        if (!v[k]->valued)
+        {
+          ValueCorner(f, mode, *v[k]);
+        }
+      }
+      const Corner* const corners[3] = { v[0], v[1], v[2] };
+      state = SetUpPlanes(tile, AttributeCount(mode), corners, planes) ? 1 : -1;
+      counts.triangles += state > 0 ? 1 : 0;
+    }
+    return state > 0 ? &planes : nullptr;
+  };
   auto span = [&](int y, int lo, int hi)
   {
+    const Planes* p = getPlanes();
+    if (!p)
+    {
+      return;
+    }
     counts.fragments += static_cast<std::size_t>(hi - lo + 1);
     if (mode == Mode::Compatible)
     {
-      ShadeCompatible(f, tile, planes, y, lo, hi);
+      ShadeCompatible(f, tile, *p, y, lo, hi);
     }
     else
     {
-      ShadeIntegrated(f, tile, mode, planes, y, lo, hi);
+      ShadeIntegrated(f, tile, mode, *p, y, lo, hi);
     }
   };
   const int x0 = static_cast<int>(bx0), x1 = static_cast<int>(bx1);
@@ -590,7 +633,7 @@ void DrawTriangle(const RasterFrame& f, const TileTarget& tile, Mode mode,
     }
     if (mode == Mode::Compatible && edges.extent <= SmallTriangle)
     {
-      ShadeSmall(f, tile, edges, planes, x0, x1, y0, y1, counts);
+      ShadeSmall(f, tile, edges, getPlanes, x0, x1, y0, y1, counts);
     }
     else
     {
@@ -623,10 +666,10 @@ void RasterizeTileImpl(const RasterFrame& f, const TileTarget& tile, const Fan* 
     const Fan& fan = fans[e];
     const int n = fan.count;
     Corner corners[5];
-    bool finite = MakeCorner(f, mode, fan.centre, corners[n]);
+    bool finite = PlaceCorner(f, fan.centre, corners[n]);
     for (int k = 0; k < n; ++k)
     {
-      finite = finite && MakeCorner(f, mode, fan.boundary[k], corners[k]);
+      finite = finite && PlaceCorner(f, fan.boundary[k], corners[k]);
     }
     if (!finite)
     {
@@ -635,7 +678,7 @@ void RasterizeTileImpl(const RasterFrame& f, const TileTarget& tile, const Fan* 
     const int triangles = fan.closed ? n : n - 1;
     for (int k = 0; k < triangles; ++k)
     {
-      const Corner* v[3] = { &corners[k], &corners[(k + 1) % n], &corners[n] };
+      Corner* v[3] = { &corners[k], &corners[(k + 1) % n], &corners[n] };
       DrawTriangle(f, tile, mode, v, counts);
     }
   }

@@ -39,7 +39,7 @@ struct TileTarget
 /// Work counted while rasterizing.
 struct RasterCounts
 {
-  std::size_t triangles = 0; ///< triangles set up in the tile
+  std::size_t triangles = 0; ///< triangles that covered a pixel of the tile (set up)
   std::size_t fragments = 0; ///< pixels covered and shaded
 };
 

@@ -115,7 +115,7 @@ struct CompositorStats
 {
   std::size_t fans = 0;        ///< fans given that touch the image
   std::size_t binEntries = 0;  ///< (fan, tile) pairs
-  std::size_t triangles = 0;   ///< (triangle, tile) pairs set up
+  std::size_t triangles = 0;   ///< (triangle, tile) pairs that covered a pixel (set up)
   std::size_t fragments = 0;   ///< pixels covered by a triangle and shaded
   std::size_t tiles = 0;       ///< tiles that had fans
   double binSeconds = 0;       ///< binning
