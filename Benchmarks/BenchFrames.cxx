@@ -41,94 +41,6 @@ struct Options
   std::string csv;
 };
 
-/// A window size "512" (square) or "1920x1080".
-bool ParseSize(const std::string& text, int& width, int& height)
-{
-  const std::size_t x = text.find('x');
-  try
-  {
-    std::size_t used = 0;
-    width = std::stoi(text.substr(0, x), &used);
-    if (used != (x == std::string::npos ? text.size() : x))
-    {
-      return false;
-    }
-    height = x == std::string::npos ? width : std::stoi(text.substr(x + 1), &used);
-    return (x == std::string::npos || used == text.size() - x - 1) && width > 0 && height > 0;
-  }
-  catch (const std::exception&)
-  {
-    return false;
-  }
-}
-
-/// What one contender measured on one scene and size.
-struct Measurement
-{
-  FrameTiming moving, unchanged;
-  vtkSmartPointer<vtkImageData> image; ///< at the end of the moving frames
-  // MTPT only, of the median moving frame:
-  double cpuStages = 0, composite = 0, bin = 0, raster = 0, upload = 0, draw = 0;
-  double fragments = 0;
-  long long sorted = 0, pixelCulled = 0;
-};
-
-Measurement Measure(const Scene& scene, vtkVolumeProperty* property, const std::string& name,
-  int width, int height, const Options& o)
-{
-  Measurement m;
-  auto mapper = MakeMapper(name, o.common.threads, o.shading);
-  Stage stage(scene, property, mapper, width, height);
-  auto* ours = Mapper::SafeDownCast(mapper);
-  struct Record
-  {
-    double cpu, composite, bin, raster, upload, draw, fragments;
-    long long sorted, pixelCulled;
-  };
-  std::vector<Record> records;
-  m.moving = TimeFrames(stage, o.common.timing,
-    [&](std::size_t)
-    {
-      if (ours)
-      {
-        records.push_back({ ours->GetCPUStageSeconds(), ours->GetCompositeSeconds(),
-          ours->GetBinSeconds(), ours->GetRasterSeconds(), ours->GetUploadSeconds(),
-          ours->GetDrawSeconds(), static_cast<double>(ours->GetNumberOfFragments()),
-          static_cast<long long>(ours->GetNumberOfTetrahedra()),
-          static_cast<long long>(ours->GetNumberOfPixelCulledCells()) });
-      }
-    });
-  m.image = stage.Image();
-  if (ours && !records.empty())
-  {
-    const Record& r = records[std::min(m.moving.medianFrame, records.size() - 1)];
-    m.cpuStages = 1e3 * r.cpu;
-    m.composite = 1e3 * r.composite;
-    m.bin = 1e3 * r.bin;
-    m.raster = 1e3 * r.raster;
-    m.upload = 1e3 * r.upload;
-    m.draw = 1e3 * r.draw;
-    m.fragments = r.fragments;
-    m.sorted = r.sorted;
-    m.pixelCulled = r.pixelCulled;
-  }
-  if (o.unchanged && !m.moving.slow)
-  {
-    TimingOptions still = o.common.timing;
-    still.step = 0;
-    m.unchanged = TimeFrames(stage, still);
-  }
-  return m;
-}
-
-std::string Ms(const FrameTiming& t)
-{
-  char text[32];
-  std::snprintf(text, sizeof(text), t.median < 100 ? "%.1f%s" : "%.0f%s", t.median,
-    t.slow ? "*" : "");
-  return text;
-}
-
 void PrintScene(const Scene& scene, int width, int height, const std::vector<std::string>& names,
   std::map<std::string, Measurement>& results, const Options& o, std::ofstream& csv)
 {
@@ -150,8 +62,8 @@ void PrintScene(const Scene& scene, int width, int height, const std::vector<std
     const ImageError e = pt ? CompareImages(m.image, pt->image) : ImageError{};
     const double nsPerFragment = m.fragments > 0 ? 1e6 * m.raster * threads / m.fragments : 0;
     std::printf("| %s | %s |%s %.2fx | %.4f | %.1f | %.1f (%.1f + %.1f) | %.1f | %.0f | %.1f |\n",
-      name.c_str(), Ms(m.moving).c_str(),
-      o.unchanged ? (" " + Ms(m.unchanged) + " |").c_str() : "", ratio, e.rmse, m.cpuStages,
+      name.c_str(), FormatMs(m.moving).c_str(),
+      o.unchanged ? (" " + FormatMs(m.unchanged) + " |").c_str() : "", ratio, e.rmse, m.cpuStages,
       m.composite, m.bin, m.raster, m.upload + m.draw, m.fragments, nsPerFragment);
     if (csv)
     {
@@ -234,13 +146,13 @@ int main(int argc, char* argv[])
       // VTK's PT first: the others' images are compared with it.
       if (results.count("vtk-pt") == 0 && std::find(names.begin(), names.end(), "vtk-pt") != names.end())
       {
-        results["vtk-pt"] = Measure(scene, property, "vtk-pt", size.first, size.second, o);
+        results["vtk-pt"] = Measure(scene, property, "vtk-pt", size.first, size.second, o.common, o.shading, o.unchanged);
       }
       for (const std::string& name : names)
       {
         if (!results.count(name))
         {
-          results[name] = Measure(scene, property, name, size.first, size.second, o);
+          results[name] = Measure(scene, property, name, size.first, size.second, o.common, o.shading, o.unchanged);
         }
       }
       PrintScene(scene, size.first, size.second, names, results, o, csv);

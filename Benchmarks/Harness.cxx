@@ -32,6 +32,7 @@
 #include "mtpt/Timing.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <memory>
 #include <sstream>
@@ -337,6 +338,83 @@ FrameTiming TimeFrames(Stage& stage, const TimingOptions& options,
   timing.median = Median(timing.frames);
   timing.medianFrame = MedianIndex(timing.frames);
   return timing;
+}
+
+bool ParseSize(const std::string& text, int& width, int& height)
+{
+  const std::size_t x = text.find('x');
+  try
+  {
+    std::size_t used = 0;
+    width = std::stoi(text.substr(0, x), &used);
+    if (used != (x == std::string::npos ? text.size() : x))
+    {
+      return false;
+    }
+    height = x == std::string::npos ? width : std::stoi(text.substr(x + 1), &used);
+    return (x == std::string::npos || used == text.size() - x - 1) && width > 0 && height > 0;
+  }
+  catch (const std::exception&)
+  {
+    return false;
+  }
+}
+
+Measurement Measure(const Scene& scene, vtkVolumeProperty* property, const std::string& name,
+  int width, int height, const CommonOptions& options, const std::string& shading,
+  bool unchanged)
+{
+  Measurement m;
+  auto mapper = MakeMapper(name, options.threads, shading);
+  Stage stage(scene, property, mapper, width, height);
+  auto* ours = vtkMultiThreadedProjectedTetrahedraMapper::SafeDownCast(mapper);
+  struct Record
+  {
+    double cpu, composite, bin, raster, upload, draw, fragments;
+    long long sorted, pixelCulled;
+  };
+  std::vector<Record> records;
+  m.moving = TimeFrames(stage, options.timing,
+    [&](std::size_t)
+    {
+      if (ours)
+      {
+        records.push_back({ ours->GetCPUStageSeconds(), ours->GetCompositeSeconds(),
+          ours->GetBinSeconds(), ours->GetRasterSeconds(), ours->GetUploadSeconds(),
+          ours->GetDrawSeconds(), static_cast<double>(ours->GetNumberOfFragments()),
+          static_cast<long long>(ours->GetNumberOfTetrahedra()),
+          static_cast<long long>(ours->GetNumberOfPixelCulledCells()) });
+      }
+    });
+  m.image = stage.Image();
+  if (ours && !records.empty())
+  {
+    const Record& r = records[std::min(m.moving.medianFrame, records.size() - 1)];
+    m.cpuStages = 1e3 * r.cpu;
+    m.composite = 1e3 * r.composite;
+    m.bin = 1e3 * r.bin;
+    m.raster = 1e3 * r.raster;
+    m.upload = 1e3 * r.upload;
+    m.draw = 1e3 * r.draw;
+    m.fragments = r.fragments;
+    m.sorted = r.sorted;
+    m.pixelCulled = r.pixelCulled;
+  }
+  if (unchanged && !m.moving.slow)
+  {
+    TimingOptions still = options.timing;
+    still.step = 0;
+    m.unchanged = TimeFrames(stage, still);
+  }
+  return m;
+}
+
+std::string FormatMs(const FrameTiming& t)
+{
+  char text[32];
+  std::snprintf(text, sizeof(text), t.median < 100 ? "%.1f%s" : "%.0f%s", t.median,
+    t.slow ? "*" : "");
+  return text;
 }
 
 ImageError CompareImages(vtkImageData* a, vtkImageData* b)

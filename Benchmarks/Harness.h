@@ -21,6 +21,7 @@
 #ifndef mtpt_bench_Harness_h
 #define mtpt_bench_Harness_h
 
+#include "vtkImageData.h" // Measurement holds images
 #include "vtkNew.h"
 #include "vtkSmartPointer.h"
 
@@ -33,7 +34,7 @@ namespace CLI
 {
 class App;
 }
-class vtkImageData;
+
 class vtkRenderWindow;
 class vtkRenderer;
 class vtkUnstructuredGrid;
@@ -142,13 +143,6 @@ struct TimingOptions
 FrameTiming TimeFrames(Stage& stage, const TimingOptions& options,
   const std::function<void(std::size_t)>& afterFrame = {});
 
-/// RMSE over RGB in [0, 1] and largest channel difference of two images of equal size.
-struct ImageError
-{
-  double rmse = 1, worst = 1;
-};
-ImageError CompareImages(vtkImageData* a, vtkImageData* b);
-
 /// Options every frame benchmark takes.
 struct CommonOptions
 {
@@ -156,6 +150,39 @@ struct CommonOptions
   int threads = 0;         ///< MTPT's threads (0: the default)
   std::string dataFolder;  ///< real meshes beyond the repository's (optional)
 };
+
+/// What one contender measured on one scene and window size.
+struct Measurement
+{
+  FrameTiming moving;    ///< the camera turning before every frame
+  FrameTiming unchanged; ///< the same view every frame (when asked for)
+  vtkSmartPointer<vtkImageData> image; ///< at the end of the moving frames
+  // MTPT only, milliseconds and counts of the median moving frame:
+  double cpuStages = 0, composite = 0, bin = 0, raster = 0, upload = 0, draw = 0;
+  double fragments = 0;
+  long long sorted = 0, pixelCulled = 0;
+};
+
+/**
+ * Times contender `name` (MakeMapper) on `scene` in a width x height window: moving
+ * frames, and with `unchanged` also frames of an unchanged view.
+ */
+Measurement Measure(const Scene& scene, vtkVolumeProperty* property, const std::string& name,
+  int width, int height, const CommonOptions& options, const std::string& shading = "vtk",
+  bool unchanged = false);
+
+/// A median as a table shows it ("12.3", "456", with "*" when one slow frame).
+std::string FormatMs(const FrameTiming& t);
+
+/// A window size "512" (square) or "1920x1080"; false for anything else.
+bool ParseSize(const std::string& text, int& width, int& height);
+
+/// RMSE over RGB in [0, 1] and largest channel difference of two images of equal size.
+struct ImageError
+{
+  double rmse = 1, worst = 1;
+};
+ImageError CompareImages(vtkImageData* a, vtkImageData* b);
 
 /// Adds --repeat, --step, --slow-limit, --threads and --data to `app`.
 void AddCommonOptions(CLI::App& app, CommonOptions& options);
