@@ -50,7 +50,8 @@ void ViewDirection(const Matrix4& m, double d[3])
 bool FramePipeline::Inputs::operator==(const Inputs& o) const
 {
   return points == o.points && pointCount == o.pointCount && connectivity == o.connectivity &&
-    offsets == o.offsets && cellCount == o.cellCount && scalars == o.scalars &&
+    offsets == o.offsets && cellSize == o.cellSize && cellCount == o.cellCount &&
+    scalars == o.scalars &&
     association == o.association && dataVersion == o.dataVersion;
 }
 
@@ -145,6 +146,7 @@ bool FramePipeline::Prepare(const FrameInput& input, int threads)
   data.pointCount = input.points.count;
   data.connectivity = input.cells.connectivity;
   data.offsets = input.cells.offsets;
+  data.cellSize = input.cells.cellSize;
   data.cellCount = n;
   data.scalars = input.scalars.values;
   data.association = input.scalars.association;

@@ -336,6 +336,52 @@ TEST(VisibilityOrder, SortNearlySortedGivesTheUniqueOrderOrGivesUp)
   }
 }
 
+TEST(FramePipeline, FixedSizeCellsGiveTheFrameOfExplicitOffsets)
+{
+  // VTK 9.6 stores cells of one size without offsets: the same mesh seen that way (64- and
+  // 32-bit ids) must give the same order, the same fans and the same image.
+  const TetMesh mesh = mtpt::test::JitteredGrid(8, 3);
+  std::vector<std::int32_t> ids32(mesh.connectivity.begin(), mesh.connectivity.end());
+  const std::vector<float> table = { 0.2f, 0.4f, 0.9f, 0.0f, 0.9f, 0.5f, 0.1f, 3.0f };
+  for (bool perspective : { false, true })
+  {
+    const mtpt::FrameInput input = Frame(mesh, 0.7, perspective);
+    mtpt::FramePipeline explicitOffsets;
+    ASSERT_TRUE(explicitOffsets.Prepare(input, 2));
+    const std::vector<float> reference = Composite(explicitOffsets, input, table);
+    float drawn = 0;
+    for (std::size_t i = 3; i < reference.size(); i += 4)
+    {
+      drawn = std::max(drawn, reference[i]);
+    }
+    ASSERT_GT(drawn, 0.1f);
+    for (int bits : { 64, 32 })
+    {
+      mtpt::FrameInput fixed = input;
+      fixed.cells = bits == 64
+        ? mtpt::CellsView::FromFixedSizeInt64(mesh.connectivity.data(), 4, mesh.CellCount())
+        : mtpt::CellsView::FromFixedSizeInt32(ids32.data(), 4, mesh.CellCount());
+      mtpt::FramePipeline pipeline;
+      ASSERT_TRUE(pipeline.Prepare(fixed, 2));
+      EXPECT_EQ(pipeline.Keys(), explicitOffsets.Keys()) << bits;
+      EXPECT_TRUE(SameImage(Composite(pipeline, fixed, table), reference)) << bits;
+    }
+    // Cells that are not 4 points long are not drawn (the fixed size is checked).
+    mtpt::FrameInput triangles = input;
+    triangles.cells =
+      mtpt::CellsView::FromFixedSizeInt64(mesh.connectivity.data(), 3, mesh.CellCount());
+    mtpt::FramePipeline pipeline;
+    ASSERT_TRUE(pipeline.Prepare(triangles, 2));
+    const std::vector<float> none = Composite(pipeline, triangles, table);
+    float alpha = 0;
+    for (std::size_t i = 3; i < none.size(); i += 4)
+    {
+      alpha = std::max(alpha, none[i]);
+    }
+    EXPECT_EQ(alpha, 0.0f);
+  }
+}
+
 TEST(FramePipeline, BatchesReproduceTheWholeFrame)
 {
   const TetMesh mesh = JitteredGrid(11, 2); // 7,986 tetrahedra

@@ -17,14 +17,24 @@ template <typename IndexT>
 struct CellAccess
 {
   const IndexT* connectivity;
-  const IndexT* offsets;
+  const IndexT* offsets; ///< null: every cell has cellSize points
   std::int64_t pointCount;
+  std::int64_t cellSize;
 
   /// The 4 point ids of `cell`; false if it is not a tetrahedron or an id is out of range.
   bool TetrahedronPoints(std::size_t cell, std::int64_t ids[4]) const
   {
-    const auto begin = static_cast<std::int64_t>(this->offsets[cell]);
-    const auto end = static_cast<std::int64_t>(this->offsets[cell + 1]);
+    std::int64_t begin, end;
+    if (this->offsets)
+    {
+      begin = static_cast<std::int64_t>(this->offsets[cell]);
+      end = static_cast<std::int64_t>(this->offsets[cell + 1]);
+    }
+    else
+    {
+      begin = static_cast<std::int64_t>(cell) * this->cellSize;
+      end = begin + this->cellSize;
+    }
     if (end - begin != 4)
     {
       return false;
@@ -45,15 +55,16 @@ template <typename Functor>
 void DispatchCells(const CellsView& cells, std::size_t pointCount, Functor&& functor)
 {
   const auto n = static_cast<std::int64_t>(pointCount);
+  const auto size = static_cast<std::int64_t>(cells.cellSize);
   if (cells.type == CellsView::Type::Int32)
   {
     functor(CellAccess<std::int32_t>{ static_cast<const std::int32_t*>(cells.connectivity),
-      static_cast<const std::int32_t*>(cells.offsets), n });
+      static_cast<const std::int32_t*>(cells.offsets), n, size });
   }
   else
   {
     functor(CellAccess<std::int64_t>{ static_cast<const std::int64_t*>(cells.connectivity),
-      static_cast<const std::int64_t*>(cells.offsets), n });
+      static_cast<const std::int64_t*>(cells.offsets), n, size });
   }
 }
 

@@ -275,6 +275,7 @@ private:
     std::size_t pointCount = 0;
     const void* connectivity = nullptr;
     const void* offsets = nullptr;
+    std::size_t cellSize = 0;
     std::size_t cellCount = 0;
     const float* scalars = nullptr;
     ScalarsView::Association association = ScalarsView::Association::Points;

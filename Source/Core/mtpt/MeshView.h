@@ -15,7 +15,9 @@
  * - Connectivity follows vtkCellArray (VTK 9): cell c owns the point ids
  *   connectivity[offsets[c]] .. connectivity[offsets[c+1]-1]; offsets has cellCount+1
  *   entries. Offsets and connectivity share one integer type (int32 or int64), as in
- *   vtkCellArray's two storages.
+ *   vtkCellArray's 32- and 64-bit storages. Without offsets (VTK 9.6's fixed-size
+ *   storages, whose offsets are implicit), cell c owns connectivity[c * cellSize] ..
+ *   connectivity[(c+1) * cellSize - 1].
  *
  * Views never copy or own data; the caller keeps the arrays alive while a view is in use.
  */
@@ -66,17 +68,27 @@ struct CellsView
     Int64
   };
   const void* connectivity = nullptr;
-  const void* offsets = nullptr; ///< cellCount + 1 entries
+  const void* offsets = nullptr; ///< cellCount + 1 entries; null: every cell has cellSize
   Type type = Type::Int64;
   std::size_t cellCount = 0;
+  std::size_t cellSize = 0; ///< points per cell when there are no offsets
 
   static CellsView FromInt32(const std::int32_t* conn, const std::int32_t* offsets, std::size_t n)
   {
-    return { conn, offsets, Type::Int32, n };
+    return { conn, offsets, Type::Int32, n, 0 };
   }
   static CellsView FromInt64(const std::int64_t* conn, const std::int64_t* offsets, std::size_t n)
   {
-    return { conn, offsets, Type::Int64, n };
+    return { conn, offsets, Type::Int64, n, 0 };
+  }
+  /// Every cell `cellSize` points long, one after the other (no offsets array).
+  static CellsView FromFixedSizeInt32(const std::int32_t* conn, std::size_t cellSize, std::size_t n)
+  {
+    return { conn, nullptr, Type::Int32, n, cellSize };
+  }
+  static CellsView FromFixedSizeInt64(const std::int64_t* conn, std::size_t cellSize, std::size_t n)
+  {
+    return { conn, nullptr, Type::Int64, n, cellSize };
   }
 };
 
