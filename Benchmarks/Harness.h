@@ -21,6 +21,7 @@
 #ifndef mtpt_bench_Harness_h
 #define mtpt_bench_Harness_h
 
+#include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
 #include "vtkImageData.h" // Measurement holds images
 #include "vtkNew.h"
 #include "vtkSmartPointer.h"
@@ -35,12 +36,14 @@ namespace CLI
 class App;
 }
 
+VTK_ABI_NAMESPACE_BEGIN
 class vtkRenderWindow;
 class vtkRenderer;
 class vtkUnstructuredGrid;
 class vtkUnstructuredGridVolumeMapper;
 class vtkVolume;
 class vtkVolumeProperty;
+VTK_ABI_NAMESPACE_END
 
 namespace mtpt
 {

@@ -6,6 +6,7 @@
 #include <vtkCellDataToPointData.h>
 #include <vtkCellType.h>
 #include <vtkDataArray.h>
+#include <vtkDataArrayRange.h>
 #include <vtkDataSet.h>
 #include <vtkDataSetReader.h>
 #include <vtkDataSetTriangleFilter.h>
@@ -15,8 +16,6 @@
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkSmartPointer.h>
-#include <vtkTypeInt32Array.h>
-#include <vtkTypeInt64Array.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLUnstructuredGridReader.h>
 
@@ -139,15 +138,14 @@ bool AllTetrahedra(vtkDataSet* data)
   return true;
 }
 
-template <typename ArrayT>
-void CopyIds(ArrayT* array, std::vector<std::int64_t>& out)
+/// The ids of any of vtkCellArray's storages (32 or 64 bits, explicit or implicit).
+void CopyIds(vtkDataArray* array, std::vector<std::int64_t>& out)
 {
-  const vtkIdType n = array->GetNumberOfValues();
-  out.resize(static_cast<std::size_t>(n));
-  const auto* values = array->GetPointer(0);
-  for (vtkIdType i = 0; i < n; ++i)
+  out.clear();
+  out.reserve(static_cast<std::size_t>(array->GetNumberOfValues()));
+  for (const auto id : vtk::DataArrayValueRange<1>(array))
   {
-    out[static_cast<std::size_t>(i)] = static_cast<std::int64_t>(values[i]);
+    out.push_back(static_cast<std::int64_t>(id));
   }
 }
 
@@ -256,16 +254,8 @@ bool LoadTetMesh(
   }
 
   vtkCellArray* cells = grid->GetCells();
-  if (cells->IsStorage64Bit())
-  {
-    CopyIds(cells->GetOffsetsArray64(), mesh.offsets);
-    CopyIds(cells->GetConnectivityArray64(), mesh.connectivity);
-  }
-  else
-  {
-    CopyIds(cells->GetOffsetsArray32(), mesh.offsets);
-    CopyIds(cells->GetConnectivityArray32(), mesh.connectivity);
-  }
+  CopyIds(cells->GetOffsetsArray(), mesh.offsets);
+  CopyIds(cells->GetConnectivityArray(), mesh.connectivity);
   // The triangle filter's TetrahedraOnly and the all-tetrahedra check above should leave
   // nothing else; check anyway, since a stray cell would skew every rate in the table.
   for (std::size_t c = 0; c + 1 < mesh.offsets.size(); ++c)

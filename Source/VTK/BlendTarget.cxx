@@ -12,7 +12,7 @@
 #include "vtkOpenGLState.h"
 #include "vtkShaderProgram.h"
 #include "vtkTextureObject.h"
-#include "vtk_glew.h"
+#include "OpenGLHeader.h"
 
 namespace mtpt
 {

@@ -18,16 +18,19 @@
 #ifndef mtpt_BlendTarget_h
 #define mtpt_BlendTarget_h
 
+#include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
 #include "vtkNew.h"
 
 #include <memory>
 #include <string>
 
+VTK_ABI_NAMESPACE_BEGIN
 class vtkOpenGLFramebufferObject;
 class vtkOpenGLQuadHelper;
 class vtkOpenGLRenderWindow;
 class vtkTextureObject;
 class vtkWindow;
+VTK_ABI_NAMESPACE_END
 
 namespace mtpt
 {

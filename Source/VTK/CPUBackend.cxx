@@ -10,7 +10,7 @@
 #include "vtkOpenGLState.h"
 #include "vtkTextureObject.h"
 #include "vtkType.h"
-#include "vtk_glew.h"
+#include "OpenGLHeader.h"
 
 #include <algorithm>
 #include <cstdlib>

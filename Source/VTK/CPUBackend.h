@@ -22,6 +22,7 @@
 #ifndef mtpt_CPUBackend_h
 #define mtpt_CPUBackend_h
 
+#include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
 #include "BlendTarget.h"
 #include "RenderBackend.h"
 
@@ -32,7 +33,9 @@
 #include <cstdint>
 #include <vector>
 
+VTK_ABI_NAMESPACE_BEGIN
 class vtkTextureObject;
+VTK_ABI_NAMESPACE_END
 
 namespace mtpt
 {

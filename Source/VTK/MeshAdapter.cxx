@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "MeshAdapter.h"
 
+#include "VTKCompatibility.h"
+
 #include "vtkCellArray.h"
 #include "vtkCellType.h"
-#include "vtkCellTypes.h"
 #include "vtkDataArray.h"
 #include "vtkDataArrayRange.h"
 #include "vtkDoubleArray.h"
@@ -11,9 +12,7 @@
 #include "vtkIdList.h"
 #include "vtkNew.h"
 #include "vtkPoints.h"
-#include "vtkTypeInt32Array.h"
-#include "vtkTypeInt64Array.h"
-#include "vtkUnsignedCharArray.h"
+#include "vtkAOSDataArrayTemplate.h"
 #include "vtkUnstructuredGrid.h"
 #include "vtkUnstructuredGridBase.h"
 
@@ -43,8 +42,12 @@ bool MeshAdapter::Update(vtkUnstructuredGridBase* input)
   {
     return false;
   }
-  vtkCellArray* cells = this->AdaptCells(input);
-  this->WarningMessage = this->Problems(cells, input->GetPoints()->GetData());
+  vtkCellArray* cells = this->AdaptCells(input); // may say that it copied them
+  const std::string problems = this->Problems(cells, input->GetPoints()->GetData());
+  if (!problems.empty())
+  {
+    this->WarningMessage += (this->WarningMessage.empty() ? "" : "; ") + problems;
+  }
   return true;
 }
 
@@ -81,14 +84,16 @@ bool MeshAdapter::CheckCellTypes(vtkUnstructuredGridBase* input)
   // Every cell must be a tetrahedron (the mapper splits other cells first: see
   // Tetrahedralizer; this guards the core against anything else).
   auto* grid = vtkUnstructuredGrid::SafeDownCast(input);
+  if (grid && OnlyTetrahedra(grid))
+  {
+    return true;
+  }
   const vtkIdType cellCount = input->GetNumberOfCells();
   vtkIdType nonTetrahedra = 0, firstBad = -1;
   int firstBadType = VTK_EMPTY_CELL;
-  const unsigned char* types =
-    grid && grid->GetCellTypesArray() ? grid->GetCellTypesArray()->GetPointer(0) : nullptr;
   for (vtkIdType c = 0; c < cellCount; ++c)
   {
-    const int type = types ? types[c] : input->GetCellType(c);
+    const int type = input->GetCellType(c);
     if (type != VTK_TETRA && nonTetrahedra++ == 0)
     {
       firstBad = c;
@@ -101,53 +106,104 @@ bool MeshAdapter::CheckCellTypes(vtkUnstructuredGridBase* input)
   }
   std::ostringstream message;
   message << nonTetrahedra << " of " << cellCount << " cells are not tetrahedra (first: cell "
-          << firstBad << ", " << vtkCellTypes::GetClassNameFromTypeId(firstBadType)
+          << firstBad << ", " << CellTypeName(firstBadType)
           << "); tetrahedralize the input first, e.g. with vtkDataSetTriangleFilter";
   this->ErrorMessage = message.str();
   return false;
 }
 
-vtkCellArray* MeshAdapter::AdaptCells(vtkUnstructuredGridBase* input)
+namespace
 {
-  // A vtkUnstructuredGrid's own vtkCellArray is used in place; any other
-  // vtkUnstructuredGridBase is copied into one through its cell interface.
-  const vtkIdType cellCount = input->GetNumberOfCells();
-  vtkCellArray* cells = nullptr;
-  auto* grid = vtkUnstructuredGrid::SafeDownCast(input);
-  if (grid && grid->GetCells())
+using Ids32 = vtkAOSDataArrayTemplate<vtkTypeInt32>;
+using Ids64 = vtkAOSDataArrayTemplate<vtkTypeInt64>;
+
+/// The points per cell of a fixed-size storage (VTK 9.6: the offsets are implicit), or 0
+/// where the storage has explicit offsets or there is none.
+vtkIdType FixedCellSize(vtkCellArray* cells)
+{
+#if VTK_VERSION_NUMBER >= VTK_VERSION_CHECK(9, 6, 0)
+  if (cells->IsStorageFixedSize() && cells->GetNumberOfCells() > 0)
   {
-    cells = grid->GetCells();
+    return cells->GetCellSize(0);
   }
-  else
-  {
-    this->CellCopy = vtkSmartPointer<vtkCellArray>::New();
-    this->CellCopy->AllocateEstimate(cellCount, 4);
-    vtkNew<vtkIdList> ids;
-    for (vtkIdType c = 0; c < cellCount; ++c)
-    {
-      input->GetCellPoints(c, ids);
-      this->CellCopy->InsertNextCell(ids);
-    }
-    cells = this->CellCopy;
-  }
+#else
+  (void)cells;
+#endif
+  return 0;
+}
+} // namespace
+
+bool MeshAdapter::ViewCells(vtkCellArray* cells, std::size_t cellCount)
+{
   // vtkTypeInt64 is long long, std::int64_t may be long: same size and representation.
   static_assert(sizeof(vtkTypeInt64) == sizeof(std::int64_t), "64-bit ids");
   static_assert(sizeof(vtkTypeInt32) == sizeof(std::int32_t), "32-bit ids");
-  if (cells->IsStorage64Bit())
+  vtkDataArray* connectivity = cells->GetConnectivityArray();
+  vtkDataArray* offsets = cells->GetOffsetsArray();
+  auto* c64 = Ids64::FastDownCast(connectivity);
+  auto* c32 = Ids32::FastDownCast(connectivity);
+  auto* o64 = Ids64::FastDownCast(offsets);
+  auto* o32 = Ids32::FastDownCast(offsets);
+  if (c64 && o64)
   {
-    this->CellData = CellsView::FromInt64(
-      reinterpret_cast<const std::int64_t*>(cells->GetConnectivityArray64()->GetPointer(0)),
-      reinterpret_cast<const std::int64_t*>(cells->GetOffsetsArray64()->GetPointer(0)),
-      static_cast<std::size_t>(cellCount));
+    this->CellData = CellsView::FromInt64(reinterpret_cast<const std::int64_t*>(c64->GetPointer(0)),
+      reinterpret_cast<const std::int64_t*>(o64->GetPointer(0)), cellCount);
+    return true;
   }
-  else
+  if (c32 && o32)
   {
-    this->CellData = CellsView::FromInt32(
-      reinterpret_cast<const std::int32_t*>(cells->GetConnectivityArray32()->GetPointer(0)),
-      reinterpret_cast<const std::int32_t*>(cells->GetOffsetsArray32()->GetPointer(0)),
-      static_cast<std::size_t>(cellCount));
+    this->CellData = CellsView::FromInt32(reinterpret_cast<const std::int32_t*>(c32->GetPointer(0)),
+      reinterpret_cast<const std::int32_t*>(o32->GetPointer(0)), cellCount);
+    return true;
   }
-  return cells;
+  const vtkIdType size = FixedCellSize(cells);
+  if (size > 0 && (c64 || c32))
+  {
+    this->CellData = c64
+      ? CellsView::FromFixedSizeInt64(
+          reinterpret_cast<const std::int64_t*>(c64->GetPointer(0)), size, cellCount)
+      : CellsView::FromFixedSizeInt32(
+          reinterpret_cast<const std::int32_t*>(c32->GetPointer(0)), size, cellCount);
+    return true;
+  }
+  return false;
+}
+
+vtkCellArray* MeshAdapter::AdaptCells(vtkUnstructuredGridBase* input)
+{
+  // A vtkUnstructuredGrid's own vtkCellArray is used in place when its storage has the
+  // core's layout (32- or 64-bit ids, explicit offsets or VTK 9.6's fixed-size cells). Any
+  // other storage, and any other vtkUnstructuredGridBase, is copied through VTK's cell
+  // interface into a 64-bit vtkCellArray once per input change.
+  const vtkIdType cellCount = input->GetNumberOfCells();
+  auto* grid = vtkUnstructuredGrid::SafeDownCast(input);
+  vtkCellArray* own = grid ? grid->GetCells() : nullptr;
+  if (own && this->ViewCells(own, static_cast<std::size_t>(cellCount)))
+  {
+    return own;
+  }
+  this->CellCopy = vtkSmartPointer<vtkCellArray>::New();
+  this->CellCopy->Use64BitStorage();
+  this->CellCopy->AllocateEstimate(cellCount, 4);
+  vtkNew<vtkIdList> ids;
+  for (vtkIdType c = 0; c < cellCount; ++c)
+  {
+    input->GetCellPoints(c, ids);
+    this->CellCopy->InsertNextCell(ids);
+  }
+  if (own)
+  {
+    // Said once per input change, with the mapper's other warnings about the input.
+    std::ostringstream note;
+    note << "the input's cells are stored as " << own->GetOffsetsArray()->GetClassName()
+         << " offsets and " << own->GetConnectivityArray()->GetClassName()
+         << " connectivity, which the mapper cannot read in place; they are copied ("
+         << (this->CellCopy->GetActualMemorySize() + 1023) / 1024
+         << " MiB) at every change of the input";
+    this->WarningMessage = note.str();
+  }
+  this->ViewCells(this->CellCopy, static_cast<std::size_t>(cellCount));
+  return this->CellCopy;
 }
 
 std::string MeshAdapter::Problems(vtkCellArray* cells, vtkDataArray* coordinates)

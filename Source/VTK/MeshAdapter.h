@@ -5,26 +5,32 @@
  * copying where VTK's storage already has the core's layout.
  *
  * Points stored as float or double (AOS) and a vtkUnstructuredGrid's vtkCellArray (32- or
- * 64-bit) are used in place. Other storage (implicit arrays, vtkUnstructuredGridBase
- * subclasses) is copied once per input change. Scalars become one float per tuple (a
- * component or the magnitude), recomputed only when the array or the selection changes.
+ * 64-bit ids; explicit offsets, or VTK 9.6's fixed-size storage) are used in place. Other
+ * storage (implicit arrays, VTK 9.6's generic cell storage, vtkUnstructuredGridBase
+ * subclasses) is copied once per input change; a grid's cells copied so say so in
+ * Warning(). Scalars become one float per tuple (a component or the magnitude),
+ * recomputed only when the array or the selection changes.
  */
 #ifndef MeshAdapter_h
 #define MeshAdapter_h
 
+#include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
 #include "mtpt/MeshView.h"
 
 #include "vtkNew.h"
 #include "vtkSmartPointer.h"
 #include "vtkType.h"
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
+VTK_ABI_NAMESPACE_BEGIN
 class vtkCellArray;
 class vtkDataArray;
 class vtkDoubleArray;
 class vtkUnstructuredGridBase;
+VTK_ABI_NAMESPACE_END
 
 namespace mtpt
 {
@@ -64,6 +70,8 @@ private:
   bool AdaptPoints(vtkUnstructuredGridBase* input);
   bool CheckCellTypes(vtkUnstructuredGridBase* input);
   vtkCellArray* AdaptCells(vtkUnstructuredGridBase* input);
+  /// Points the cell view at `cells` in place; false when its storage is not the core's.
+  bool ViewCells(vtkCellArray* cells, std::size_t cellCount);
   /// Ids out of range and non-finite points, as one warning (empty: none).
   static std::string Problems(vtkCellArray* cells, vtkDataArray* coordinates);
 

@@ -17,7 +17,7 @@
 #include "vtkOpenGLVertexBufferObject.h"
 #include "vtkShaderProgram.h"
 #include "vtkTextureObject.h"
-#include "vtk_glew.h"
+#include "OpenGLHeader.h"
 
 #include <algorithm>
 #include <climits>

@@ -18,6 +18,7 @@
 #ifndef mtpt_OpenGLBackend_h
 #define mtpt_OpenGLBackend_h
 
+#include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
 #include "BlendTarget.h"
 #include "RenderBackend.h"
 
@@ -26,9 +27,11 @@
 
 #include <cstdint>
 
+VTK_ABI_NAMESPACE_BEGIN
 class vtkOpenGLVertexBufferObject;
 class vtkShaderProgram;
 class vtkTextureObject;
+VTK_ABI_NAMESPACE_END
 
 namespace mtpt
 {

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "RenderBackend.h"
 
-#include "vtk_glew.h"
+#include "OpenGLHeader.h"
 
 #include <string>
 

@@ -16,6 +16,7 @@
 #ifndef mtpt_RenderBackend_h
 #define mtpt_RenderBackend_h
 
+#include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
 #include "mtpt/Compositor.h"
 
 #include <cstddef>
@@ -23,9 +24,11 @@
 #include <functional>
 #include <string>
 
+VTK_ABI_NAMESPACE_BEGIN
 class vtkOpenGLRenderWindow;
 class vtkRenderer;
 class vtkWindow;
+VTK_ABI_NAMESPACE_END
 
 namespace mtpt
 {

@@ -1,14 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "Tetrahedralizer.h"
 
+#include "VTKCompatibility.h"
+
 #include "vtkCellData.h"
 #include "vtkCellIterator.h"
 #include "vtkCellType.h"
-#include "vtkCellTypes.h"
 #include "vtkDataSetTriangleFilter.h"
 #include "vtkIdList.h"
 #include "vtkPointData.h"
-#include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
 #include "vtkUnstructuredGridBase.h"
 
@@ -17,31 +17,6 @@
 
 namespace mtpt
 {
-namespace
-{
-/// True if `input` is a vtkUnstructuredGrid whose cell types are all VTK_TETRA (checked
-/// from its types array, without visiting any cell).
-bool OnlyTetrahedra(vtkUnstructuredGridBase* input)
-{
-  auto* grid = vtkUnstructuredGrid::SafeDownCast(input);
-  vtkUnsignedCharArray* types = grid ? grid->GetCellTypesArray() : nullptr;
-  if (!types)
-  {
-    return false;
-  }
-  const unsigned char* type = types->GetPointer(0);
-  const vtkIdType count = grid->GetNumberOfCells();
-  for (vtkIdType c = 0; c < count; ++c)
-  {
-    if (type[c] != VTK_TETRA)
-    {
-      return false;
-    }
-  }
-  return true;
-}
-} // namespace
-
 Tetrahedralizer::Tetrahedralizer()
 {
   // Vertices, lines and polygons enclose no volume: the filter drops them.
@@ -60,7 +35,8 @@ vtkUnstructuredGridBase* Tetrahedralizer::Update(vtkUnstructuredGridBase* input)
   this->InputTime = input->GetMTime();
   this->WarningMessage.clear();
   this->Output = nullptr;
-  if (OnlyTetrahedra(input))
+  auto* grid = vtkUnstructuredGrid::SafeDownCast(input);
+  if (grid && OnlyTetrahedra(grid))
   {
     return input; // the common case: nothing to split, nothing copied
   }
@@ -74,7 +50,7 @@ vtkUnstructuredGridBase* Tetrahedralizer::Update(vtkUnstructuredGridBase* input)
   {
     warning << survey.lowerDimensional << " of " << input->GetNumberOfCells()
             << " cells are vertices, lines or polygons (first: cell " << survey.firstLower << ", "
-            << vtkCellTypes::GetClassNameFromTypeId(survey.firstLowerType)
+            << CellTypeName(survey.firstLowerType)
             << "); they enclose no volume and are ignored";
   }
   vtkSmartPointer<vtkUnstructuredGrid> valid;
@@ -145,7 +121,7 @@ vtkSmartPointer<vtkUnstructuredGrid> Tetrahedralizer::WithoutCells(
     }
     const int type = cell->GetCellType();
     const vtkIdType newId = type == VTK_POLYHEDRON
-      ? valid->InsertNextCell(type, cell->GetFaces())
+      ? valid->InsertNextCell(type, PolyhedronFaces(cell))
       : valid->InsertNextCell(type, cell->GetPointIds());
     valid->GetCellData()->CopyData(input->GetCellData(), id, newId);
   }

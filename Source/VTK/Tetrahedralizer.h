@@ -20,6 +20,7 @@
 #ifndef Tetrahedralizer_h
 #define Tetrahedralizer_h
 
+#include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
 #include "vtkNew.h"
 #include "vtkSmartPointer.h"
 #include "vtkType.h"
@@ -27,9 +28,11 @@
 #include <string>
 #include <vector>
 
+VTK_ABI_NAMESPACE_BEGIN
 class vtkDataSetTriangleFilter;
 class vtkUnstructuredGrid;
 class vtkUnstructuredGridBase;
+VTK_ABI_NAMESPACE_END
 
 namespace mtpt
 {

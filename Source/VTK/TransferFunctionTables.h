@@ -16,6 +16,7 @@
 #ifndef mtpt_TransferFunctionTables_h
 #define mtpt_TransferFunctionTables_h
 
+#include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
 #include "mtpt/TransferFunctionTable.h"
 
 #include "vtkType.h"
@@ -23,7 +24,9 @@
 #include <cstdint>
 #include <vector>
 
+VTK_ABI_NAMESPACE_BEGIN
 class vtkVolumeProperty;
+VTK_ABI_NAMESPACE_END
 
 namespace mtpt
 {

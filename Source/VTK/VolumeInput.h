@@ -7,16 +7,19 @@
 #ifndef mtpt_VolumeInput_h
 #define mtpt_VolumeInput_h
 
+#include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
 #include "mtpt/MeshView.h"
 
 #include <string>
 
+VTK_ABI_NAMESPACE_BEGIN
 class vtkAbstractVolumeMapper;
 class vtkDataArray;
 class vtkRenderer;
 class vtkUnstructuredGridBase;
 class vtkVolume;
 class vtkVolumeProperty;
+VTK_ABI_NAMESPACE_END
 
 namespace mtpt
 {

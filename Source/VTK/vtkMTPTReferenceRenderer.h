@@ -40,13 +40,16 @@
 #ifndef vtkMTPTReferenceRenderer_h
 #define vtkMTPTReferenceRenderer_h
 
+#include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
 #include "vtkObject.h"
 #include "vtkRenderingMTPTModule.h" // for export macro
 
+VTK_ABI_NAMESPACE_BEGIN
 class vtkDoubleArray;
 class vtkRenderer;
 class vtkUnstructuredGridBase;
 class vtkVolume;
+VTK_ABI_NAMESPACE_END
 
 class VTKRENDERINGMTPT_EXPORT vtkMTPTReferenceRenderer : public vtkObject
 {

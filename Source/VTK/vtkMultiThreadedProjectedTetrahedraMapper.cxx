@@ -26,7 +26,7 @@
 #include "vtkVolume.h"
 #include "vtkVolumeProperty.h"
 #include "vtkWeakPointer.h"
-#include "vtk_glew.h"
+#include "OpenGLHeader.h"
 
 #include <algorithm>
 #include <cstdlib>

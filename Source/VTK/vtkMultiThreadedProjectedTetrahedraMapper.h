@@ -94,16 +94,19 @@
 #ifndef vtkMultiThreadedProjectedTetrahedraMapper_h
 #define vtkMultiThreadedProjectedTetrahedraMapper_h
 
+#include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
 #include "vtkRenderingMTPTModule.h" // for export macro
 #include "vtkUnstructuredGridVolumeMapper.h"
 
 #include <cstddef> // for std::size_t
 #include <memory>  // for std::unique_ptr
 
+VTK_ABI_NAMESPACE_BEGIN
 class vtkOpenGLRenderWindow;
 class vtkRenderWindow;
 class vtkUnstructuredGridBase;
 class vtkVolumeProperty;
+VTK_ABI_NAMESPACE_END
 namespace mtpt
 {
 struct BackendFrame;

@@ -3,6 +3,7 @@
 #ifndef mtpt_RenderingTestUtilities_h
 #define mtpt_RenderingTestUtilities_h
 
+#include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
 #include "vtkCommand.h"
 #include "vtkNew.h"
 #include "vtkSmartPointer.h"
@@ -11,6 +12,7 @@
 #include <string>
 #include <vector>
 
+VTK_ABI_NAMESPACE_BEGIN
 class vtkActor;
 class vtkImageData;
 class vtkRenderWindow;
@@ -19,6 +21,7 @@ class vtkUnstructuredGrid;
 class vtkUnstructuredGridVolumeMapper;
 class vtkVolume;
 class vtkVolumeProperty;
+VTK_ABI_NAMESPACE_END
 
 namespace mtpt
 {

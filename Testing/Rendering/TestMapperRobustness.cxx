@@ -8,6 +8,8 @@
 #include "mtpt/Threads.h"
 
 #include "vtkCamera.h"
+#include "vtkCellArray.h"
+#include "vtkCellType.h"
 #include "vtkCellData.h"
 #include "vtkColorTransferFunction.h"
 #include "vtkFloatArray.h"
@@ -17,6 +19,8 @@
 #include "vtkRenderWindow.h"
 #include "vtkRenderer.h"
 #include "vtkUnsignedCharArray.h"
+#include "vtkUnsignedIntArray.h"
+#include "vtkVersionMacros.h"
 #include "vtkUnstructuredGrid.h"
 #include "vtkVolume.h"
 #include "vtkVolumeProperty.h"
@@ -28,6 +32,8 @@
 #include <iostream>
 #include <limits>
 #include <sstream>
+#include <string>
+#include <vector>
 
 namespace
 {
@@ -280,6 +286,77 @@ TEST_F(MapperRobustness, OutOfRangeConnectivityIsReportedAndTheRestDrawn)
   const ImageDifference d = Compare(image, FreshBoxImage());
   EXPECT_LT(d.rmse, 1e-3) << "the valid cells draw as the box";
   this->ExpectRecovers();
+}
+
+/// The same grid with its cells in another of vtkCellArray's storages.
+vtkSmartPointer<vtkUnstructuredGrid> WithCellStorage(vtkUnstructuredGrid* grid, const std::string& kind)
+{
+  auto copy = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  copy->ShallowCopy(grid);
+  vtkNew<vtkCellArray> cells;
+  cells->DeepCopy(grid->GetCells());
+  if (kind == "32-bit")
+  {
+    cells->ConvertTo32BitStorage();
+  }
+  else if (kind == "64-bit")
+  {
+    cells->ConvertTo64BitStorage();
+  }
+#if VTK_VERSION_NUMBER >= VTK_VERSION_CHECK(9, 6, 0)
+  else if (kind == "fixed-size 32-bit")
+  {
+    cells->ConvertToFixedSize32BitStorage();
+  }
+  else if (kind == "fixed-size 64-bit")
+  {
+    cells->ConvertToFixedSize64BitStorage();
+  }
+  else if (kind == "generic")
+  {
+    // Ids in arrays of a type no specialized storage has: VTK keeps them as they are.
+    vtkNew<vtkUnsignedIntArray> offsets, connectivity;
+    offsets->DeepCopy(grid->GetCells()->GetOffsetsArray());
+    connectivity->DeepCopy(grid->GetCells()->GetConnectivityArray());
+    cells->SetData(offsets, connectivity);
+  }
+#endif
+  copy->SetCells(VTK_TETRA, cells);
+  return copy;
+}
+
+/// The cell storages this VTK has: 32- and 64-bit always; fixed-size and generic from 9.6.
+std::vector<std::string> CellStorages()
+{
+  std::vector<std::string> kinds = { "32-bit", "64-bit" };
+#if VTK_VERSION_NUMBER >= VTK_VERSION_CHECK(9, 6, 0)
+  kinds.insert(kinds.end(), { "fixed-size 32-bit", "fixed-size 64-bit", "generic" });
+#endif
+  return kinds;
+}
+
+TEST_F(MapperRobustness, EveryCellStorageDrawsTheSameImage)
+{
+  // Read in place where the storage has the core's layout; copied, with one warning that
+  // says so, where it has not (VTK 9.6's generic storage). The image is the same.
+  const auto reference = this->FreshBoxImage();
+  for (const std::string& kind : CellStorages())
+  {
+    SCOPED_TRACE(kind);
+    auto grid = WithCellStorage(this->Box, kind);
+    this->Observer->Clear();
+    vtkNew<Mapper> mapper;
+    mapper->AddObserver(vtkCommand::WarningEvent, this->Observer);
+    mapper->AddObserver(vtkCommand::ErrorEvent, this->Observer);
+    Scene s = SceneOf(grid);
+    auto image = Render(s, mapper, 2);
+    EXPECT_EQ(Compare(image, reference).worst, 0.0);
+    EXPECT_TRUE(this->Observer->errors.empty());
+    const bool copied = kind == "generic";
+    EXPECT_EQ(this->Observer->warnings.size(), copied ? 1u : 0u) << "once, not per frame";
+    EXPECT_EQ(AnyContains(this->Observer->warnings, "cannot read in place"), copied);
+    EXPECT_GT(CoveredFraction(image, Background), 0.1);
+  }
 }
 
 TEST_F(MapperRobustness, GridsWithoutPointsAreReported)
