@@ -276,8 +276,10 @@ void Compositor::Rasterize(int threads)
   frame.inverseUnit = static_cast<float>(1.0 / s.unitDistance);
   const auto jobs = static_cast<std::int64_t>(this->Tiles.size());
   std::size_t triangles = 0, fragments = 0;
-  // Threads take tiles; a tile's work is worth a thread.
-  const int team = ThreadsForWork(this->Tiles.size(), 1, threads);
+  // Threads take tiles: no more threads than tiles, nor than the binned fans are worth.
+  const std::size_t entries = this->TileStart.empty() ? 0 : this->TileStart.back();
+  const int team = std::min(ThreadsForWork(this->Tiles.size(), 1, threads),
+    ThreadsForWork(entries, detail::FansPerThread, threads));
 #pragma omp parallel num_threads(team) reduction(+ : triangles, fragments)
   {
     std::vector<float> depth(s.opaqueDepth ? TilePixels : 0);

@@ -519,7 +519,7 @@ bool FramePipeline::DecomposeWindow(Window& window, std::size_t& first, std::siz
   }
   const auto start = Clock::now();
   EnsureSize(this->Classes, count);
-  decomposeCells(in, first, count);
+  decomposeCells(in, first, count, threads);
   // Pieces of cells cut by the near plane: ranks after the cells'.
   const auto pieces = static_cast<std::int64_t>(this->Pieces.size());
 #pragma omp parallel for num_threads(detail::ResolveThreads(threads))                              \
@@ -556,12 +556,12 @@ bool FramePipeline::DecomposeWindow(Window& window, std::size_t& first, std::siz
 void FramePipeline::DecomposeBatch(std::size_t first, std::size_t count, int threads)
 {
   const bool decomposed = this->DecomposeWindow(this->SlotWindow, first, count, threads,
-    [&](const DecomposeInput& in, std::size_t from, std::size_t n)
+    [&](const DecomposeInput& in, std::size_t from, std::size_t n, int team)
     {
       EnsureSize(this->VertexBuffer, VerticesPerTetrahedron * n);
       EnsureSize(this->IndexBuffer, IndicesPerTetrahedron * n);
       DecomposeTetrahedraByRank(in, this->Rank.data(), from, n, this->VertexBuffer.data(),
-        this->IndexBuffer.data(), this->Classes.data(), threads);
+        this->IndexBuffer.data(), this->Classes.data(), team);
     },
     [&](const DecomposeInput& in, const ProjectedPoint* const corners[4], const float* scalars,
       std::uint64_t k)
@@ -576,11 +576,11 @@ void FramePipeline::DecomposeBatch(std::size_t first, std::size_t count, int thr
 void FramePipeline::DecomposeFans(std::size_t first, std::size_t count, int threads)
 {
   const bool decomposed = this->DecomposeWindow(this->FanWindow, first, count, threads,
-    [&](const DecomposeInput& in, std::size_t from, std::size_t n)
+    [&](const DecomposeInput& in, std::size_t from, std::size_t n, int team)
     {
       EnsureSize(this->FanBuffer, n);
       DecomposeFansByRank(
-        in, this->Rank.data(), from, n, this->FanBuffer.data(), this->Classes.data(), threads);
+        in, this->Rank.data(), from, n, this->FanBuffer.data(), this->Classes.data(), team);
     },
     [&](const DecomposeInput& in, const ProjectedPoint* const corners[4], const float* scalars,
       std::uint64_t k) { return DecomposeIntoFan(in, corners, scalars, this->FanBuffer[k]); });
