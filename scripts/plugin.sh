@@ -16,10 +16,10 @@
 #
 # python3-paraview (pvpython, and the paraview Python package that pvbatch runs) conflicts
 # with python3-vtk9, which Debian's VTK 9.1 (libvtk9-dev, the main build) needs, and
-# paraview-dev's CMake package names its files (DESIGN.md section 6). Unless it is installed,
-# its .deb is downloaded (not installed) into the build tree and extracted there; the
-# plugin's CMake reads ParaView's wrapping hierarchy files from it, and pvpython/pvbatch run
-# with that copy first on their Python path. Nothing is installed or changed under /usr.
+# paraview-dev's CMake package names its files (Documentation/environment.md). Unless it is
+# installed, its .deb is downloaded (not installed) into the build tree and extracted there;
+# the plugin's CMake reads ParaView's wrapping hierarchy files from it, and pvpython/pvbatch
+# run with that copy first on their Python path. Nothing is installed or changed under /usr.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="$(mkdir -p "${1:-$here/build-plugin}" && cd "${1:-$here/build-plugin}" && pwd)"
@@ -27,7 +27,6 @@ arch="$(dpkg-architecture -qDEB_HOST_MULTIARCH 2>/dev/null || echo x86_64-linux-
 jobs="$(nproc)"
 
 data="$here/Data/bluntfin_tets.vtu"
-[ -f "$data" ] || data="$here/../shared/data/bluntfin/bluntfin_tets.vtu"
 [ -f "$data" ] || { echo "plugin.sh: bluntfin_tets.vtu not found" >&2; exit 1; }
 
 installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q "install ok installed"; }

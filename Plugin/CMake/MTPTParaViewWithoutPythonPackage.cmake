@@ -1,4 +1,5 @@
-# find_package(ParaView) on Debian without python3-paraview installed (DESIGN.md section 6).
+# find_package(ParaView) on Debian without python3-paraview installed
+# (Documentation/environment.md).
 #
 # ParaView's CMake package (paraview-dev) always loads three export sets whose files belong to
 # python3-paraview: VTK's Python modules (vtk/VTKPython-targets.cmake), ParaView's Python

@@ -47,8 +47,9 @@ Projection ClassifyProjection(const double x[4], const double y[4])
     return result;
   }
 
-  // Signs with a zero band relative to the hull area (DESIGN.md section 3: never test a
-  // denominator with == 0). A zero is a point on the line through an edge of the others.
+  // Signs with a zero band relative to the hull area, never a test of a denominator with
+  // == 0 (VTK's PT does that, and near-zero denominators then give huge alpha and beta;
+  // Documentation/algorithm.md). A zero is a point on the line through an edge of the others.
   const double zeroBand = ClassificationTolerance * sumAbs;
   int sign[4];
   int positives = 0, negatives = 0;

@@ -119,10 +119,12 @@ private:
 };
 
 /**
- * Parallel LSD radix sort, 8-bit digits. Each pass: every thread counts the digits of its
- * contiguous block, an exclusive prefix over (digit, thread) gives every thread its own
- * output ranges, and every thread scatters its block stably. A pass whose digit is the same
- * for all keys is skipped (typically the sign/exponent byte of the depth).
+ * Parallel LSD radix sort, 8-bit digits (256 buckets): 4 passes over the depth bits 32-63
+ * when the cell ids arrive ascending, else 8 passes over all 64 bits. Each pass: every
+ * thread counts the digits of its contiguous block, an exclusive prefix over (digit, thread)
+ * gives every thread its own output ranges, and every thread scatters its block stably. A
+ * pass whose digit is the same for all keys is skipped (typically the top byte, the sign and
+ * high exponent bits of the depth).
  */
 class RadixSortOrder final : public VisibilityOrder
 {

@@ -1,8 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Numerical hard cases (issue 6), each against an expected image: the exact reference
-// (ReferenceRenderer.h) or the same scene without the difficulty. MTPT renders through the
-// whole CPU path (FramePipeline + Compositor) in pre-integrated shading, whose perspective
-// interpolation is exact, so the remaining differences are rounding and rasterization.
+// Numerical hard cases (far from the origin, tiny and huge scales, a wide perspective view,
+// saturated and vanishing attenuation, non-convex meshes, huge cells beside tiny ones,
+// edge-on faces, stacked vertices, slivers), each against an expected image: the exact
+// reference (ReferenceRenderer.h) or the same scene without the difficulty. MTPT renders
+// through the whole CPU path (FramePipeline + Compositor) in pre-integrated shading, whose
+// perspective interpolation is exact, so the remaining differences are rounding and
+// rasterization.
 #include "TestHelpers.h"
 
 #include "mtpt/Compositor.h"

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// "Speed against error" (DESIGN.md section 4): the mapper's image against the exact
+// "Speed against error" (Documentation/accuracy.md): the mapper's image against the exact
 // emission-absorption reference (vtkMTPTReferenceRenderer), beside VTK's own
 // vtkProjectedTetrahedraMapper on the same scene. Errors are RMSE over linear RGB in [0, 1]
 // of the 8-bit window against the double-precision reference, so even a perfect mapper

@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// The camera flies into and through a mesh (issue 6): cells crossing the near plane are cut
-// and their visible parts drawn, so no frame has holes, and each frame matches the exact
-// reference (vtkMTPTReferenceRenderer). VTK's vtkProjectedTetrahedraMapper drops such
-// cells whole; its holes are counted beside ours.
+// The camera flies into and through a mesh (Documentation/algorithm.md, "Near-plane
+// clipping"): cells crossing the near plane are cut and their visible parts drawn, so no
+// frame has holes, and each frame matches the exact reference (vtkMTPTReferenceRenderer).
+// VTK's vtkProjectedTetrahedraMapper drops such cells whole; its holes are counted beside
+// ours.
 #include "RenderingTestUtilities.h"
 
 #include "vtkMTPTReferenceRenderer.h"

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Internal: the threading layer. Stage math stays in plain functions; only the loops
-// that call it know about OpenMP (STYLE.md: keep scheduling out of the per-tet math).
+// Internal: the threading layer. Stage math stays in plain functions, written once and
+// testable alone; only the loops that call it know about OpenMP (no scheduling inside the
+// per-cell math).
 #ifndef mtpt_detail_Parallel_h
 #define mtpt_detail_Parallel_h
 

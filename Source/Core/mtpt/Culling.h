@@ -2,7 +2,8 @@
 /**
  * @file Culling.h
  * @brief Cells a frame can skip before it sorts: those the opacity transfer function makes
- * fully transparent (DESIGN.md section 5, "model only what a scene needs").
+ * fully transparent, so that per-frame work follows what the scene shows, not the mesh size
+ * (Documentation/algorithm.md, "Culling and reuse").
  *
  * Exactness: both backends shade a fragment from transfer-function values looked up at
  * scalars interpolated inside its cell, so they lie in the cell's scalar range [min, max].

@@ -2,7 +2,9 @@
 /**
  * @file Decompose.h
  * @brief Stage 4 of a frame: classify each tetrahedron's projection and decompose it into
- * exactly 4 triangles, written at a fixed stride (paper's Algorithm 2, DESIGN.md step 4-5).
+ * exactly 4 triangles, written at a fixed stride (the paper's Algorithm 2;
+ * Documentation/algorithm.md, "Classification and the thick vertex" and "Decomposition at a
+ * fixed stride").
  *
  * Conventions (see also MeshView.h):
  * - Slot k (the k-th tetrahedron in visibility order) owns vertices [5k, 5k+5) and

@@ -3,10 +3,10 @@
  * @file DepthKeys.h
  * @brief Stage 2 of a frame: one sortable depth key per tetrahedron.
  *
- * Depth (DESIGN.md section 2, step 2): orthographic views use the eye-space depth -z of the
- * centroid (the paper's dot(view direction, centroid)); perspective views use the squared
- * distance from the eye to the centroid, which orders the cells at the sides of a wide
- * view correctly where the view-direction dot product does not.
+ * Depth (Documentation/algorithm.md, "Depth keys"): orthographic views use the eye-space
+ * depth -z of the centroid (the paper's dot(view direction, centroid)); perspective views
+ * use the squared distance from the eye to the centroid, which orders the cells at the
+ * sides of a wide view correctly where the view-direction dot product does not.
  *
  * A sort key packs the depth and the cell id into one 64-bit integer so that ascending
  * key order is the visibility order: back to front (farthest first), and among equal

@@ -5,13 +5,15 @@
  * decompose), owning their buffers, timing each stage, counting what it culls, and reusing
  * the results of stages whose inputs did not change.
  *
- * Work follows what the scene needs (DESIGN.md section 5):
+ * Work follows what the scene needs (Documentation/algorithm.md, "Culling and reuse"):
  * - cells crossing the near plane are cut by it and their visible part drawn as extra
  *   tetrahedra with their own keys (NearPlane.h); cells wholly in front of it are dropped;
  * - culling before the sort: cells the opacity transfer function makes fully transparent
- *   (Culling.h; recomputed only when the data or the opacity table change) and cells
- *   entirely outside the view volume (DepthKeys.h); after the sort, the decomposition
- *   culls cells that cover no pixel centre (Decompose.h);
+ *   (Culling.h; recomputed only when the data or the opacity table change), and, while the
+ *   keys are computed, cells entirely outside the view volume and cells whose projection
+ *   covers no pixel centre of the viewport (DepthKeys.h, detail/PixelCoverage.h); the
+ *   pieces of cells cut by the near plane are tested for pixel coverage by the same rule
+ *   when they are decomposed (Decompose.h);
  * - reuse (SetReuse): an unchanged view, model matrix and data skip every stage; a change
  *   of colour only (the same opacity-visible cells) skips every stage too; a change of
  *   the opacity table redoes culling, keys, order and decomposition but not the

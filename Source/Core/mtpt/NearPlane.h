@@ -3,7 +3,7 @@
  * @file NearPlane.h
  * @brief Cells that cross the near plane are cut by it and their visible part drawn, where
  * VTK's PT drops the whole cell (holes when the camera is near or inside the mesh;
- * DESIGN.md section 3).
+ * Documentation/algorithm.md, "Near-plane clipping").
  *
  * The cutting plane is NDC z = NearPlaneNdcZ, a hair behind the near plane, so that the
  * rasterizer's own near clipping (z < -1) never removes a fragment of a piece. The plane

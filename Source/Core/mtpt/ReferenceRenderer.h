@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 /**
  * @file ReferenceRenderer.h
- * @brief The accuracy reference (DESIGN.md section 4): the exact emission-absorption ray
- * integral through a tetrahedral mesh, per pixel, on the CPU in double precision, with no
- * OpenGL. Every mapper's image is measured against it ("speed against error").
+ * @brief The accuracy reference: the exact emission-absorption ray integral through a
+ * tetrahedral mesh, per pixel, on the CPU in double precision, with no OpenGL. Every
+ * mapper's image is measured against it ("speed against error", Documentation/accuracy.md).
  *
  * Conventions (MeshView.h, Compositor.h):
  * - Matrices: row-major on column vectors; the camera looks down -z in eye space; OpenGL NDC.
@@ -18,12 +18,12 @@
  *   perspective cameras alike. Lengths are measured in eye coordinates, as every mapper
  *   measures them (ScalarOpacityUnitDistance is an eye-space length under a rigid view).
  *
- * The model (DESIGN.md section 4): the scalar is linear inside each tetrahedron (point
- * scalars; cell scalars are constant per cell); colour c(s) and opacity o(s) are the
- * piecewise-linear functions through the given nodes, clamped to the end values outside
- * their node range (VTK's default clamping); extinction tau(s) = o(s) / unitDistance;
- * pixel = integral c tau exp(-integral tau) along the ray, front to back, then over the
- * background colour with the remaining transmittance.
+ * The model: the scalar is linear inside each tetrahedron (point scalars; cell scalars are
+ * constant per cell); colour c(s) and opacity o(s) are the piecewise-linear functions
+ * through the given nodes, clamped to the end values outside their node range (VTK's
+ * default clamping); extinction tau(s) = o(s) / unitDistance; pixel = integral c tau
+ * exp(-integral tau) along the ray, front to back, then over the background colour with
+ * the remaining transmittance.
  *
  * Exactness: each cell's ray segment is split at the transfer-function nodes; on each
  * piece c and tau are linear in the ray parameter, so the optical depth is a quadratic,

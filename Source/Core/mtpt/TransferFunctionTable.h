@@ -33,20 +33,21 @@ struct TransferFunctionTable
 };
 
 /**
- * Pre-integrated shading (DESIGN.md section 3): the colour and opacity of a ray segment
- * along which the scalar runs linearly from `front` to `back`, computed from the integral
- * functions of the table (Engel, Kraus and Ertl, "High-quality pre-integrated volume
- * rendering using hardware-accelerated pixel shading", 2001) instead of from the two end
- * values. With the table's attenuation tau(u) and colour c(u) linear between entries, the
- * integral functions
+ * Pre-integrated shading (Documentation/algorithm.md, "Shading"): the colour and opacity of
+ * a ray segment along which the scalar runs linearly from `front` to `back`, computed from
+ * the integral functions of the table (Engel, Kraus and Ertl, "High-quality pre-integrated
+ * volume rendering using hardware-accelerated pixel shading", 2001) instead of from the two
+ * end values. With the table's attenuation tau(u) and colour c(u) linear between entries,
+ * the integral functions
  *   T(u) = integral_0^u tau,   E(u) = integral_0^u c tau
  * are exact piecewise cubics, stored at the entries (prefix sums) and completed inside an
  * entry in closed form. A segment's optical depth is then exact for any transfer function
  * the table holds, however narrow its features: a peak between the two end scalars is
  * counted in full. The segment is composited front to back in up to
- * MaxPreIntegrationSteps equal scalar steps (one per PreIntegrationStepEntries entries),
- * each with its exact optical depth and its attenuation-weighted mean colour; only the
- * order of emission inside one step is approximated.
+ * MaxPreIntegrationSteps equal scalar steps (one per PreIntegrationStepEntries entries
+ * crossed or per unit of optical depth, whichever asks for more), each with its exact
+ * optical depth and its attenuation-weighted mean colour; only the order of emission inside
+ * one step is approximated.
  */
 struct PreIntegrationTable
 {

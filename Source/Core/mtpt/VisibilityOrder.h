@@ -25,9 +25,11 @@ enum class OrderMethod
   /// Hoare partition splits the keys into sub-arrays of disjoint key ranges until each is
   /// shorter than MaxSubArraySize; then the sub-arrays are sorted in parallel.
   PartitionSort,
-  /// Parallel least-significant-digit radix sort on the 32 depth bits (3 passes of 11
-  /// bits, constant digits skipped). No sequential phase; stable, so the ascending cell
-  /// ids of the input order survive as the tie rule.
+  /// Parallel least-significant-digit radix sort with 8-bit digits: 4 passes over the 32
+  /// depth bits when the keys arrive in ascending cell-id order (as the key stage writes
+  /// them), else 8 passes over all 64 bits; a pass whose digit is the same for every key is
+  /// skipped. No sequential phase; stable, so the ascending cell ids of the input order
+  /// survive as the tie rule.
   RadixSort,
 };
 
