@@ -1,21 +1,25 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// mtpt_bench_accuracy: "speed against error" (DESIGN.md section 4). For real meshes and a
+// mtpt_bench_accuracy: speed against error (Documentation/accuracy.md). For real meshes and a
 // generated grid, each with a smooth transfer function and one of narrow opacity peaks
 // (narrower than the spacing of the vertex scalars), in orthographic and perspective views,
 // it renders every contender -- MTPT in each shading mode (CPU backend at 1 and 2 threads,
 // OpenGL at 2), VTK's projected tetrahedra, its unstructured ray caster with each of its four
 // ray integrators, and its Z-sweep mapper -- and measures the median frame time and the
 // image's error against the exact reference (vtkMTPTReferenceRenderer): RMSE and PSNR over
-// linear RGB in [0, 1] and the worst pixel. Every contender and the reference run in their
+// linear RGB in [0, 1] and the worst pixel. Timing and windows follow the benchmark
+// harness (Harness.h): the camera turns before every timed frame; the image compared is
+// drawn at the start view afterwards. Every contender and the reference run in their
 // own forked child process, so a crash (VTK's ray caster crashes on some inputs) is reported
 // as such. Writes accuracy.md, accuracy.csv and accuracy.png (time against RMSE, log-log,
 // geometric means over the scenes) to --out; --from-csv re-plots a previous run. Run under a
 // display (Testing/xvfb-launch.sh on machines without one).
-#include "MeshLoader.h"
-#include "TetrahedralGrid.h"
+#include "Harness.h"
+#include "Plot.h"
 
 #include "vtkMTPTReferenceRenderer.h"
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
+
+#include "mtpt/Timing.h"
 
 #include "vtkAxis.h"
 #include "vtkCamera.h"
@@ -48,6 +52,8 @@
 #include "vtkVolumeProperty.h"
 #include "vtkWindowToImageFilter.h"
 
+#include <CLI/CLI.hpp>
+
 #include <sys/stat.h>
 #include <sys/types.h>
 #include <sys/wait.h>
@@ -70,34 +76,21 @@
 
 namespace
 {
-using mtpt::bench::TetMesh;
+using namespace mtpt::bench;
 using Mapper = vtkMultiThreadedProjectedTetrahedraMapper;
 
 struct Options
 {
   int size = 256;
-  int repeat = 3;
-  double slowLimit = 10;
+  CommonOptions common; ///< repeat, step, slow limit, data folder
   std::string out = "accuracy";
   std::string fromCsv;
-  std::string data = MTPT_SHARED_DATA_DIR;
-  std::vector<std::string> meshes{ "grid", "pulley", "bluntfin", "comb" };
-  std::size_t gridTets = 200000;
+  std::string meshes = "grid,pulley,bluntfin,comb";
+  long long gridTets = 200000;
   bool images = false;               ///< also save every image as PNG under out/images
   std::string loadBefore, loadAfter; ///< /proc/loadavg at the start and the end of the run
   std::string renderer = "unknown";  ///< the OpenGL renderer string
 };
-
-std::vector<std::string> Split(const std::string& s, char separator = ',')
-{
-  std::vector<std::string> out;
-  std::stringstream in(s);
-  for (std::string item; std::getline(in, item, separator);)
-  {
-    out.push_back(item);
-  }
-  return out;
-}
 
 /// The contenders, in table order.
 struct Contender
@@ -125,31 +118,23 @@ const std::vector<Contender>& Contenders()
   return list;
 }
 
-vtkSmartPointer<vtkUnstructuredGridVolumeMapper> MakeMapper(const std::string& name)
+vtkSmartPointer<vtkUnstructuredGridVolumeMapper> MakeContender(const std::string& name)
 {
   if (name.rfind("MTPT", 0) == 0)
   {
-    auto m = vtkSmartPointer<Mapper>::New();
-    m->SetShadingMode(name.find("pre-integrated") != std::string::npos
-        ? Mapper::PRE_INTEGRATED_SHADING
-        : Mapper::VTK_COMPATIBLE_SHADING);
-    m->SetBackend(
-      name.find(" GL ") != std::string::npos ? Mapper::OPENGL_BACKEND : Mapper::CPU_BACKEND);
-    m->SetNumberOfThreads(name.find(" 1t") != std::string::npos ? 1 : 2);
-    // Every timed frame does all the work of a frame after a view change.
-    m->SetReuseResults(false);
-    return m;
+    MapperSettings settings;
+    settings.shading = name.find("pre-integrated") != std::string::npos ? "pre-integrated" : "vtk";
+    settings.threads = name.find(" 1t") != std::string::npos ? 1 : 2;
+    return MakeMapper(name.find(" GL ") != std::string::npos ? "mtpt-gl" : "mtpt-cpu", settings);
   }
   if (name == "VTK PT")
   {
-    return vtkSmartPointer<vtkProjectedTetrahedraMapper>::New();
+    return MakeMapper("vtk-pt");
   }
   if (name.rfind("VTK ray cast", 0) == 0)
   {
-    auto m = vtkSmartPointer<vtkUnstructuredGridVolumeRayCastMapper>::New();
-    // Full resolution: no image-sample-distance adaptation to a frame rate.
-    m->SetAutoAdjustSampleDistances(0);
-    m->SetImageSampleDistance(1.0f);
+    auto mapper = MakeMapper("raycast");
+    auto* m = vtkUnstructuredGridVolumeRayCastMapper::SafeDownCast(mapper);
     if (name.find("homogeneous") != std::string::npos)
     {
       m->SetRayIntegrator(vtkSmartPointer<vtkUnstructuredGridHomogeneousRayIntegrator>::New());
@@ -166,19 +151,15 @@ vtkSmartPointer<vtkUnstructuredGridVolumeMapper> MakeMapper(const std::string& n
     {
       m->SetRayIntegrator(vtkSmartPointer<vtkUnstructuredGridLinearRayIntegrator>::New());
     }
-    return m;
+    return mapper;
   }
-  auto m = vtkSmartPointer<vtkUnstructuredGridVolumeZSweepMapper>::New();
-  m->SetAutoAdjustSampleDistances(0);
-  m->SetImageSampleDistance(1.0f);
-  return m;
+  return MakeMapper("zsweep");
 }
 
 /// One scene: a mesh, a transfer function, a view.
-struct Scene
+struct AccuracyScene
 {
-  const TetMesh* mesh = nullptr;
-  vtkUnstructuredGrid* grid = nullptr;
+  const Scene* mesh = nullptr;
   std::string tf;   ///< "smooth" or "narrow"
   bool perspective; ///< else orthographic
   std::string Name() const
@@ -187,17 +168,16 @@ struct Scene
   }
 };
 
-vtkSmartPointer<vtkVolumeProperty> MakeProperty(const Scene& scene)
+vtkSmartPointer<vtkVolumeProperty> MakeAccuracyProperty(const AccuracyScene& scene)
 {
-  double range[2];
-  scene.grid->GetPointData()->GetScalars()->GetRange(range);
+  const double* range = scene.mesh->range;
   const double low = range[0], high = range[1], span = high - low;
   vtkNew<vtkColorTransferFunction> color;
   color->AddRGBPoint(low, 0.23, 0.30, 0.75);
   color->AddRGBPoint(low + 0.5 * span, 0.87, 0.87, 0.87);
   color->AddRGBPoint(high, 0.71, 0.02, 0.15);
   vtkNew<vtkPiecewiseFunction> opacity;
-  const double diagonal = scene.grid->GetLength();
+  const double diagonal = scene.mesh->grid->GetLength();
   if (scene.tf == "smooth")
   {
     opacity->AddPoint(low, 0.0);
@@ -222,42 +202,6 @@ vtkSmartPointer<vtkVolumeProperty> MakeProperty(const Scene& scene)
   property->SetScalarOpacity(opacity);
   property->SetScalarOpacityUnitDistance(diagonal / 50);
   return property;
-}
-
-/// The scene in a window: the camera of mtpt_bench_frames (reset, azimuth 30, elevation 20).
-struct Stage
-{
-  vtkNew<vtkVolume> volume;
-  vtkNew<vtkRenderer> renderer;
-  vtkNew<vtkRenderWindow> window;
-  vtkSmartPointer<vtkVolumeProperty> property;
-
-  Stage(const Scene& scene, vtkUnstructuredGridVolumeMapper* mapper, int size)
-  {
-    this->property = MakeProperty(scene);
-    mapper->SetInputData(scene.grid);
-    this->volume->SetMapper(mapper);
-    this->volume->SetProperty(this->property);
-    this->renderer->SetBackground(1, 1, 1);
-    this->renderer->AddVolume(this->volume);
-    this->window->SetOffScreenRendering(1);
-    this->window->SetMultiSamples(0);
-    this->window->SetSize(size, size);
-    this->window->AddRenderer(this->renderer);
-    this->renderer->ResetCamera();
-    vtkCamera* camera = this->renderer->GetActiveCamera();
-    camera->SetParallelProjection(scene.perspective ? 0 : 1);
-    camera->Azimuth(30);
-    camera->Elevation(20);
-    camera->OrthogonalizeViewUp();
-    this->renderer->ResetCameraClippingRange();
-  }
-};
-
-double Median(std::vector<double> v)
-{
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v[v.size() / 2];
 }
 
 bool WriteImage(const std::string& path, vtkDoubleArray* rgb)
@@ -285,57 +229,41 @@ std::vector<double> ReadImage(const std::string& path)
 
 /// Child process body: renders (or integrates, for "reference") and writes
 /// `<base>.bin` (the image) and `<base>.txt` ("ok|slow milliseconds").
-int RunChild(
-  const Scene& scene, const std::string& contender, const Options& o, const std::string& base)
+int RunChild(const AccuracyScene& scene, const std::string& contender, const Options& o,
+  const std::string& base)
 {
   const bool reference = contender == "reference";
-  auto mapper = reference ? vtkSmartPointer<vtkUnstructuredGridVolumeMapper>(
-                              vtkSmartPointer<vtkProjectedTetrahedraMapper>::New())
-                          : MakeMapper(contender);
-  Stage stage(scene, mapper, o.size);
+  auto mapper = MakeContender(reference ? "VTK PT" : contender);
+  auto property = MakeAccuracyProperty(scene);
+  StageOptions look;
+  look.view.parallel = !scene.perspective;
+  Stage stage(*scene.mesh, property, mapper, o.size, o.size, look);
   vtkNew<vtkDoubleArray> rgb;
   double ms = 0;
   bool slow = false;
   if (reference)
   {
     vtkNew<vtkMTPTReferenceRenderer> integrator;
-    const auto start = std::chrono::steady_clock::now();
-    if (!integrator->Render(stage.renderer, stage.volume))
+    const auto start = mtpt::Clock::now();
+    if (!integrator->Render(stage.GetRenderer(), stage.GetVolume()))
     {
       return 3;
     }
-    ms = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ms = 1e3 * mtpt::SecondsSince(start);
     rgb->DeepCopy(integrator->GetImage());
   }
   else
   {
-    auto frame = [&]
-    {
-      const auto start = std::chrono::steady_clock::now();
-      stage.window->Render();
-      stage.window->WaitForCompletion();
-      return 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    };
-    const double first = frame(); // warm-up: input analysis, shaders, buffers
-    std::vector<double> times;
-    if (first > 1e3 * o.slowLimit)
-    {
-      slow = true;
-      times.push_back(first);
-    }
-    else
-    {
-      for (int i = 0; i < o.repeat; ++i)
-      {
-        times.push_back(frame());
-      }
-    }
-    ms = Median(times);
-    if (!vtkMTPTReferenceRenderer::ReadPixels(stage.renderer, rgb, 0))
+    const FrameTiming timing = TimeFrames(stage, o.common.timing);
+    ms = timing.median;
+    slow = timing.slow;
+    // The image compared: the start view, as the reference sees it.
+    stage.StartView();
+    stage.Frame();
+    if (!vtkMTPTReferenceRenderer::ReadPixels(stage.GetRenderer(), rgb, 0))
     {
       return 4;
     }
-    mapper->ReleaseGraphicsResources(stage.window);
   }
   if (!WriteImage(base + ".bin", rgb))
   {
@@ -355,7 +283,7 @@ struct Row
 };
 
 /// Forks a child for one run, with a watchdog; returns the status and fills ms and image.
-std::string RunInChild(const Scene& scene, const std::string& contender, const Options& o,
+std::string RunInChild(const AccuracyScene& scene, const std::string& contender, const Options& o,
   const std::string& base, double& ms, std::vector<double>& image)
 {
   std::fflush(stdout);
@@ -371,7 +299,7 @@ std::string RunInChild(const Scene& scene, const std::string& contender, const O
   }
   // The watchdog: a warm-up frame past the slow limit is still let finish, up to 6 times
   // the limit plus a minute for input analysis.
-  const double limit = 6 * o.slowLimit + 60;
+  const double limit = 6 * o.common.timing.slowLimit + 60;
   const auto start = std::chrono::steady_clock::now();
   int status = 0;
   bool timedOut = false;
@@ -476,7 +404,8 @@ double ImageRmse(const std::vector<double>& a, const std::vector<double>& b, dou
 void WriteCsv(const std::string& path, const std::vector<Row>& rows, const Options& o)
 {
   std::ofstream out(path);
-  out << "# size: " << o.size << "\n# repeat: " << o.repeat << "\n# slow-limit: " << o.slowLimit
+  out << "# size: " << o.size << "\n# repeat: " << o.common.timing.repeat
+      << "\n# step: " << o.common.timing.step << "\n# slow-limit: " << o.common.timing.slowLimit
       << "\n# renderer: " << o.renderer << "\n# load-before: " << o.loadBefore
       << "\n# load-after: " << o.loadAfter << "\n";
   out << "scene,mesh,tets,tf,view,contender,status,ms,rmse,psnr,worst\n";
@@ -505,9 +434,11 @@ std::vector<Row> ReadCsv(const std::string& path, Options& o)
       if (key == "size")
         o.size = std::atoi(value.c_str());
       else if (key == "repeat")
-        o.repeat = std::atoi(value.c_str());
+        o.common.timing.repeat = std::atoi(value.c_str());
+      else if (key == "step")
+        o.common.timing.step = std::atof(value.c_str());
       else if (key == "slow-limit")
-        o.slowLimit = std::atof(value.c_str());
+        o.common.timing.slowLimit = std::atof(value.c_str());
       else if (key == "renderer")
         o.renderer = value;
       else if (key == "load-before")
@@ -520,7 +451,8 @@ std::vector<Row> ReadCsv(const std::string& path, Options& o)
     {
       continue; // the header
     }
-    const auto f = Split(line);
+    const auto f = SplitList(line);
+    // SplitList drops empty fields: an unmeasured row keeps its 11 fields with 0 values.
     if (f.size() < 11)
     {
       continue;
@@ -698,14 +630,19 @@ std::string Markdown(const std::vector<Row>& rows, const Options& o)
         "functions, exact to about 1e-12). RMSE and PSNR over linear RGB in [0, 1] (8-bit "
         "window read-back: an error floor of about 0.0011 RMSE for any mapper); worst = "
         "largest channel difference. Time: median of "
-     << o.repeat << " frames after one warm-up, whole `Render()` + `WaitForCompletion()` (ms); "
-     << "slow = a warm-up frame over " << o.slowLimit << " s, then only that frame. Window "
-     << o.size << "x" << o.size << ", white background. OpenGL renderer: " << o.renderer
-     << ". Load average (1, 5, 15 min) at the start " << o.loadBefore << ", at the end "
-     << o.loadAfter
-     << ". MTPT with ReuseResults off (every frame does a full frame's work); VTK's ray caster "
-        "and Z-sweep at image sample distance 1 without automatic adjustment. Every "
-        "contender runs in its own child process: crashes are reported as such.\n\n"
+     << o.common.timing.repeat << " frames after one warm-up, the camera turning "
+     << o.common.timing.step
+     << " degrees of azimuth before each, whole `Render()` + `WaitForCompletion()` (ms); "
+     << "slow = a warm-up frame over " << o.common.timing.slowLimit
+     << " s, then only that frame. The image compared is drawn at the start view after the "
+        "timed frames. Window "
+     << o.size << "x" << o.size
+     << " as VTK makes it by default (multisampled), white background. OpenGL renderer: "
+     << o.renderer << ". Load average (1, 5, 15 min) at the start " << o.loadBefore
+     << ", at the end " << o.loadAfter
+     << ". MTPT with its default settings; VTK's ray caster and Z-sweep at image sample "
+        "distance 1 without automatic adjustment. Every contender runs in its own child "
+        "process: crashes are reported as such.\n\n"
      << "Transfer functions: smooth = three-colour ramp, opacity rising linearly 0 -> 1 over "
         "the data range; narrow = the same colours, opacity 0 except three peaks of height 40 "
         "and half-width 0.2% of the range at 25%, 50% and 75% of it. Unit distance: 1/50 of "
@@ -713,7 +650,8 @@ std::string Markdown(const std::vector<Row>& rows, const Options& o)
 
   int passA = 0, passB = 0, passBestB = 0, passAFloor = 0, scenes = 0;
   const std::string verdicts = Verdicts(rows, passA, passB, passBestB, passAFloor, scenes);
-  md << "## Targets of issue 5 (MTPT CPU backend, 2 threads)\n\n"
+  md << "## Targets: pre-integrated error and VTK-compatible speed (MTPT CPU backend, 2 "
+        "threads)\n\n"
      << "(a) pre-integrated RMSE <= 1/4 of VTK PT's: " << passA << " of " << scenes
      << " scenes. (b) VTK-compatible faster than every VTK mapper with RMSE <= VTK PT's: " << passB
      << " of " << scenes
@@ -776,86 +714,28 @@ std::string Markdown(const std::vector<Row>& rows, const Options& o)
   return md.str();
 }
 
-/// Time against RMSE, log-log, one point per contender (geometric means), with VTK's charts.
-void Plot(const std::vector<Row>& rows, const std::string& path)
+/// Time against RMSE, log-log, one point per contender (geometric means).
+void PlotSummary(const std::vector<Row>& rows, const std::string& path)
 {
-  const std::vector<Summary> summary = Summarize(rows);
-  vtkNew<vtkContextView> view;
-  view->GetRenderWindow()->SetOffScreenRendering(1);
-  view->GetRenderWindow()->SetSize(900, 600);
-  view->GetRenderer()->SetBackground(1, 1, 1);
-  vtkNew<vtkChartXY> chart;
-  view->GetScene()->AddItem(chart);
-  chart->SetShowLegend(true);
-  chart->GetLegend()->SetHorizontalAlignment(vtkChartLegend::RIGHT);
-  chart->GetLegend()->SetVerticalAlignment(vtkChartLegend::TOP);
-  chart->SetTitle("Speed against error (geometric means over the scenes)");
-  chart->GetAxis(vtkAxis::BOTTOM)->SetTitle("frame time (ms), log");
-  chart->GetAxis(vtkAxis::LEFT)->SetTitle("RMSE against the exact integral, log");
-  chart->GetAxis(vtkAxis::BOTTOM)->SetLogScale(true);
-  chart->GetAxis(vtkAxis::LEFT)->SetLogScale(true);
-  static const unsigned char colours[][3] = { { 31, 119, 180 }, { 44, 160, 44 }, { 23, 190, 207 },
-    { 255, 127, 14 }, { 214, 39, 40 }, { 148, 103, 189 }, { 140, 86, 75 }, { 227, 119, 194 },
-    { 127, 127, 127 }, { 188, 189, 34 }, { 0, 0, 0 }, { 174, 199, 232 } };
-  static const int markers[] = { vtkPlotPoints::CIRCLE, vtkPlotPoints::SQUARE,
-    vtkPlotPoints::DIAMOND, vtkPlotPoints::CIRCLE, vtkPlotPoints::SQUARE, vtkPlotPoints::DIAMOND,
-    vtkPlotPoints::CROSS, vtkPlotPoints::PLUS, vtkPlotPoints::PLUS, vtkPlotPoints::PLUS,
-    vtkPlotPoints::PLUS, vtkPlotPoints::CROSS };
-  // Room above the points for the legend.
-  double lowMs = 1e300, highMs = 0, lowRmse = 1e300, highRmse = 0;
-  for (const Summary& s : summary)
+  std::vector<Series> series;
+  for (const Summary& s : Summarize(rows))
   {
     if (s.scenes > 0)
     {
-      lowMs = std::min(lowMs, s.ms);
-      highMs = std::max(highMs, s.ms);
-      lowRmse = std::min(lowRmse, s.rmse);
-      highRmse = std::max(highRmse, s.rmse);
+      series.push_back({ s.contender, { s.ms }, { s.rmse } });
     }
   }
-  if (highMs > 0)
+  Chart chart;
+  chart.title = "Speed against error (geometric means over the scenes)";
+  chart.xTitle = "frame time (ms), log";
+  chart.yTitle = "RMSE against the exact integral, log";
+  chart.lines = false;
+  chart.headroom = 30; // room above the points for the legend
+  std::string error;
+  if (!WritePlot(path, chart, series, error))
   {
-    chart->GetAxis(vtkAxis::BOTTOM)->SetUnscaledRange(lowMs / 1.5, highMs * 1.5);
-    chart->GetAxis(vtkAxis::LEFT)->SetUnscaledRange(lowRmse / 1.5, highRmse * 30);
-    chart->GetAxis(vtkAxis::BOTTOM)->SetBehavior(vtkAxis::FIXED);
-    chart->GetAxis(vtkAxis::LEFT)->SetBehavior(vtkAxis::FIXED);
+    std::fprintf(stderr, "mtpt_bench_accuracy: %s\n", error.c_str());
   }
-  std::vector<vtkSmartPointer<vtkTable>> tables;
-  int index = 0;
-  for (const Summary& s : summary)
-  {
-    const int k = index++;
-    if (s.scenes == 0)
-    {
-      continue;
-    }
-    auto table = vtkSmartPointer<vtkTable>::New();
-    vtkNew<vtkDoubleArray> x, y;
-    x->SetName("ms");
-    y->SetName(s.contender.c_str());
-    x->InsertNextValue(s.ms);
-    y->InsertNextValue(s.rmse);
-    table->AddColumn(x);
-    table->AddColumn(y);
-    tables.push_back(table);
-    auto* plot = vtkPlotPoints::SafeDownCast(chart->AddPlot(vtkChart::POINTS));
-    plot->SetInputData(table, 0, 1);
-    plot->SetColor(colours[k % 12][0], colours[k % 12][1], colours[k % 12][2], 255);
-    plot->SetMarkerStyle(markers[k % 12]);
-    plot->SetMarkerSize(14);
-    plot->SetWidth(2.0);
-    plot->SetLabel(s.contender);
-  }
-  view->GetRenderWindow()->Render();
-  vtkNew<vtkWindowToImageFilter> grab;
-  grab->SetInput(view->GetRenderWindow());
-  grab->SetInputBufferTypeToRGB();
-  grab->ReadFrontBufferOff();
-  grab->Update();
-  vtkNew<vtkPNGWriter> writer;
-  writer->SetFileName(path.c_str());
-  writer->SetInputConnection(grab->GetOutputPort());
-  writer->Write();
 }
 
 std::string OpenGLRendererName()
@@ -885,36 +765,21 @@ void WriteOutputs(const std::vector<Row>& rows, const Options& o)
 int main(int argc, char** argv)
 {
   Options o;
-  for (int i = 1; i < argc; ++i)
-  {
-    const std::string a = argv[i];
-    auto next = [&] { return i + 1 < argc ? std::string(argv[++i]) : std::string(); };
-    if (a == "--size")
-      o.size = std::max(8, std::atoi(next().c_str()));
-    else if (a == "--repeat")
-      o.repeat = std::max(1, std::atoi(next().c_str()));
-    else if (a == "--slow-limit")
-      o.slowLimit = std::atof(next().c_str());
-    else if (a == "--out")
-      o.out = next();
-    else if (a == "--from-csv")
-      o.fromCsv = next();
-    else if (a == "--data")
-      o.data = next();
-    else if (a == "--meshes")
-      o.meshes = Split(next());
-    else if (a == "--grid-tets")
-      o.gridTets = std::strtoull(next().c_str(), nullptr, 10);
-    else if (a == "--images")
-      o.images = true;
-    else
-    {
-      std::printf("usage: mtpt_bench_accuracy [--size 256] [--repeat 3] [--slow-limit 10]\n"
-                  "  [--out DIR] [--from-csv FILE] [--data DIR] [--grid-tets 200000]\n"
-                  "  [--meshes grid,pulley,bluntfin,comb,fire_ug,kiefer] [--images]\n");
-      return a == "--help" ? 0 : 2;
-    }
-  }
+  CLI::App app{ "Speed against error: every mapper's image against the exact ray integral, "
+                "each contender in its own process." };
+  AddCommonOptions(app, o.common);
+  o.common.timing.repeat = 3;
+  o.common.timing.slowLimit = 10;
+  app.add_option("--size", o.size, "window size (square)")->check(CLI::Range(8, 4096));
+  app.add_option("--out", o.out, "folder for accuracy.md, accuracy.csv and accuracy.png");
+  app.add_option("--from-csv", o.fromCsv, "re-plot a previous run's CSV instead of measuring");
+  app.add_option("--meshes", o.meshes,
+    "scenes: grid (a generated grid of --grid-tets) and the harness's names (bluntfin, "
+    "pulley, comb, fire_ug, kiefer, ...)");
+  app.add_option("--grid-tets", o.gridTets, "tetrahedra of the generated grid")
+    ->check(CLI::PositiveNumber);
+  app.add_flag("--images", o.images, "also write every image as PNG under <out>/images");
+  CLI11_PARSE(app, argc, argv);
   mkdir(o.out.c_str(), 0755);
 
   if (!o.fromCsv.empty())
@@ -926,55 +791,28 @@ int main(int argc, char** argv)
       return 1;
     }
     WriteOutputs(rows, o);
-    Plot(rows, o.out + "/accuracy.png");
+    PlotSummary(rows, o.out + "/accuracy.png");
     std::printf("%s", Markdown(rows, o).c_str());
     return 0;
   }
 
   // Meshes first, before any OpenGL context exists (children are forked from here).
   o.loadBefore = LoadAverage();
-  std::vector<TetMesh> meshes;
-  for (const std::string& name : o.meshes)
+  std::vector<Scene> meshes;
+  for (const std::string& name : SplitList(o.meshes))
   {
-    if (name == "grid")
+    Scene scene;
+    std::string error;
+    const std::string what = name == "grid" ? "grid:" + std::to_string(o.gridTets) : name;
+    if (LoadScene(what, o.common.dataFolder, scene, error))
     {
-      mtpt::bench::GridOptions grid;
-      grid.cells = mtpt::bench::GridCellsForTetrahedra(o.gridTets, mtpt::bench::HexSplit::Five);
-      grid.jitter = 0.2;
-      meshes.push_back(mtpt::bench::GenerateTetrahedralGrid(grid));
-      meshes.back().name = "grid";
-      continue;
+      scene.name = name;
+      meshes.push_back(std::move(scene));
     }
-    bool known = false;
-    for (const auto& entry : mtpt::bench::SharedDataSets())
+    else
     {
-      if (name != entry.name)
-      {
-        continue;
-      }
-      known = true;
-      TetMesh mesh;
-      std::string error;
-      if (mtpt::bench::LoadTetMesh(
-            o.data + "/" + entry.relativePath, entry.scalarName, mesh, error))
-      {
-        mesh.name = entry.name;
-        meshes.push_back(std::move(mesh));
-      }
-      else
-      {
-        std::fprintf(stderr, "skipping %s: %s\n", entry.name, error.c_str());
-      }
+      std::fprintf(stderr, "skipping %s: %s\n", name.c_str(), error.c_str());
     }
-    if (!known)
-    {
-      std::fprintf(stderr, "unknown mesh %s\n", name.c_str());
-    }
-  }
-  std::vector<vtkSmartPointer<vtkUnstructuredGrid>> grids;
-  for (const TetMesh& mesh : meshes)
-  {
-    grids.push_back(mtpt::bench::ToUnstructuredGrid(mesh));
   }
 
   std::vector<Row> rows;
@@ -985,16 +823,15 @@ int main(int argc, char** argv)
     {
       for (bool perspective : { false, true })
       {
-        Scene scene;
+        AccuracyScene scene;
         scene.mesh = &meshes[m];
-        scene.grid = grids[m];
         scene.tf = tf;
         scene.perspective = perspective;
         const std::string name = scene.Name();
         Row base;
         base.scene = name;
         base.mesh = meshes[m].name;
-        base.tets = meshes[m].CellCount();
+        base.tets = static_cast<std::size_t>(meshes[m].grid->GetNumberOfCells());
         base.tf = tf;
         base.view = perspective ? "persp" : "ortho";
 
@@ -1053,7 +890,7 @@ int main(int argc, char** argv)
   // Only now an OpenGL context in this process (no more forks).
   o.renderer = OpenGLRendererName();
   WriteOutputs(rows, o);
-  Plot(rows, o.out + "/accuracy.png");
+  PlotSummary(rows, o.out + "/accuracy.png");
   std::printf("%s", Markdown(rows, o).c_str());
   return 0;
 }

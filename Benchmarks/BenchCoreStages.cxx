@@ -10,6 +10,8 @@
  * checks what the headers promise: every order method and thread count yields the same
  * sorted keys and bit-identical vertex and index buffers; a difference exits with 1.
  */
+#include "DataFolder.h"
+#include "Statistics.h"
 #include "TetrahedralGrid.h"
 #ifdef MTPT_BENCH_HAVE_VTK
 #include "MeshLoader.h"
@@ -44,9 +46,8 @@
 #include <string>
 #include <vector>
 
-#ifndef MTPT_SHARED_DATA_DIR
-#define MTPT_SHARED_DATA_DIR "../shared/data"
-#endif
+#include <CLI/CLI.hpp>
+
 #ifndef MTPT_BENCH_BUILD_TYPE
 #define MTPT_BENCH_BUILD_TYPE "unknown"
 #endif
@@ -56,6 +57,8 @@ namespace
 
 using mtpt::Matrix4;
 using mtpt::SortKey;
+using mtpt::bench::DefaultDataFolder;
+using mtpt::bench::Median;
 using mtpt::bench::TetMesh;
 using Clock = std::chrono::steady_clock;
 
@@ -65,102 +68,40 @@ using Clock = std::chrono::steady_clock;
 struct Options
 {
   bool quick = false;
-  std::size_t tetrahedra = 1200000;
+  long long tetrahedra = 1200000;
   int repeat = 7;
-  std::string dataDir = MTPT_SHARED_DATA_DIR;
+  std::string dataDir = DefaultDataFolder();
   std::vector<int> threads = { 1, 2 };
 };
 
-void PrintUsage(std::FILE* stream, const char* program)
+/// Parses the options (CLI11); returns -1 to go on, else the exit status.
+int ParseOptions(int argc, char* argv[], Options& options)
 {
-  std::fprintf(stream,
-    "Usage: %s [--quick] [--tets N] [--repeat R] [--data DIR] [--threads LIST]\n"
-    "  --quick         only the generated grid (no real meshes)\n"
-    "  --tets N        tetrahedra of the generated grid, at least (default 1200000)\n"
-    "  --repeat R      timed runs per measurement, median reported (default 7)\n"
-    "  --data DIR      folder of the real meshes (default %s)\n"
-    "  --threads LIST  comma-separated OpenMP thread counts (default 1,2)\n",
-    program, MTPT_SHARED_DATA_DIR);
-}
-
-bool ParseCount(const std::string& text, long long minimum, long long& value)
-{
-  char* end = nullptr;
-  const long long parsed = std::strtoll(text.c_str(), &end, 10);
-  if (text.empty() || *end != '\0' || parsed < minimum)
+  CLI::App app{ "Timing of the core's CPU stages, and of the visibility orders against "
+                "library sorts." };
+  app.add_flag("--quick", options.quick, "only the generated grid (no real meshes)");
+  app.add_option("--tets", options.tetrahedra, "tetrahedra of the generated grid, at least")
+    ->check(CLI::PositiveNumber);
+  app.add_option("--repeat", options.repeat, "timed runs per measurement (median reported)")
+    ->check(CLI::Range(1, 1000));
+  app.add_option("--data", options.dataDir,
+    "folder of real meshes (comb, kiefer, pulley, ...; default $MTPT_DATA_DIR)");
+  app.add_option("--threads", options.threads, "OpenMP thread counts")
+    ->delimiter(',')
+    ->check(CLI::Range(1, 4096));
+  try
   {
-    return false;
+    app.parse(argc, argv);
   }
-  value = parsed;
-  return true;
-}
-
-bool ParseThreadList(const std::string& text, std::vector<int>& threads)
-{
-  threads.clear();
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ','))
+  catch (const CLI::ParseError& e)
   {
-    long long value = 0;
-    if (!ParseCount(item, 1, value) || value > 4096)
-    {
-      return false;
-    }
-    threads.push_back(static_cast<int>(value));
+    return app.exit(e);
   }
   // Ascending order puts the 1-thread run first, which the speedup column refers to.
-  std::sort(threads.begin(), threads.end());
-  threads.erase(std::unique(threads.begin(), threads.end()), threads.end());
-  return !threads.empty();
-}
-
-// Returns 0 to go on, otherwise the exit status (help: 0 after printing, errors: 2).
-int ParseOptions(int argc, char* argv[], Options& options, bool& exitNow)
-{
-  exitNow = false;
-  for (int i = 1; i < argc; ++i)
-  {
-    const std::string arg = argv[i];
-    const bool hasValue = i + 1 < argc;
-    long long value = 0;
-    if (arg == "--help" || arg == "-h")
-    {
-      PrintUsage(stdout, argv[0]);
-      exitNow = true;
-      return 0;
-    }
-    else if (arg == "--quick")
-    {
-      options.quick = true;
-    }
-    else if (arg == "--tets" && hasValue && ParseCount(argv[i + 1], 1, value))
-    {
-      options.tetrahedra = static_cast<std::size_t>(value);
-      ++i;
-    }
-    else if (arg == "--repeat" && hasValue && ParseCount(argv[i + 1], 1, value))
-    {
-      options.repeat = static_cast<int>(std::min<long long>(value, 1000));
-      ++i;
-    }
-    else if (arg == "--data" && hasValue)
-    {
-      options.dataDir = argv[++i];
-    }
-    else if (arg == "--threads" && hasValue && ParseThreadList(argv[i + 1], options.threads))
-    {
-      ++i;
-    }
-    else
-    {
-      std::fprintf(stderr, "error: bad or incomplete argument '%s'\n", arg.c_str());
-      PrintUsage(stderr, argv[0]);
-      exitNow = true;
-      return 2;
-    }
-  }
-  return 0;
+  std::sort(options.threads.begin(), options.threads.end());
+  options.threads.erase(
+    std::unique(options.threads.begin(), options.threads.end()), options.threads.end());
+  return -1;
 }
 
 //------------------------------------------------------------------------------------------
@@ -255,17 +196,6 @@ std::array<View, 2> MakeViews(const std::array<double, 6>& bounds)
 
 //------------------------------------------------------------------------------------------
 // Measurement helpers
-
-double Median(std::vector<double> values)
-{
-  if (values.empty())
-  {
-    return 0;
-  }
-  std::sort(values.begin(), values.end());
-  const std::size_t mid = values.size() / 2;
-  return values.size() % 2 ? values[mid] : 0.5 * (values[mid - 1] + values[mid]);
-}
 
 // Millions of items per second; 0 marks a time below the clock's resolution.
 double Rate(std::size_t items, double seconds)
@@ -577,7 +507,8 @@ std::vector<MeshRecord> LoadMeshes(const Options& options)
   {
     MeshRecord record;
     mtpt::bench::GridOptions grid;
-    grid.cells = mtpt::bench::GridCellsForTetrahedra(options.tetrahedra, grid.split);
+    grid.cells =
+      mtpt::bench::GridCellsForTetrahedra(static_cast<std::size_t>(options.tetrahedra), grid.split);
     // A tenth of the spacing: breaks the lattice's exact depth ties, as in a real mesh.
     grid.jitter = 0.1;
     const Clock::time_point start = Clock::now();
@@ -638,9 +569,8 @@ void PrintMeshes(const std::vector<MeshRecord>& meshes)
 int main(int argc, char* argv[])
 {
   Options options;
-  bool exitNow = false;
-  const int status = ParseOptions(argc, argv, options, exitNow);
-  if (exitNow)
+  const int status = ParseOptions(argc, argv, options);
+  if (status >= 0)
   {
     return status;
   }

@@ -36,7 +36,6 @@ struct Options
   std::string meshes = "wavelet,bluntfin";
   std::string sizes = "16,512,1024";
   std::string contenders = "mtpt-cpu,mtpt-gl,vtk-pt,raycast,zsweep";
-  std::string shading = "vtk";
   bool unchanged = false;
   std::string csv;
 };
@@ -60,19 +59,19 @@ void PrintScene(const Scene& scene, int width, int height, const std::vector<std
     Measurement& m = results[name];
     const double ratio = pt ? pt->moving.median / m.moving.median : 0;
     const ImageError e = pt ? CompareImages(m.image, pt->image) : ImageError{};
-    const double nsPerFragment = m.fragments > 0 ? 1e6 * m.raster * threads / m.fragments : 0;
+    const double nsPerFragment = m.mtpt.fragments > 0 ? 1e6 * m.mtpt.raster * threads / m.mtpt.fragments : 0;
     std::printf("| %s | %s |%s %.2fx | %.4f | %.1f | %.1f (%.1f + %.1f) | %.1f | %.0f | %.1f |\n",
       name.c_str(), FormatMs(m.moving).c_str(),
-      o.unchanged ? (" " + FormatMs(m.unchanged) + " |").c_str() : "", ratio, e.rmse, m.cpuStages,
-      m.composite, m.bin, m.raster, m.upload + m.draw, m.fragments, nsPerFragment);
+      o.unchanged ? (" " + FormatMs(m.unchanged) + " |").c_str() : "", ratio, e.rmse, m.mtpt.cpuStages,
+      m.mtpt.composite, m.mtpt.bin, m.mtpt.raster, m.mtpt.upload + m.mtpt.draw, m.mtpt.fragments, nsPerFragment);
     if (csv)
     {
       csv << scene.name << ',' << scene.grid->GetNumberOfCells() << ',' << width << ',' << height
-          << ',' << name << ',' << o.shading << ',' << m.moving.median << ','
+          << ',' << name << ',' << o.common.mapper.shading << ',' << m.moving.median << ','
           << (m.moving.slow ? 1 : 0) << ',' << m.unchanged.median << ',' << ratio << ','
-          << e.rmse << ',' << e.worst << ',' << m.cpuStages << ',' << m.composite << ',' << m.bin
-          << ',' << m.raster << ',' << m.upload << ',' << m.draw << ',' << m.fragments << ','
-          << nsPerFragment << ',' << m.sorted << ',' << m.pixelCulled << ',' << threads << '\n';
+          << e.rmse << ',' << e.worst << ',' << m.mtpt.cpuStages << ',' << m.mtpt.composite << ',' << m.mtpt.bin
+          << ',' << m.mtpt.raster << ',' << m.mtpt.upload << ',' << m.mtpt.draw << ',' << m.mtpt.fragments << ','
+          << nsPerFragment << ',' << m.mtpt.sorted << ',' << m.mtpt.pixelCulled << ',' << threads << '\n';
     }
   }
 }
@@ -89,8 +88,6 @@ int main(int argc, char* argv[])
                                        "blocks, comb, kiefer, ...)");
   app.add_option("--sizes", o.sizes, "window sizes: 512 (square) or 1920x1080, comma-separated");
   app.add_option("--contenders", o.contenders, "mtpt-cpu, mtpt-gl, vtk-pt, raycast, zsweep");
-  app.add_option("--shading", o.shading, "MTPT's shading")
-    ->check(CLI::IsMember({ "vtk", "pre-integrated" }));
   app.add_flag("--unchanged", o.unchanged, "also time frames whose view does not change");
   app.add_option("--csv", o.csv, "append every figure to this CSV file");
   CLI11_PARSE(app, argc, argv);
@@ -146,13 +143,13 @@ int main(int argc, char* argv[])
       // VTK's PT first: the others' images are compared with it.
       if (results.count("vtk-pt") == 0 && std::find(names.begin(), names.end(), "vtk-pt") != names.end())
       {
-        results["vtk-pt"] = Measure(scene, property, "vtk-pt", size.first, size.second, o.common, o.shading, o.unchanged);
+        results["vtk-pt"] = Measure(scene, property, "vtk-pt", size.first, size.second, o.common, o.unchanged);
       }
       for (const std::string& name : names)
       {
         if (!results.count(name))
         {
-          results[name] = Measure(scene, property, name, size.first, size.second, o.common, o.shading, o.unchanged);
+          results[name] = Measure(scene, property, name, size.first, size.second, o.common, o.unchanged);
         }
       }
       PrintScene(scene, size.first, size.second, names, results, o, csv);

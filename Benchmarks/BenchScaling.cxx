@@ -34,7 +34,6 @@ struct Options
   std::string scene = "wavelet";
   std::string sizes = "16,64,256,512,1024,1920x1080";
   std::string contenders = "mtpt-cpu,mtpt-gl,vtk-pt";
-  std::string shading = "vtk";
   std::string out = ".";
 };
 
@@ -63,8 +62,6 @@ int main(int argc, char* argv[])
   app.add_option("--scene", o.scene, "--vary window: the scene");
   app.add_option("--sizes", o.sizes, "--vary window: the windows, comma-separated");
   app.add_option("--contenders", o.contenders, "mtpt-cpu, mtpt-gl, vtk-pt, raycast, zsweep");
-  app.add_option("--shading", o.shading, "MTPT's shading")
-    ->check(CLI::IsMember({ "vtk", "pre-integrated" }));
   app.add_option("--out", o.out, "folder for scaling_<vary>.csv and scaling_<vary>.png");
   CLI11_PARSE(app, argc, argv);
 
@@ -119,7 +116,7 @@ int main(int argc, char* argv[])
       for (const std::string& name : names)
       {
         p.results[name] =
-          Measure(scene, property, name, p.width, p.height, o.common, o.shading, false);
+          Measure(scene, property, name, p.width, p.height, o.common);
       }
       std::fprintf(stderr, "measured %s at %dx%d\n", p.scene.c_str(), p.width, p.height);
       points.push_back(std::move(p));
@@ -129,7 +126,7 @@ int main(int argc, char* argv[])
   // The table, the CSV and the plot.
   std::printf("Frame time (ms, median of %d, camera turning %.2f degrees per frame; * one "
               "frame slower than %.0f s), MTPT shading %s\n\n",
-    o.common.timing.repeat, o.common.timing.step, o.common.timing.slowLimit, o.shading.c_str());
+    o.common.timing.repeat, o.common.timing.step, o.common.timing.slowLimit, o.common.mapper.shading.c_str());
   std::printf("| scene | tetrahedra | window |");
   for (const std::string& name : names)
   {
@@ -160,9 +157,9 @@ int main(int argc, char* argv[])
       const Measurement& m = p.results.at(names[k]);
       std::printf(" %s |", FormatMs(m.moving).c_str());
       csv << p.scene << ',' << p.tetrahedra << ',' << p.width << ',' << p.height << ','
-          << names[k] << ',' << o.shading << ',' << m.moving.median << ','
-          << (m.moving.slow ? 1 : 0) << ',' << m.cpuStages << ',' << m.composite << ','
-          << m.fragments << ',' << threads << '\n';
+          << names[k] << ',' << o.common.mapper.shading << ',' << m.moving.median << ','
+          << (m.moving.slow ? 1 : 0) << ',' << m.mtpt.cpuStages << ',' << m.mtpt.composite << ','
+          << m.mtpt.fragments << ',' << threads << '\n';
       series[k].x.push_back(
         byMesh ? static_cast<double>(p.tetrahedra) : static_cast<double>(p.width) * p.height);
       series[k].y.push_back(m.moving.median);

@@ -7,6 +7,11 @@
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
 
 #include "vtkCamera.h"
+#include "vtkDataArray.h"
+#include "vtkXMLUnstructuredGridReader.h"
+#include "vtkDataSetReader.h"
+#include "vtkDataSet.h"
+#include "vtkCellData.h"
 #include "vtkCellTypeSource.h"
 #include "vtkColorTransferFunction.h"
 #include "vtkDataSetTriangleFilter.h"
@@ -41,33 +46,11 @@
 #error "MTPT_SOURCE_DIR must be defined"
 #endif
 
+
 namespace mtpt
 {
 namespace bench
 {
-
-double Median(std::vector<double> values)
-{
-  if (values.empty())
-  {
-    return 0.0;
-  }
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
-
-std::size_t MedianIndex(const std::vector<double>& values)
-{
-  std::vector<std::size_t> order(values.size());
-  for (std::size_t i = 0; i < order.size(); ++i)
-  {
-    order[i] = i;
-  }
-  std::sort(order.begin(), order.end(),
-    [&](std::size_t a, std::size_t b) { return values[a] < values[b]; });
-  return order.empty() ? 0 : order[(order.size() - 1) / 2];
-}
 
 namespace
 {
@@ -192,6 +175,95 @@ bool LoadScene(
   return true;
 }
 
+namespace
+{
+bool EndsWith(const std::string& s, const std::string& suffix)
+{
+  return s.size() >= suffix.size() &&
+    s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+} // namespace
+
+bool LoadSceneFile(
+  const std::string& path, const std::string& array, Scene& scene, std::string& error)
+{
+  vtkSmartPointer<vtkDataSet> data;
+  if (EndsWith(path, ".vtu"))
+  {
+    vtkNew<vtkXMLUnstructuredGridReader> reader;
+    if (!reader->CanReadFile(path.c_str()))
+    {
+      error = "cannot read '" + path + "' as a VTK XML unstructured grid";
+      return false;
+    }
+    reader->SetFileName(path.c_str());
+    reader->Update();
+    data = reader->GetOutput();
+  }
+  else if (EndsWith(path, ".vtk"))
+  {
+    vtkNew<vtkDataSetReader> reader;
+    reader->SetFileName(path.c_str());
+    reader->Update();
+    data = reader->GetOutput();
+  }
+  else
+  {
+    error = "'" + path + "' is neither .vtu nor .vtk";
+    return false;
+  }
+  if (!data || data->GetNumberOfCells() == 0)
+  {
+    error = "'" + path + "' holds no cells (missing or unreadable file?)";
+    return false;
+  }
+  vtkDataArray* scalars = nullptr;
+  bool cells = false;
+  if (!array.empty())
+  {
+    scalars = data->GetPointData()->GetArray(array.c_str());
+    if (!scalars && (scalars = data->GetCellData()->GetArray(array.c_str())))
+    {
+      cells = true;
+    }
+    if (!scalars)
+    {
+      error = "'" + path + "' has no point or cell array named '" + array + "'";
+      return false;
+    }
+  }
+  else if (!(scalars = data->GetPointData()->GetScalars()) &&
+    data->GetPointData()->GetNumberOfArrays() > 0)
+  {
+    scalars = data->GetPointData()->GetArray(0);
+  }
+  if (!scalars && data->GetCellData()->GetNumberOfArrays() > 0)
+  {
+    scalars = data->GetCellData()->GetArray(0);
+    cells = scalars != nullptr;
+  }
+  if (!scalars)
+  {
+    error = "'" + path + "' has no data arrays to render";
+    return false;
+  }
+  vtkDataSetAttributes* attributes = cells
+    ? static_cast<vtkDataSetAttributes*>(data->GetCellData())
+    : static_cast<vtkDataSetAttributes*>(data->GetPointData());
+  attributes->SetActiveScalars(scalars->GetName());
+  scalars->GetRange(scene.range, scalars->GetNumberOfComponents() > 1 ? -1 : 0);
+  vtkNew<vtkDataSetTriangleFilter> tetrahedralize;
+  tetrahedralize->SetInputData(data);
+  tetrahedralize->TetrahedraOnlyOn();
+  tetrahedralize->Update();
+  scene.name = vtksys::SystemTools::GetFilenameWithoutLastExtension(path);
+  scene.grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  scene.grid->ShallowCopy(tetrahedralize->GetOutput());
+  scene.arrayName = scalars->GetName() ? scalars->GetName() : "";
+  scene.cellScalars = cells;
+  return true;
+}
+
 vtkSmartPointer<vtkVolumeProperty> MakeProperty(const Scene& scene)
 {
   const double low = scene.range[0], high = scene.range[1];
@@ -211,22 +283,26 @@ vtkSmartPointer<vtkVolumeProperty> MakeProperty(const Scene& scene)
 
 const std::vector<std::string>& ContenderNames()
 {
-  static const std::vector<std::string> names = { "mtpt-cpu", "mtpt-gl", "vtk-pt", "raycast",
-    "zsweep" };
+  static const std::vector<std::string> names = { "mtpt", "mtpt-cpu", "mtpt-gl", "vtk-pt",
+    "raycast", "zsweep" };
   return names;
 }
 
 vtkSmartPointer<vtkUnstructuredGridVolumeMapper> MakeMapper(
-  const std::string& name, int threads, const std::string& shading)
+  const std::string& name, const MapperSettings& settings)
 {
   using Mapper = vtkMultiThreadedProjectedTetrahedraMapper;
-  if (name == "mtpt-cpu" || name == "mtpt-gl")
+  if (name == "mtpt" || name == "mtpt-cpu" || name == "mtpt-gl")
   {
     auto mapper = vtkSmartPointer<Mapper>::New();
-    mapper->SetBackend(name == "mtpt-cpu" ? Mapper::CPU_BACKEND : Mapper::OPENGL_BACKEND);
-    mapper->SetNumberOfThreads(threads);
-    mapper->SetShadingMode(
-      shading == "pre-integrated" ? Mapper::PRE_INTEGRATED_SHADING : Mapper::VTK_COMPATIBLE_SHADING);
+    mapper->SetBackend(name == "mtpt-cpu" ? Mapper::CPU_BACKEND
+        : name == "mtpt-gl"               ? Mapper::OPENGL_BACKEND
+                                          : Mapper::AUTOMATIC_BACKEND);
+    mapper->SetNumberOfThreads(settings.threads);
+    mapper->SetShadingMode(settings.shading == "pre-integrated" ? Mapper::PRE_INTEGRATED_SHADING
+                                                                : Mapper::VTK_COMPATIBLE_SHADING);
+    mapper->SetOrderMethod(
+      settings.order == "partition" ? Mapper::PARTITION_SORT : Mapper::RADIX_SORT);
     mapper->SynchronizedTimingOn(); // stage timers that measure the work, not its submission
     return mapper;
   }
@@ -252,15 +328,17 @@ vtkSmartPointer<vtkUnstructuredGridVolumeMapper> MakeMapper(
 }
 
 Stage::Stage(const Scene& scene, vtkVolumeProperty* property,
-  vtkUnstructuredGridVolumeMapper* mapper, int width, int height)
+  vtkUnstructuredGridVolumeMapper* mapper, int width, int height, const StageOptions& options)
   : Mapper(mapper)
+  , StartCamera(options.view)
 {
   mapper->SetInputData(scene.grid);
   this->Volume->SetMapper(mapper);
   this->Volume->SetProperty(property);
-  this->Renderer->SetBackground(1, 1, 1);
+  this->Renderer->SetBackground(options.background[0], options.background[1],
+    options.background[2]);
   this->Renderer->AddVolume(this->Volume);
-  this->Window->SetOffScreenRendering(1);
+  this->Window->SetOffScreenRendering(options.onScreen ? 0 : 1);
   this->Window->SetSize(width, height);
   this->Window->AddRenderer(this->Renderer);
   this->StartView();
@@ -271,13 +349,27 @@ Stage::~Stage()
   this->Mapper->ReleaseGraphicsResources(this->Window);
 }
 
+void Stage::SetMapper(vtkUnstructuredGridVolumeMapper* mapper)
+{
+  this->Mapper->ReleaseGraphicsResources(this->Window);
+  mapper->SetInputData(this->Mapper->GetInput());
+  this->Mapper = mapper;
+  this->Volume->SetMapper(mapper);
+}
+
 void Stage::StartView()
 {
-  this->Renderer->ResetCamera();
+  // From VTK's default direction every time: ResetCamera keeps the current direction.
   vtkCamera* camera = this->Renderer->GetActiveCamera();
-  camera->Azimuth(30);
-  camera->Elevation(20);
+  camera->SetPosition(0, 0, 1);
+  camera->SetFocalPoint(0, 0, 0);
+  camera->SetViewUp(0, 1, 0);
+  camera->SetParallelProjection(this->StartCamera.parallel ? 1 : 0);
+  this->Renderer->ResetCamera();
+  camera->Azimuth(this->StartCamera.azimuth);
+  camera->Elevation(this->StartCamera.elevation);
   camera->OrthogonalizeViewUp();
+  camera->Zoom(this->StartCamera.zoom);
   this->Renderer->ResetCameraClippingRange();
 }
 
@@ -360,45 +452,48 @@ bool ParseSize(const std::string& text, int& width, int& height)
   }
 }
 
+StageFigures FiguresOf(vtkUnstructuredGridVolumeMapper* mapper)
+{
+  StageFigures f;
+  auto* ours = vtkMultiThreadedProjectedTetrahedraMapper::SafeDownCast(mapper);
+  if (!ours)
+  {
+    return f;
+  }
+  f.transform = 1e3 * ours->GetTransformSeconds();
+  f.cull = 1e3 * ours->GetCullSeconds();
+  f.keys = 1e3 * ours->GetDepthKeySeconds();
+  f.order = 1e3 * ours->GetOrderSeconds();
+  f.decompose = 1e3 * ours->GetDecomposeSeconds();
+  f.cpuStages = 1e3 * ours->GetCPUStageSeconds();
+  f.composite = 1e3 * ours->GetCompositeSeconds();
+  f.bin = 1e3 * ours->GetBinSeconds();
+  f.raster = 1e3 * ours->GetRasterSeconds();
+  f.upload = 1e3 * ours->GetUploadSeconds();
+  f.draw = 1e3 * ours->GetDrawSeconds();
+  f.fragments = static_cast<double>(ours->GetNumberOfFragments());
+  f.sorted = static_cast<long long>(ours->GetNumberOfTetrahedra());
+  f.pixelCulled = static_cast<long long>(ours->GetNumberOfPixelCulledCells());
+  f.backend = ours->GetLastBackend() == vtkMultiThreadedProjectedTetrahedraMapper::CPU_BACKEND
+    ? "CPU"
+    : "OpenGL";
+  return f;
+}
+
 Measurement Measure(const Scene& scene, vtkVolumeProperty* property, const std::string& name,
-  int width, int height, const CommonOptions& options, const std::string& shading,
-  bool unchanged)
+  int width, int height, const CommonOptions& options, bool unchanged,
+  const StageOptions& stageOptions)
 {
   Measurement m;
-  auto mapper = MakeMapper(name, options.threads, shading);
-  Stage stage(scene, property, mapper, width, height);
-  auto* ours = vtkMultiThreadedProjectedTetrahedraMapper::SafeDownCast(mapper);
-  struct Record
-  {
-    double cpu, composite, bin, raster, upload, draw, fragments;
-    long long sorted, pixelCulled;
-  };
-  std::vector<Record> records;
-  m.moving = TimeFrames(stage, options.timing,
-    [&](std::size_t)
-    {
-      if (ours)
-      {
-        records.push_back({ ours->GetCPUStageSeconds(), ours->GetCompositeSeconds(),
-          ours->GetBinSeconds(), ours->GetRasterSeconds(), ours->GetUploadSeconds(),
-          ours->GetDrawSeconds(), static_cast<double>(ours->GetNumberOfFragments()),
-          static_cast<long long>(ours->GetNumberOfTetrahedra()),
-          static_cast<long long>(ours->GetNumberOfPixelCulledCells()) });
-      }
-    });
+  auto mapper = MakeMapper(name, options.mapper);
+  Stage stage(scene, property, mapper, width, height, stageOptions);
+  std::vector<StageFigures> figures;
+  m.moving = TimeFrames(
+    stage, options.timing, [&](std::size_t) { figures.push_back(FiguresOf(mapper)); });
   m.image = stage.Image();
-  if (ours && !records.empty())
+  if (!figures.empty())
   {
-    const Record& r = records[std::min(m.moving.medianFrame, records.size() - 1)];
-    m.cpuStages = 1e3 * r.cpu;
-    m.composite = 1e3 * r.composite;
-    m.bin = 1e3 * r.bin;
-    m.raster = 1e3 * r.raster;
-    m.upload = 1e3 * r.upload;
-    m.draw = 1e3 * r.draw;
-    m.fragments = r.fragments;
-    m.sorted = r.sorted;
-    m.pixelCulled = r.pixelCulled;
+    m.mtpt = figures[std::min(m.moving.medianFrame, figures.size() - 1)];
   }
   if (unchanged && !m.moving.slow)
   {
@@ -439,14 +534,6 @@ ImageError CompareImages(vtkImageData* a, vtkImageData* b)
   return e;
 }
 
-std::string DefaultDataFolder()
-{
-  const std::string folder = MTPT_SOURCE_DIR "/../shared/data";
-  return vtksys::SystemTools::FileIsDirectory(folder)
-    ? vtksys::SystemTools::CollapseFullPath(folder)
-    : std::string();
-}
-
 void AddCommonOptions(CLI::App& app, CommonOptions& options)
 {
   app.add_option("--repeat", options.timing.repeat, "timed frames per measurement (median)")
@@ -456,11 +543,16 @@ void AddCommonOptions(CLI::App& app, CommonOptions& options)
   app.add_option("--slow-limit", options.timing.slowLimit,
     "seconds: a slower warm-up frame is the measurement (one frame)")
     ->check(CLI::PositiveNumber);
-  app.add_option("--threads", options.threads, "MTPT's threads (0: the default)")
+  app.add_option("--threads", options.mapper.threads, "MTPT's threads (0: the default)")
     ->check(CLI::NonNegativeNumber);
+  app.add_option("--shading", options.mapper.shading, "MTPT's shading")
+    ->check(CLI::IsMember({ "vtk", "pre-integrated" }));
+  app.add_option("--order", options.mapper.order, "MTPT's visibility order")
+    ->check(CLI::IsMember({ "radix", "partition" }));
   options.dataFolder = DefaultDataFolder();
   app.add_option("--data", options.dataFolder,
-    "folder of the real meshes beyond the repository's (comb, kiefer, pulley, ...)");
+    "folder of real meshes beyond the repository's (comb, kiefer, pulley, ...; default "
+    "$MTPT_DATA_DIR)");
 }
 
 std::vector<std::string> SplitList(const std::string& list)

@@ -21,6 +21,9 @@
 #ifndef mtpt_bench_Harness_h
 #define mtpt_bench_Harness_h
 
+#include "DataFolder.h"
+#include "Statistics.h"
+
 #include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
 #include "vtkImageData.h" // Measurement holds images
 #include "vtkNew.h"
@@ -50,12 +53,6 @@ namespace mtpt
 namespace bench
 {
 
-/// The median of `values` (the mean of the two middle ones for an even count; 0 for none).
-double Median(std::vector<double> values);
-
-/// Index of the value at the median (the lower middle one for an even count).
-std::size_t MedianIndex(const std::vector<double>& values);
-
 /// A benchmark scene: a grid of tetrahedra and the scalar range its transfer function spans.
 struct Scene
 {
@@ -63,6 +60,8 @@ struct Scene
   vtkSmartPointer<vtkUnstructuredGrid> grid;
   double range[2] = { 0, 1 };
   std::shared_ptr<void> storage; ///< arrays the grid uses in place, if not VTK's own
+  std::string arrayName;         ///< the scalars coloured by
+  bool cellScalars = false;      ///< one value per cell rather than per point
 };
 
 /**
@@ -77,33 +76,66 @@ struct Scene
 bool LoadScene(const std::string& name, const std::string& dataFolder, Scene& scene,
   std::string& error);
 
+/**
+ * A scene from a VTK file (.vtu, or legacy .vtk of any data set), split into tetrahedra
+ * (vtkDataSetTriangleFilter, every array passed), coloured by the array named `array`
+ * (point data first, then cell data), else the active point scalars, else the first point
+ * array, else the first cell array; that array is made the active scalars. Returns false
+ * with `error` set when the file cannot be read, holds no cells or no such array.
+ */
+bool LoadSceneFile(const std::string& path, const std::string& array, Scene& scene,
+  std::string& error);
+
 /// The benchmark's transfer functions: a cool-warm colour map and opacity rising linearly
 /// over `range`, unit distance a fiftieth of the grid's diagonal.
 vtkSmartPointer<vtkVolumeProperty> MakeProperty(const Scene& scene);
 
+/// How MTPT's contenders are set up.
+struct MapperSettings
+{
+  int threads = 0;             ///< 0: the default
+  std::string shading = "vtk"; ///< "vtk" or "pre-integrated"
+  std::string order = "radix"; ///< "radix" or "partition"
+};
+
 /**
- * Contenders by name: "mtpt-cpu" and "mtpt-gl" (vtkMultiThreadedProjectedTetrahedraMapper
- * with the CPU or the OpenGL backend, `threads` threads, `shading` "vtk" or
- * "pre-integrated"), "vtk-pt" (vtkProjectedTetrahedraMapper), "raycast"
- * (vtkUnstructuredGridVolumeRayCastMapper) and "zsweep"
- * (vtkUnstructuredGridVolumeZSweepMapper). Null for an unknown name.
+ * Contenders by name: "mtpt" (vtkMultiThreadedProjectedTetrahedraMapper choosing its
+ * backend), "mtpt-cpu" and "mtpt-gl" (with the CPU or the OpenGL backend), "vtk-pt"
+ * (vtkProjectedTetrahedraMapper), "raycast" (vtkUnstructuredGridVolumeRayCastMapper) and
+ * "zsweep" (vtkUnstructuredGridVolumeZSweepMapper). Null for an unknown name.
  */
 vtkSmartPointer<vtkUnstructuredGridVolumeMapper> MakeMapper(
-  const std::string& name, int threads = 0, const std::string& shading = "vtk");
+  const std::string& name, const MapperSettings& settings = {});
 
 /// Every contender name MakeMapper knows.
 const std::vector<std::string>& ContenderNames();
 
-/// A volume in a renderer in a window as VTK makes it by default, off-screen.
+/// The camera of a stage's start view, after it is reset on the volume (VTK's default
+/// direction, looking down -z).
+struct View
+{
+  double azimuth = 30, elevation = 20; ///< degrees
+  double zoom = 1;
+  bool parallel = false; ///< orthographic instead of perspective
+};
+
+/// How a stage's window looks.
+struct StageOptions
+{
+  View view;
+  double background[3] = { 1, 1, 1 };
+  bool onScreen = false; ///< a window on the display (default: off-screen)
+};
+
+/// A volume in a renderer in a window as VTK makes it by default.
 class Stage
 {
 public:
   Stage(const Scene& scene, vtkVolumeProperty* property, vtkUnstructuredGridVolumeMapper* mapper,
-    int width, int height);
+    int width, int height, const StageOptions& options = {});
   ~Stage();
 
-  /// The starting view: the camera reset on the volume, turned 30 degrees in azimuth and 20
-  /// in elevation.
+  /// The starting view (StageOptions::view).
   void StartView();
   /// Turns the camera by `degrees` of azimuth about the volume.
   void Turn(double degrees);
@@ -111,15 +143,19 @@ public:
   double Frame();
   /// The window's RGB image as drawn by the last frame.
   vtkSmartPointer<vtkImageData> Image();
+  /// Draws the volume with another mapper from now on.
+  void SetMapper(vtkUnstructuredGridVolumeMapper* mapper);
 
   vtkRenderer* GetRenderer() { return this->Renderer; }
   vtkRenderWindow* GetWindow() { return this->Window; }
+  vtkVolume* GetVolume() { return this->Volume; }
 
 private:
   vtkNew<vtkVolume> Volume;
   vtkNew<vtkRenderer> Renderer;
   vtkNew<vtkRenderWindow> Window;
   vtkUnstructuredGridVolumeMapper* Mapper;
+  View StartCamera;
 };
 
 /// The frames of one measurement.
@@ -150,9 +186,23 @@ FrameTiming TimeFrames(Stage& stage, const TimingOptions& options,
 struct CommonOptions
 {
   TimingOptions timing;
-  int threads = 0;         ///< MTPT's threads (0: the default)
-  std::string dataFolder;  ///< real meshes beyond the repository's (optional)
+  MapperSettings mapper;  ///< MTPT's threads, shading and order
+  std::string dataFolder; ///< real meshes beyond the repository's (optional)
 };
+
+/// MTPT's timers and counters of one frame, milliseconds and counts (zero for VTK's
+/// mappers).
+struct StageFigures
+{
+  double transform = 0, cull = 0, keys = 0, order = 0, decompose = 0, cpuStages = 0;
+  double composite = 0, bin = 0, raster = 0, upload = 0, draw = 0;
+  double fragments = 0;
+  long long sorted = 0, pixelCulled = 0;
+  std::string backend; ///< "CPU" or "OpenGL": the backend that drew
+};
+
+/// The figures of the last frame `mapper` drew.
+StageFigures FiguresOf(vtkUnstructuredGridVolumeMapper* mapper);
 
 /// What one contender measured on one scene and window size.
 struct Measurement
@@ -160,19 +210,16 @@ struct Measurement
   FrameTiming moving;    ///< the camera turning before every frame
   FrameTiming unchanged; ///< the same view every frame (when asked for)
   vtkSmartPointer<vtkImageData> image; ///< at the end of the moving frames
-  // MTPT only, milliseconds and counts of the median moving frame:
-  double cpuStages = 0, composite = 0, bin = 0, raster = 0, upload = 0, draw = 0;
-  double fragments = 0;
-  long long sorted = 0, pixelCulled = 0;
+  StageFigures mtpt;     ///< MTPT's figures of the median moving frame
 };
 
 /**
- * Times contender `name` (MakeMapper) on `scene` in a width x height window: moving
- * frames, and with `unchanged` also frames of an unchanged view.
+ * Times contender `name` (MakeMapper with options.mapper) on `scene` in a width x height
+ * window: moving frames, and with `unchanged` also frames of an unchanged view.
  */
 Measurement Measure(const Scene& scene, vtkVolumeProperty* property, const std::string& name,
-  int width, int height, const CommonOptions& options, const std::string& shading = "vtk",
-  bool unchanged = false);
+  int width, int height, const CommonOptions& options, bool unchanged = false,
+  const StageOptions& stage = {});
 
 /// A median as a table shows it ("12.3", "456", with "*" when one slow frame).
 std::string FormatMs(const FrameTiming& t);
@@ -187,11 +234,9 @@ struct ImageError
 };
 ImageError CompareImages(vtkImageData* a, vtkImageData* b);
 
-/// Adds --repeat, --step, --slow-limit, --threads and --data to `app`.
+/// Adds --repeat, --step, --slow-limit, --threads, --shading, --order and --data to `app`.
 void AddCommonOptions(CLI::App& app, CommonOptions& options);
 
-/// The folder of real meshes next to the repository, if it exists ("" otherwise).
-std::string DefaultDataFolder();
 
 /// A comma-separated list as its items ("a,b" -> {"a", "b"}).
 std::vector<std::string> SplitList(const std::string& list);

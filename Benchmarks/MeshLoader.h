@@ -48,7 +48,7 @@ struct DataSetEntry
 /// outlive it), with the scalars as active point scalars "scalars".
 vtkSmartPointer<vtkUnstructuredGrid> ToUnstructuredGrid(const TetMesh& mesh);
 
-/// The real meshes in ../shared/data (see its README.md), smallest first.
+/// The real meshes a data folder may hold (DataFolder.h), smallest first.
 const std::vector<DataSetEntry>& SharedDataSets();
 
 } // namespace bench
