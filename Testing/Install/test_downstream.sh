@@ -9,8 +9,10 @@ build_dir="$2"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 cmake --install "$build_dir" --prefix "$work/prefix" >/dev/null
+# The VTK the build used (Debian's, or another one given with VTK_DIR).
+vtk_dir="$(sed -n 's/^VTK_DIR:PATH=//p' "$build_dir/CMakeCache.txt")"
 cmake -S "$source_dir/Examples" -B "$work/example" -G Ninja -DCMAKE_BUILD_TYPE=Release \
-  -DCMAKE_PREFIX_PATH="$work/prefix" >/dev/null
+  -DCMAKE_PREFIX_PATH="$work/prefix" ${vtk_dir:+-DVTK_DIR="$vtk_dir"} >/dev/null
 cmake --build "$work/example" >/dev/null
 "$source_dir/Testing/xvfb-launch.sh" "$work/example/mtpt_render" --size 160x120 --frames 1 \
   --output "$work/out.png"
