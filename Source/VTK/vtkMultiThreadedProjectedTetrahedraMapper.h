@@ -281,8 +281,9 @@ public:
   vtkIdType GetNumberOfTetrahedra();
 
   ///@{
-  /// Cells the last Render culled: fully transparent, outside the view volume, covering no
-  /// pixel centre (these were sorted, then skipped by the decomposition).
+  /// Cells the last Render culled before sorting them: fully transparent, outside the view
+  /// volume, covering no pixel centre (the last also counts near-plane pieces culled when
+  /// they were decomposed).
   vtkIdType GetNumberOfOpacityCulledCells();
   vtkIdType GetNumberOfFrustumCulledCells();
   vtkIdType GetNumberOfPixelCulledCells();

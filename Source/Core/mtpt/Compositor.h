@@ -4,7 +4,8 @@
  * @brief The CPU compositor: blends the sorted tetrahedra (as fans, Decompose.h) into a
  * float RGBA image with the per-fragment math of the OpenGL path, for machines where
  * OpenGL is itself a software rasterizer. Its cost follows the fragments: a tetrahedron is
- * set up once per screen tile it touches, and every pixel covered costs one SIMD lane.
+ * set up once per screen tile it touches, and in VTK-compatible shading every pixel covered
+ * costs one SIMD lane (pre-integrated shading integrates each fragment on its own).
  *
  * Conventions:
  * - Window coordinates: pixel (x, y) covers [x, x+1) x [y, y+1), y up (OpenGL), its sample
