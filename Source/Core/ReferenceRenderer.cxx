@@ -494,43 +494,53 @@ bool RenderReference(const PointsView& points, const CellsView& cells, const Sca
   const std::size_t pixelCount = static_cast<std::size_t>(width) * height;
   rgb.assign(3 * pixelCount, 0.0);
 
-  // Points to eye and window coordinates, once.
-  const auto pointCount = static_cast<std::int64_t>(points.count);
+  // Points to eye and window coordinates, once; a mesh of parts part after part.
   std::vector<EyePoint> eye(points.count);
   const Matrix4& mv = settings.modelView;
   const Matrix4& p = settings.projection;
-#pragma omp parallel for num_threads(nthreads) schedule(static)
-  for (std::int64_t i = 0; i < pointCount; ++i)
+  std::vector<PointsView> pointParts;
+  for (std::size_t k = 0; k < (points.parts ? points.partCount : 1); ++k)
   {
-    double m[3];
-    for (int d = 0; d < 3; ++d)
+    pointParts.push_back(points.parts ? points.parts[k].points : points);
+  }
+  std::size_t first = 0;
+  for (const PointsView& part : pointParts)
+  {
+    const auto partCount = static_cast<std::int64_t>(part.count);
+#pragma omp parallel for num_threads(nthreads) schedule(static)
+    for (std::int64_t j = 0; j < partCount; ++j)
     {
-      m[d] = points.type == PointsView::Type::Float32
-        ? static_cast<const float*>(points.data)[3 * i + d]
-        : static_cast<const double*>(points.data)[3 * i + d];
+      double m[3];
+      for (int d = 0; d < 3; ++d)
+      {
+        m[d] = part.type == PointsView::Type::Float32
+          ? static_cast<const float*>(part.data)[3 * j + d]
+          : static_cast<const double*>(part.data)[3 * j + d];
+      }
+      EyePoint& e = eye[first + static_cast<std::size_t>(j)];
+      double w = 1;
+      for (int r = 0; r < 3; ++r)
+      {
+        e.eye[r] = mv[4 * r] * m[0] + mv[4 * r + 1] * m[1] + mv[4 * r + 2] * m[2] + mv[4 * r + 3];
+      }
+      w = mv[12] * m[0] + mv[13] * m[1] + mv[14] * m[2] + mv[15];
+      for (int r = 0; r < 3; ++r)
+      {
+        e.eye[r] /= w;
+      }
+      double clip[4];
+      for (int r = 0; r < 4; ++r)
+      {
+        clip[r] =
+          p[4 * r] * e.eye[0] + p[4 * r + 1] * e.eye[1] + p[4 * r + 2] * e.eye[2] + p[4 * r + 3];
+      }
+      e.clipW = clip[3];
+      e.windowX = (clip[0] / clip[3] + 1.0) * 0.5 * width;
+      e.windowY = (clip[1] / clip[3] + 1.0) * 0.5 * height;
+      e.finite = std::isfinite(e.eye[0]) && std::isfinite(e.eye[1]) && std::isfinite(e.eye[2]) &&
+        std::isfinite(w) && w != 0;
     }
-    EyePoint& e = eye[i];
-    double w = 1;
-    for (int r = 0; r < 3; ++r)
-    {
-      e.eye[r] = mv[4 * r] * m[0] + mv[4 * r + 1] * m[1] + mv[4 * r + 2] * m[2] + mv[4 * r + 3];
-    }
-    w = mv[12] * m[0] + mv[13] * m[1] + mv[14] * m[2] + mv[15];
-    for (int r = 0; r < 3; ++r)
-    {
-      e.eye[r] /= w;
-    }
-    double clip[4];
-    for (int r = 0; r < 4; ++r)
-    {
-      clip[r] =
-        p[4 * r] * e.eye[0] + p[4 * r + 1] * e.eye[1] + p[4 * r + 2] * e.eye[2] + p[4 * r + 3];
-    }
-    e.clipW = clip[3];
-    e.windowX = (clip[0] / clip[3] + 1.0) * 0.5 * width;
-    e.windowY = (clip[1] / clip[3] + 1.0) * 0.5 * height;
-    e.finite = std::isfinite(e.eye[0]) && std::isfinite(e.eye[1]) && std::isfinite(e.eye[2]) &&
-      std::isfinite(w) && w != 0;
+    first += part.count;
   }
 
   // Pixel boxes of the cells, and an estimate of segments per row (box widths) for banding.

@@ -57,10 +57,24 @@ void ProjectAll(const PointT* xyz, const float* pointScalars, std::int64_t count
 void ProjectPoints(const PointsView& points, const ScalarsView& scalars, const Matrix4& modelView,
   const Matrix4& projection, ProjectedPoint* out, int threads)
 {
-  const int nthreads = detail::ResolveThreads(threads);
-  const auto count = static_cast<std::int64_t>(points.count);
   const float* pointScalars =
     scalars.association == ScalarsView::Association::Points ? scalars.values : nullptr;
+  if (points.parts)
+  {
+    // Part after part, into one array: the points of part k follow those of parts 0..k-1,
+    // and so do their scalars.
+    std::size_t first = 0;
+    for (std::size_t k = 0; k < points.partCount; ++k)
+    {
+      const PointsView& part = points.parts[k].points;
+      ProjectPoints(part, { pointScalars ? pointScalars + first : nullptr, scalars.association },
+        modelView, projection, out + first, threads);
+      first += part.count;
+    }
+    return;
+  }
+  const int nthreads = detail::ResolveThreads(threads);
+  const auto count = static_cast<std::int64_t>(points.count);
   if (points.type == PointsView::Type::Float32)
   {
     ProjectAll(static_cast<const float*>(points.data), pointScalars, count, modelView, projection,

@@ -6,6 +6,7 @@
 #include "mtpt/Compositor.h"
 #include "mtpt/Culling.h"
 #include "mtpt/FramePipeline.h"
+#include "mtpt/ReferenceRenderer.h"
 
 #include <gtest/gtest.h>
 
@@ -379,6 +380,133 @@ TEST(FramePipeline, FixedSizeCellsGiveTheFrameOfExplicitOffsets)
       alpha = std::max(alpha, none[i]);
     }
     EXPECT_EQ(alpha, 0.0f);
+  }
+}
+
+TEST(FramePipeline, AMeshOfPartsGivesTheFrameOfTheMergedMesh)
+{
+  // A multi-block data set used in place: the cells split into parts with their own points
+  // (local ids), in 64-bit, 32-bit and fixed-size layouts, with an empty part among them.
+  // The parts must be one mesh to every stage: the same order (same global cell ids), the
+  // same image, and the same reference image.
+  const TetMesh mesh = mtpt::test::JitteredGrid(8, 7);
+  const std::size_t cells = mesh.CellCount();
+  const std::size_t cut[3] = { 0, cells / 3, 2 * cells / 3 };
+  struct PartData
+  {
+    std::vector<float> points;
+    std::vector<std::int64_t> ids64, offsets64{ 0 };
+    std::vector<std::int32_t> ids32, offsets32{ 0 };
+  };
+  std::vector<PartData> data(4);
+  std::vector<float> scalars; // point scalars in the parts' point order
+  std::vector<std::int64_t> pointOf; // merged point id of each part point, part after part
+  for (int k = 0; k < 3; ++k)
+  {
+    const std::size_t begin = cut[k], end = k < 2 ? cut[k + 1] : cells;
+    std::vector<std::int64_t> local(mesh.points.size() / 3, -1);
+    PartData& part = data[k == 2 ? 3 : k]; // part 2 stays empty
+    for (std::size_t c = begin; c < end; ++c)
+    {
+      for (std::int64_t i = mesh.offsets[c]; i < mesh.offsets[c + 1]; ++i)
+      {
+        std::int64_t& id = local[mesh.connectivity[i]];
+        if (id < 0)
+        {
+          id = static_cast<std::int64_t>(part.points.size() / 3);
+          for (int d = 0; d < 3; ++d)
+          {
+            part.points.push_back(mesh.points[3 * mesh.connectivity[i] + d]);
+          }
+        }
+        part.ids64.push_back(id);
+        part.ids32.push_back(static_cast<std::int32_t>(id));
+      }
+      part.offsets64.push_back(static_cast<std::int64_t>(part.ids64.size()));
+      part.offsets32.push_back(static_cast<std::int32_t>(part.ids32.size()));
+    }
+    std::vector<std::int64_t> merged(part.points.size() / 3);
+    for (std::size_t p = 0; p < local.size(); ++p)
+    {
+      if (local[p] >= 0)
+      {
+        merged[local[p]] = static_cast<std::int64_t>(p);
+      }
+    }
+    pointOf.insert(pointOf.end(), merged.begin(), merged.end());
+  }
+  // The merged mesh with its points in the parts' order, so that point ids agree too.
+  TetMesh merged;
+  std::vector<std::int64_t> partPointOf(mesh.points.size() / 3);
+  std::int64_t first = 0;
+  for (int k : { 0, 1, 3 })
+  {
+    for (std::size_t i = 0; i < data[k].points.size() / 3; ++i)
+    {
+      for (int d = 0; d < 3; ++d)
+      {
+        merged.points.push_back(data[k].points[3 * i + d]);
+      }
+    }
+    for (std::size_t c = 0; c + 1 < data[k].offsets64.size(); ++c)
+    {
+      const std::int64_t* id = data[k].ids64.data() + data[k].offsets64[c];
+      merged.AddTetrahedron(id[0] + first, id[1] + first, id[2] + first, id[3] + first);
+    }
+    first += static_cast<std::int64_t>(data[k].points.size() / 3);
+  }
+  for (std::int64_t p : pointOf)
+  {
+    merged.scalars.push_back(mesh.scalars[p]);
+  }
+  const std::vector<mtpt::MeshPart> parts = {
+    { mtpt::PointsView::FromFloat(data[0].points.data(), data[0].points.size() / 3),
+      mtpt::CellsView::FromInt64(
+        data[0].ids64.data(), data[0].offsets64.data(), data[0].offsets64.size() - 1) },
+    { mtpt::PointsView::FromFloat(data[1].points.data(), data[1].points.size() / 3),
+      mtpt::CellsView::FromInt32(
+        data[1].ids32.data(), data[1].offsets32.data(), data[1].offsets32.size() - 1) },
+    { mtpt::PointsView::FromFloat(nullptr, 0), mtpt::CellsView::FromInt64(nullptr, nullptr, 0) },
+    { mtpt::PointsView::FromFloat(data[3].points.data(), data[3].points.size() / 3),
+      mtpt::CellsView::FromFixedSizeInt32(data[3].ids32.data(), 4, data[3].offsets32.size() - 1) },
+  };
+  const std::vector<float> table = { 0.2f, 0.4f, 0.9f, 0.0f, 0.9f, 0.5f, 0.1f, 3.0f };
+  for (bool perspective : { false, true })
+  {
+    const mtpt::FrameInput whole = Frame(merged, 0.9, perspective);
+    mtpt::FrameInput split = whole;
+    mtpt::MeshParts(parts.data(), parts.size(), split.points, split.cells);
+    ASSERT_EQ(split.cells.cellCount, cells);
+    ASSERT_EQ(split.points.count, merged.points.size() / 3);
+    for (int threads : { 1, 3 })
+    {
+      mtpt::FramePipeline a, b;
+      ASSERT_TRUE(a.Prepare(whole, threads));
+      ASSERT_TRUE(b.Prepare(split, threads));
+      EXPECT_EQ(a.Keys(), b.Keys());
+      EXPECT_GT(a.SortedCount(), cells / 2); // a few sub-pixel cells are culled
+      const std::vector<float> image = Composite(b, split, table);
+      EXPECT_TRUE(SameImage(Composite(a, whole, table), image));
+      float drawn = 0;
+      for (std::size_t i = 3; i < image.size(); i += 4)
+      {
+        drawn = std::max(drawn, image[i]);
+      }
+      EXPECT_GT(drawn, 0.1f);
+    }
+    mtpt::ReferenceSettings settings;
+    settings.width = settings.height = 24;
+    settings.modelView = whole.modelView;
+    settings.projection = whole.projection;
+    settings.color = { { -2.0, 0.2, 0.4, 0.9 }, { 3.0, 0.9, 0.5, 0.1 } };
+    settings.opacity = { { -2.0, 0.0 }, { 3.0, 1.0 } };
+    settings.unitDistance = 0.3;
+    std::vector<double> referenceWhole, referenceSplit;
+    ASSERT_TRUE(mtpt::RenderReference(
+      whole.points, whole.cells, whole.scalars, settings, referenceWhole, 2));
+    ASSERT_TRUE(mtpt::RenderReference(
+      split.points, split.cells, split.scalars, settings, referenceSplit, 2));
+    EXPECT_EQ(referenceWhole, referenceSplit);
   }
 }
 

@@ -40,7 +40,13 @@ Matrix4 IdentityMatrix();
 /// a * b (row-major, column vectors: apply b first, then a).
 Matrix4 Multiply(const Matrix4& a, const Matrix4& b);
 
-/// Point coordinates: `count` points of 3 components, interleaved xyz.
+struct MeshPart;
+
+/**
+ * Point coordinates: `count` points of 3 components, interleaved xyz. Or, with `parts`, the
+ * points of several parts one after the other (part k's after those of parts 0 to k-1;
+ * `count` their total; see MeshPart).
+ */
 struct PointsView
 {
   enum class Type
@@ -51,15 +57,24 @@ struct PointsView
   const void* data = nullptr;
   Type type = Type::Float32;
   std::size_t count = 0;
+  const MeshPart* parts = nullptr; ///< several parts instead of `data`
+  std::size_t partCount = 0;
 
-  static PointsView FromFloat(const float* xyz, std::size_t n) { return { xyz, Type::Float32, n }; }
+  static PointsView FromFloat(const float* xyz, std::size_t n)
+  {
+    return { xyz, Type::Float32, n, nullptr, 0 };
+  }
   static PointsView FromDouble(const double* xyz, std::size_t n)
   {
-    return { xyz, Type::Float64, n };
+    return { xyz, Type::Float64, n, nullptr, 0 };
   }
 };
 
-/// Cells in vtkCellArray's offsets + connectivity layout (see the conventions above).
+/**
+ * Cells in vtkCellArray's offsets + connectivity layout (see the conventions above). Or,
+ * with `parts`, the cells of several parts one after the other (part k's after those of
+ * parts 0 to k-1, their point ids local to the part; `cellCount` their total).
+ */
 struct CellsView
 {
   enum class Type
@@ -71,26 +86,56 @@ struct CellsView
   const void* offsets = nullptr; ///< cellCount + 1 entries; null: every cell has cellSize
   Type type = Type::Int64;
   std::size_t cellCount = 0;
-  std::size_t cellSize = 0; ///< points per cell when there are no offsets
+  std::size_t cellSize = 0;        ///< points per cell when there are no offsets
+  const MeshPart* parts = nullptr; ///< several parts instead of the arrays above
+  std::size_t partCount = 0;
 
   static CellsView FromInt32(const std::int32_t* conn, const std::int32_t* offsets, std::size_t n)
   {
-    return { conn, offsets, Type::Int32, n, 0 };
+    return { conn, offsets, Type::Int32, n, 0, nullptr, 0 };
   }
   static CellsView FromInt64(const std::int64_t* conn, const std::int64_t* offsets, std::size_t n)
   {
-    return { conn, offsets, Type::Int64, n, 0 };
+    return { conn, offsets, Type::Int64, n, 0, nullptr, 0 };
   }
   /// Every cell `cellSize` points long, one after the other (no offsets array).
   static CellsView FromFixedSizeInt32(const std::int32_t* conn, std::size_t cellSize, std::size_t n)
   {
-    return { conn, nullptr, Type::Int32, n, cellSize };
+    return { conn, nullptr, Type::Int32, n, cellSize, nullptr, 0 };
   }
   static CellsView FromFixedSizeInt64(const std::int64_t* conn, std::size_t cellSize, std::size_t n)
   {
-    return { conn, nullptr, Type::Int64, n, cellSize };
+    return { conn, nullptr, Type::Int64, n, cellSize, nullptr, 0 };
   }
 };
+
+/**
+ * One part of a mesh made of several, such as a block of a multi-block data set used in
+ * place: its own points and cells, the cells' point ids local to the part. A mesh of parts
+ * (MeshParts) numbers points and cells over the parts in order, so that every stage sees
+ * one mesh: one visibility order over the cells of all parts.
+ */
+struct MeshPart
+{
+  PointsView points; ///< a single part: no nested parts
+  CellsView cells;
+};
+
+/// The points and cells of `count` parts as one mesh (the views refer to `parts`, which the
+/// caller keeps alive and unchanged while the views are in use).
+inline void MeshParts(
+  const MeshPart* parts, std::size_t count, PointsView& points, CellsView& cells)
+{
+  points = PointsView{};
+  cells = CellsView{};
+  for (std::size_t k = 0; k < count; ++k)
+  {
+    points.count += parts[k].points.count;
+    cells.cellCount += parts[k].cells.cellCount;
+  }
+  points.parts = cells.parts = parts;
+  points.partCount = cells.partCount = count;
+}
 
 /// Scalars for shading: one float per point or one per cell. A null `values` pointer
 /// means "no scalars": every scalar reads as 0.
