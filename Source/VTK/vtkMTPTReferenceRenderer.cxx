@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkMTPTReferenceRenderer.h"
 
+#include "MeshSource.h"
+
 #include "MeshAdapter.h"
 #include "Tetrahedralizer.h"
 #include "VolumeInput.h"
@@ -8,7 +10,9 @@
 #include "mtpt/ReferenceRenderer.h"
 
 #include "vtkAbstractVolumeMapper.h"
+#include "vtkAppendFilter.h"
 #include "vtkCamera.h"
+#include "vtkDataObjectTree.h"
 #include "vtkColorTransferFunction.h"
 #include "vtkDataArray.h"
 #include "vtkDoubleArray.h"
@@ -19,6 +23,7 @@
 #include "vtkPiecewiseFunction.h"
 #include "vtkRenderWindow.h"
 #include "vtkRenderer.h"
+#include "vtkUnstructuredGrid.h"
 #include "vtkUnstructuredGridBase.h"
 #include "vtkUnstructuredGridVolumeMapper.h"
 #include "vtkVolume.h"
@@ -210,7 +215,25 @@ bool vtkMTPTReferenceRenderer::CheckScene(
   if (!input)
   {
     auto* gridMapper = vtkUnstructuredGridVolumeMapper::SafeDownCast(volume->GetMapper());
-    input = gridMapper ? gridMapper->GetInput() : nullptr;
+    vtkDataObject* data = gridMapper ? gridMapper->GetInputDataObject(0, 0) : nullptr;
+    input = vtkUnstructuredGridBase::SafeDownCast(data);
+    if (!input && vtkDataObjectTree::SafeDownCast(data))
+    {
+      // A composite input: its unstructured blocks as one grid (the integral does not
+      // depend on how the cells are grouped).
+      vtkNew<vtkAppendFilter> append;
+      for (const auto& grid : mtpt::MeshSource::Grids(data))
+      {
+        append->AddInputData(grid.first);
+      }
+      if (append->GetNumberOfInputConnections(0) > 0)
+      {
+        append->Update();
+        this->Appended = vtkSmartPointer<vtkUnstructuredGrid>::New();
+        this->Appended->ShallowCopy(append->GetOutput());
+        input = this->Appended;
+      }
+    }
   }
   if (!input || input->GetNumberOfCells() == 0)
   {

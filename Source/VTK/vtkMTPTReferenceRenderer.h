@@ -14,7 +14,8 @@
  * through pixel centres moved by a few millionths of a pixel).
  *
  * Inputs are read as vtkMultiThreadedProjectedTetrahedraMapper reads them: the grid (the
- * volume mapper's input unless one is given) is split into tetrahedra as the mapper splits
+ * volume mapper's input unless one is given; the unstructured blocks of a composite input
+ * appended into one grid) is split into tetrahedra as the mapper splits
  * it when it holds other 3D cells (cells of lower dimension are left out); the scalars are
  * selected by the volume mapper's scalar mode and array selection (defaults without a volume
  * mapper), the component or magnitude as the colour transfer function's vector mode says;
@@ -42,11 +43,13 @@
 
 #include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
 #include "vtkObject.h"
+#include "vtkSmartPointer.h" // for the appended blocks
 #include "vtkRenderingMTPTModule.h" // for export macro
 
 VTK_ABI_NAMESPACE_BEGIN
 class vtkDoubleArray;
 class vtkRenderer;
+class vtkUnstructuredGrid;
 class vtkUnstructuredGridBase;
 class vtkVolume;
 VTK_ABI_NAMESPACE_END
@@ -119,6 +122,7 @@ protected:
   double RenderSeconds = 0;
   vtkIdType NumberOfSegments = 0;
   vtkDoubleArray* Image;
+  vtkSmartPointer<vtkUnstructuredGrid> Appended; ///< the blocks of a composite input
 
 private:
   vtkMTPTReferenceRenderer(const vtkMTPTReferenceRenderer&) = delete;

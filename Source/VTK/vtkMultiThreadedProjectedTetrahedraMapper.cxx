@@ -2,9 +2,8 @@
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
 
 #include "CPUBackend.h"
-#include "MeshAdapter.h"
+#include "MeshSource.h"
 #include "OpenGLBackend.h"
-#include "Tetrahedralizer.h"
 #include "TransferFunctionTables.h"
 #include "VolumeInput.h"
 
@@ -16,6 +15,7 @@
 #include "vtkCommand.h"
 #include "vtkDataArray.h"
 #include "vtkDataArrayRange.h"
+#include "vtkInformation.h"
 #include "vtkMath.h"
 #include "vtkObjectFactory.h"
 #include "vtkOpenGLRenderWindow.h"
@@ -78,8 +78,7 @@ double StageProgress(mtpt::Stage stage)
 class vtkMultiThreadedProjectedTetrahedraMapper::Internals
 {
 public:
-  mtpt::Tetrahedralizer Tetrahedralizer;
-  mtpt::MeshAdapter Adapter;
+  mtpt::MeshSource Source;
   mtpt::FramePipeline Pipeline;
   mtpt::TransferFunctionTables Tables;
   mtpt::OpenGLBackend OpenGL;
@@ -90,27 +89,8 @@ public:
   vtkWeakPointer<vtkRenderWindow> LastWindow;
   int SoftwareRenderer = -1; ///< of LastWindow: -1 unknown, 0 no, 1 yes
 
-  // What the pipeline's reusable results were computed from: a change of any of these
-  // bumps DataVersion (FrameInput::dataVersion).
-  struct DataKey
-  {
-    vtkUnstructuredGridBase* input = nullptr;
-    vtkMTimeType inputTime = 0;
-    vtkDataArray* scalars = nullptr;
-    vtkMTimeType scalarTime = 0;
-    int component = 0;
-    bool cellData = false;
-    bool operator==(const DataKey& o) const
-    {
-      return input == o.input && inputTime == o.inputTime && scalars == o.scalars &&
-        scalarTime == o.scalarTime && component == o.component && cellData == o.cellData;
-    }
-  };
-  DataKey LastData;
-  std::uint64_t DataVersion = 0;
-
   // What GetBounds() last computed from.
-  vtkUnstructuredGridBase* BoundsInput = nullptr;
+  vtkDataObject* BoundsInput = nullptr;
   vtkMTimeType BoundsTime = 0;
 
   // The last frame.
@@ -321,7 +301,7 @@ vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfNearClipPieces()
 }
 vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfTetrahedralizations()
 {
-  return this->Internal->Tetrahedralizer.GetNumberOfTetrahedralizations();
+  return this->Internal->Source.Tetrahedralizations();
 }
 int vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfBatches()
 {
@@ -343,14 +323,13 @@ vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetMemoryBytes()
 
 double* vtkMultiThreadedProjectedTetrahedraMapper::GetBounds()
 {
-  vtkUnstructuredGridBase* input = this->GetInput();
-  if (!input)
+  if (!this->GetInputDataObject(0, 0))
   {
     vtkMath::UninitializeBounds(this->Bounds);
     return this->Bounds;
   }
   this->Update();
-  input = this->GetInput();
+  vtkDataObject* input = this->GetInputDataObject(0, 0);
   Internals& in = *this->Internal;
   if (input == in.BoundsInput && input->GetMTime() == in.BoundsTime)
   {
@@ -359,14 +338,17 @@ double* vtkMultiThreadedProjectedTetrahedraMapper::GetBounds()
   in.BoundsInput = input;
   in.BoundsTime = input->GetMTime();
   vtkBoundingBox box;
-  if (vtkPoints* points = input->GetPoints())
+  for (const auto& grid : mtpt::MeshSource::Grids(input))
   {
-    for (const auto p : vtk::DataArrayTupleRange<3>(points->GetData()))
+    if (vtkPoints* points = grid.first->GetPoints())
     {
-      const double x = p[0], y = p[1], z = p[2];
-      if (std::isfinite(x) && std::isfinite(y) && std::isfinite(z))
+      for (const auto p : vtk::DataArrayTupleRange<3>(points->GetData()))
       {
-        box.AddPoint(x, y, z);
+        const double x = p[0], y = p[1], z = p[2];
+        if (std::isfinite(x) && std::isfinite(y) && std::isfinite(z))
+        {
+          box.AddPoint(x, y, z);
+        }
       }
     }
   }
@@ -421,91 +403,46 @@ void vtkMultiThreadedProjectedTetrahedraMapper::MoveToWindow(vtkOpenGLRenderWind
   in.LastWindow = window;
 }
 
-vtkUnstructuredGridBase* vtkMultiThreadedProjectedTetrahedraMapper::TetrahedraToDraw()
+int vtkMultiThreadedProjectedTetrahedraMapper::FillInputPortInformation(
+  int port, vtkInformation* info)
 {
-  Internals& in = *this->Internal;
-  vtkUnstructuredGridBase* input = this->GetInput();
-  if (!input)
+  if (port != 0)
   {
-    vtkErrorMacro(<< "no input: connect an unstructured grid");
-    return nullptr;
+    return 0;
   }
-  if (input->GetNumberOfCells() == 0)
-  {
-    if (in.Report(input, "empty"))
-    {
-      vtkWarningMacro(<< "the input has no cells: nothing to draw");
-    }
-    return nullptr;
-  }
-  // Hexahedra, wedges, pyramids... are split into tetrahedra once per input change.
-  vtkUnstructuredGridBase* tetrahedra = in.Tetrahedralizer.Update(input);
-  if (!in.Tetrahedralizer.Warning().empty() && in.Report(input, in.Tetrahedralizer.Warning()))
-  {
-    vtkWarningMacro(<< in.Tetrahedralizer.Warning());
-  }
-  if (tetrahedra->GetNumberOfCells() == 0)
-  {
-    if (in.Report(input, "no 3D cells"))
-    {
-      vtkWarningMacro(<< "the input has no 3D cells: nothing to draw");
-    }
-    return nullptr;
-  }
-  if (!in.Adapter.Update(tetrahedra))
-  {
-    if (in.Report(tetrahedra, in.Adapter.Error()))
-    {
-      vtkErrorMacro(<< "cannot render the input: " << in.Adapter.Error());
-    }
-    return nullptr;
-  }
-  if (!in.Adapter.Warning().empty() && in.Report(tetrahedra, in.Adapter.Warning()))
-  {
-    vtkWarningMacro(<< in.Adapter.Warning());
-  }
-  return tetrahedra;
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkUnstructuredGridBase");
+  info->Append(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkDataObjectTree");
+  return 1;
 }
 
-bool vtkMultiThreadedProjectedTetrahedraMapper::PrepareScalars(
-  vtkUnstructuredGridBase* grid, vtkVolumeProperty* property, mtpt::FrameInput& frame)
+bool vtkMultiThreadedProjectedTetrahedraMapper::PrepareInput(
+  vtkVolumeProperty* property, mtpt::FrameInput& frame)
 {
   Internals& in = *this->Internal;
-  const mtpt::ScalarSelection selected = mtpt::SelectScalars(grid, this, property);
-  if (!selected.array)
+  // Problems are reported once per change of what they are about, not every frame.
+  const auto report = [this, &in](vtkObject* subject, const std::string& text, bool error)
   {
-    if (in.Report(grid, selected.error))
+    if (in.Report(subject, text))
     {
-      vtkErrorMacro(<< selected.error);
+      if (error)
+      {
+        vtkErrorMacro(<< text);
+      }
+      else
+      {
+        vtkWarningMacro(<< text);
+      }
     }
+  };
+  if (!in.Source.Update(this->GetInputDataObject(0, 0), this, property, report))
+  {
     return false;
   }
-  if (!selected.warning.empty() && in.Report(property, selected.warning))
-  {
-    vtkWarningMacro(<< selected.warning);
-  }
-  double range[2];
-  vtkIdType nonFinite = 0;
-  const float* values = in.Adapter.Scalars(selected.array, selected.component, range, nonFinite);
-  if (nonFinite > 0 && in.Report(grid, "non-finite scalars"))
-  {
-    vtkWarningMacro(<< nonFinite
-                    << " scalar values are NaN or infinite; the cells using them are not drawn");
-  }
-  const Internals::DataKey data{ grid, grid->GetMTime(), selected.array, selected.array->GetMTime(),
-    selected.component, selected.cellData };
-  if (!(data == in.LastData))
-  {
-    in.LastData = data;
-    ++in.DataVersion;
-  }
-  in.Tables.Update(property, range[0], range[1]);
-  frame.points = in.Adapter.Points();
-  frame.cells = in.Adapter.Cells();
-  frame.scalars = { values,
-    selected.cellData ? mtpt::ScalarsView::Association::Cells
-                      : mtpt::ScalarsView::Association::Points };
-  frame.dataVersion = in.DataVersion;
+  in.Tables.Update(property, in.Source.Range()[0], in.Source.Range()[1]);
+  frame.points = in.Source.Points();
+  frame.cells = in.Source.Cells();
+  frame.scalars = in.Source.Scalars();
+  frame.dataVersion = in.Source.Version();
   return true;
 }
 
@@ -566,9 +503,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
     vtkWarningMacro(<< "only composite blending is supported; drawing with it");
   }
   mtpt::FrameInput frame;
-  vtkUnstructuredGridBase* grid = this->TetrahedraToDraw();
-  vtkVolumeProperty* property = volume->GetProperty();
-  if (!grid || !this->PrepareScalars(grid, property, frame))
+  if (!this->PrepareInput(volume->GetProperty(), frame))
   {
     return;
   }
@@ -588,7 +523,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
     in.Stopped = in.Pipeline.Stopped();
     if (!in.Stopped)
     {
-      vtkErrorMacro(<< "the input has " << grid->GetNumberOfCells()
+      vtkErrorMacro(<< "the input has " << frame.cells.cellCount
                     << " tetrahedra; this mapper draws at most "
                     << mtpt::FramePipeline::MaxTetrahedra());
     }

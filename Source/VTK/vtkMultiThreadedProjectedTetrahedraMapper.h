@@ -23,7 +23,16 @@
  * with a VTK error, and a CPU backend that cannot read the window back draws nothing itself
  * and hands the frame to the OpenGL backend.
  *
- * Input, scalar selection (scalar mode, array by name or id, point or cell data, vector
+ * Input: an unstructured grid, or a composite data set (vtkMultiBlockDataSet,
+ * vtkPartitionedDataSet, vtkPartitionedDataSetCollection) of them, so the mapper also
+ * replaces vtkMultiBlockUnstructuredGridVolumeMapper. The cells of all blocks are sorted in
+ * one visibility order and composited once, so blocks that interleave in depth (an inner part
+ * seen through an outer one, touching parts seen obliquely) blend in the right order, where
+ * VTK's multi-block mapper draws one block after another. Blocks are used in place; blocks
+ * that are not unstructured grids, have no cells or lack the selected scalars are skipped
+ * with one warning each, and a change to one block redoes only that block's preparation.
+ *
+ * Scalar selection (scalar mode, array by name or id, point or cell data, vector
  * component or magnitude as the colour transfer function's vector mode selects) and the
  * meaning of vtkVolumeProperty (colour and scalar-opacity transfer functions,
  * ScalarOpacityUnitDistance) are those of vtkProjectedTetrahedraMapper. Where the results
@@ -340,10 +349,11 @@ public:
 
   ///@{
   /**
-   * Bounds of the input's finite points. Points with a NaN or infinite coordinate are not
-   * drawn (the cells using them are skipped, with a warning), and the bounds VTK computes
-   * for such a grid are uninitialized or infinite, which would hide the volume or break the
-   * renderer's camera reset and clipping range. Computed once per input change.
+   * Bounds of the input's finite points (of every unstructured block of a composite input).
+   * Points with a NaN or infinite coordinate are not drawn (the cells using them are
+   * skipped, with a warning), and the bounds VTK computes for such a grid are uninitialized
+   * or infinite, which would hide the volume or break the renderer's camera reset and
+   * clipping range. Computed once per input change.
    */
   double* GetBounds() VTK_SIZEHINT(6) override;
   void GetBounds(double bounds[6]) override;
@@ -353,6 +363,9 @@ public:
 protected:
   vtkMultiThreadedProjectedTetrahedraMapper();
   ~vtkMultiThreadedProjectedTetrahedraMapper() override;
+
+  /// An unstructured grid or a composite data set (vtkDataObjectTree) of them.
+  int FillInputPortInformation(int port, vtkInformation* info) override;
 
   int Backend = AUTOMATIC_BACKEND;
   int NumberOfThreads = 0;
@@ -372,9 +385,7 @@ private:
 
   // The steps of Render: the glue between VTK, the core's frame pipeline and a backend.
   void MoveToWindow(vtkOpenGLRenderWindow* window);
-  vtkUnstructuredGridBase* TetrahedraToDraw();
-  bool PrepareScalars(
-    vtkUnstructuredGridBase* grid, vtkVolumeProperty* property, mtpt::FrameInput& frame);
+  bool PrepareInput(vtkVolumeProperty* property, mtpt::FrameInput& frame);
   mtpt::RenderBackend* ChooseBackend();
   void SetUpFrame(vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window,
     mtpt::RenderBackend* backend, mtpt::FrameInput& frame, mtpt::BackendFrame& draw);

@@ -147,11 +147,11 @@ vtkSmartPointer<vtkVolumeProperty> MakeBluntFinProperty()
   return MakeProperty(0.19, 4.98, 1.5);
 }
 
-Stage MakeStage(vtkUnstructuredGrid* grid, vtkVolumeProperty* property,
+Stage MakeStage(vtkDataObject* input, vtkVolumeProperty* property,
   vtkUnstructuredGridVolumeMapper* mapper, int width, int height, WindowSettings settings)
 {
   Stage stage;
-  mapper->SetInputData(grid);
+  mapper->SetInputDataObject(input);
   stage.volume = vtkSmartPointer<vtkVolume>::New();
   stage.volume->SetMapper(mapper);
   stage.volume->SetProperty(property);
@@ -245,10 +245,10 @@ vtkSmartPointer<vtkImageData> Render(
   return image;
 }
 
-vtkSmartPointer<vtkImageData> ReferenceImage(const Stage& stage)
+vtkSmartPointer<vtkImageData> ReferenceImage(const Stage& stage, vtkUnstructuredGridBase* input)
 {
   vtkNew<vtkMTPTReferenceRenderer> reference;
-  if (!reference->Render(stage.renderer, stage.volume))
+  if (!reference->Render(stage.renderer, stage.volume, input))
   {
     ADD_FAILURE() << "no reference image";
     return nullptr;

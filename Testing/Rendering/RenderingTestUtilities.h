@@ -13,6 +13,8 @@
 #include <vector>
 
 VTK_ABI_NAMESPACE_BEGIN
+class vtkDataObject;
+class vtkUnstructuredGridBase;
 class vtkActor;
 class vtkImageData;
 class vtkRenderWindow;
@@ -103,8 +105,9 @@ struct Stage
   vtkSmartPointer<vtkRenderWindow> window;
 };
 
-/// `grid` drawn by `mapper` with `property` in a `width` x `height` window (not rendered).
-Stage MakeStage(vtkUnstructuredGrid* grid, vtkVolumeProperty* property,
+/// `input` (a grid, or a composite data set of grids) drawn by `mapper` with `property` in a
+/// `width` x `height` window (not rendered).
+Stage MakeStage(vtkDataObject* input, vtkVolumeProperty* property,
   vtkUnstructuredGridVolumeMapper* mapper, int width, int height, WindowSettings window = {});
 
 /// Points the renderer's camera at its props from `view` (after ResetCamera).
@@ -124,10 +127,11 @@ vtkSmartPointer<vtkImageData> Render(
 
 /**
  * The exact reference image (vtkMTPTReferenceRenderer) of the stage's volume as its
- * renderer shows it, rounded to 8-bit RGB like a window's pixels; null (and a gtest
- * failure) if it cannot be computed.
+ * renderer shows it (of `input` instead of the mapper's input, when given), rounded to 8-bit
+ * RGB like a window's pixels; null (and a gtest failure) if it cannot be computed.
  */
-vtkSmartPointer<vtkImageData> ReferenceImage(const Stage& stage);
+vtkSmartPointer<vtkImageData> ReferenceImage(
+  const Stage& stage, vtkUnstructuredGridBase* input = nullptr);
 
 /// The RGB back buffer of a rendered window. `rerender` renders again first (the default
 /// of vtkWindowToImageFilter); that render may use a slightly different aspect ratio, so

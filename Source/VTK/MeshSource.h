@@ -1,0 +1,133 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file MeshSource.h
+ * @brief Private glue: the mapper's input as the core sees it.
+ *
+ * The input is one unstructured grid (vtkUnstructuredGridBase) or a composite data set
+ * (vtkMultiBlockDataSet, vtkPartitionedDataSet, vtkPartitionedDataSetCollection: any
+ * vtkDataObjectTree) whose leaves are unstructured grids. Each grid is split into
+ * tetrahedra where it needs it (Tetrahedralizer), presented to the core without copying
+ * (MeshAdapter), and gives its scalars by the mapper's selection (SelectScalars). The
+ * leaves of a composite input become the parts of one mesh (mtpt::MeshPart): the core sorts
+ * the cells of all blocks in one visibility order, with no merged copy of their points or
+ * cells. Only their scalars are gathered into one array (one float per point or cell).
+ *
+ * Skipped, with one warning each: leaves that are not unstructured grids, leaves without
+ * cells, leaves without the selected scalars, and leaves whose scalars are point data where
+ * the others' are cell data (or the other way round).
+ *
+ * Kept between frames, per grid: the tetrahedralization and the adapted views, keyed on the
+ * grid object and its modification time (Tetrahedralizer, MeshAdapter). A change to one
+ * block redoes that block's work only. Version() changes whenever what the views show
+ * changes (any grid, its scalar array, the component or the association), which is the
+ * data version the pipeline's reuse is keyed on.
+ */
+#ifndef mtpt_MeshSource_h
+#define mtpt_MeshSource_h
+
+#include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
+#include "mtpt/MeshView.h"
+
+#include "vtkType.h"
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+VTK_ABI_NAMESPACE_BEGIN
+class vtkAbstractVolumeMapper;
+class vtkDataArray;
+class vtkDataObject;
+class vtkObject;
+class vtkUnstructuredGridBase;
+class vtkVolumeProperty;
+VTK_ABI_NAMESPACE_END
+
+namespace mtpt
+{
+
+class MeshSource
+{
+public:
+  MeshSource();
+  ~MeshSource();
+
+  /// Receives each problem: the object it is about (the caller reports it once per that
+  /// object's modification time), the message, and whether it stops the frame.
+  using Reporter = std::function<void(vtkObject* subject, const std::string& text, bool error)>;
+
+  /**
+   * Brings the views up to date with `input` (cheap when nothing changed). Returns false
+   * when there is nothing to draw; `report` has then been told why, unless the input is
+   * merely empty of drawable cells in a way already reported.
+   */
+  bool Update(vtkDataObject* input, vtkAbstractVolumeMapper* mapper, vtkVolumeProperty* property,
+    const Reporter& report);
+
+  PointsView Points() const { return this->PointData; }
+  CellsView Cells() const { return this->CellData; }
+  ScalarsView Scalars() const { return this->ScalarData; }
+  /// The finite range of the scalars over every grid drawn.
+  const double* Range() const { return this->ScalarRange; }
+  /// Changes whenever the content the views show changes.
+  std::uint64_t Version() const { return this->DataVersion; }
+  /// Grids drawn by the last Update: 1 for a grid input, the usable leaves for a composite.
+  std::size_t GridCount() const { return this->Used.size(); }
+  /// Splits into tetrahedra done so far, over every grid.
+  vtkIdType Tetrahedralizations() const;
+
+  /**
+   * The unstructured grids of `input`: itself, or the leaves of a composite data set in
+   * order, each with a name for messages ("block 3 'fin'"). Leaves of other types and empty
+   * nodes are not listed (`skipped` receives one message per leaf of another type).
+   */
+  static std::vector<std::pair<vtkUnstructuredGridBase*, std::string>> Grids(
+    vtkDataObject* input, std::vector<std::pair<vtkDataObject*, std::string>>* skipped = nullptr);
+
+private:
+  MeshSource(const MeshSource&) = delete;
+  void operator=(const MeshSource&) = delete;
+
+  struct Grid;
+  /// Prepares one grid; false (reported) when it cannot be drawn.
+  bool PrepareGrid(Grid& grid, vtkUnstructuredGridBase* input, const std::string& name, bool single,
+    vtkAbstractVolumeMapper* mapper, vtkVolumeProperty* property, const Reporter& report);
+  void GatherScalars();
+  /// Drops the views: the next Update makes them again (a new data version).
+  void Forget();
+
+  std::map<vtkUnstructuredGridBase*, std::unique_ptr<Grid>> Cache;
+  std::vector<Grid*> Used;     ///< the grids drawn, in order
+  std::vector<MeshPart> Parts; ///< one per used grid (composite input)
+  std::vector<float> Gathered; ///< the scalars of every used grid, in order (composite)
+  PointsView PointData;
+  CellsView CellData;
+  ScalarsView ScalarData;
+  double ScalarRange[2] = { 0, 1 };
+
+  /// What the views were made from: a change of any of these is a new data version.
+  struct Key
+  {
+    vtkUnstructuredGridBase* grid;
+    vtkMTimeType gridTime;
+    vtkDataArray* scalars;
+    vtkMTimeType scalarTime;
+    int component;
+    bool cellData;
+    bool operator==(const Key& o) const
+    {
+      return grid == o.grid && gridTime == o.gridTime && scalars == o.scalars &&
+        scalarTime == o.scalarTime && component == o.component && cellData == o.cellData;
+    }
+  };
+  std::vector<Key> LastKeys;
+  std::uint64_t DataVersion = 0;
+  vtkIdType RetiredTetrahedralizations = 0; ///< of grids no longer in the input
+};
+
+} // namespace mtpt
+
+#endif
