@@ -7,6 +7,11 @@
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
 
 #include "vtkCamera.h"
+#include "vtkXMLMultiBlockDataReader.h"
+#include "vtkMultiBlockUnstructuredGridVolumeMapper.h"
+#include "vtkDataObjectTreeIterator.h"
+#include "vtkDataObjectTree.h"
+#include "vtkAppendFilter.h"
 #include "vtkDataArray.h"
 #include "vtkXMLUnstructuredGridReader.h"
 #include "vtkDataSetReader.h"
@@ -184,9 +189,91 @@ bool EndsWith(const std::string& s, const std::string& suffix)
 }
 } // namespace
 
+namespace
+{
+/// Whether `mapper` takes a composite data set as its input.
+bool TakesBlocks(vtkUnstructuredGridVolumeMapper* mapper)
+{
+  return vtkMultiThreadedProjectedTetrahedraMapper::SafeDownCast(mapper) ||
+    vtkMultiBlockUnstructuredGridVolumeMapper::SafeDownCast(mapper);
+}
+
+/// A multi-block file: its blocks kept, the array chosen in the first block with cells.
+bool LoadBlocks(const std::string& path, const std::string& array, Scene& scene, std::string& error)
+{
+  vtkNew<vtkXMLMultiBlockDataReader> reader;
+  if (!reader->CanReadFile(path.c_str()))
+  {
+    error = "cannot read '" + path + "' as a VTK XML multi-block data set";
+    return false;
+  }
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  vtkDataObject* tree = reader->GetOutputDataObject(0);
+  auto leaf = vtkSmartPointer<vtkDataObjectTreeIterator>::Take(
+    vtkDataObjectTree::SafeDownCast(tree)->NewTreeIterator());
+  leaf->VisitOnlyLeavesOn();
+  vtkNew<vtkAppendFilter> append;
+  std::string name = array;
+  bool cells = false;
+  scene.range[0] = 1e300;
+  scene.range[1] = -1e300;
+  for (leaf->InitTraversal(); !leaf->IsDoneWithTraversal(); leaf->GoToNextItem())
+  {
+    auto* block = vtkDataSet::SafeDownCast(leaf->GetCurrentDataObject());
+    if (!block || block->GetNumberOfCells() == 0)
+    {
+      continue;
+    }
+    if (name.empty())
+    {
+      vtkDataArray* first = block->GetPointData()->GetScalars();
+      first = first ? first : block->GetPointData()->GetArray(0);
+      cells = !first && block->GetCellData()->GetArray(0);
+      first = first ? first : block->GetCellData()->GetArray(0);
+      name = first && first->GetName() ? first->GetName() : "";
+    }
+    vtkDataArray* scalars = block->GetPointData()->GetArray(name.c_str());
+    cells = !scalars;
+    scalars = scalars ? scalars : block->GetCellData()->GetArray(name.c_str());
+    if (scalars)
+    {
+      (cells ? static_cast<vtkDataSetAttributes*>(block->GetCellData())
+             : static_cast<vtkDataSetAttributes*>(block->GetPointData()))
+        ->SetActiveScalars(name.c_str());
+      double range[2];
+      scalars->GetRange(range, scalars->GetNumberOfComponents() > 1 ? -1 : 0);
+      scene.range[0] = std::min(scene.range[0], range[0]);
+      scene.range[1] = std::max(scene.range[1], range[1]);
+    }
+    append->AddInputData(block);
+  }
+  if (append->GetNumberOfInputConnections(0) == 0 || !(scene.range[0] <= scene.range[1]))
+  {
+    error = "'" + path + "' has no block with cells and the scalars '" + name + "'";
+    return false;
+  }
+  vtkNew<vtkDataSetTriangleFilter> tetrahedralize;
+  tetrahedralize->SetInputConnection(append->GetOutputPort());
+  tetrahedralize->TetrahedraOnlyOn();
+  tetrahedralize->Update();
+  scene.name = vtksys::SystemTools::GetFilenameWithoutLastExtension(path);
+  scene.grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  scene.grid->ShallowCopy(tetrahedralize->GetOutput());
+  scene.blocks = tree;
+  scene.arrayName = name;
+  scene.cellScalars = cells;
+  return true;
+}
+} // namespace
+
 bool LoadSceneFile(
   const std::string& path, const std::string& array, Scene& scene, std::string& error)
 {
+  if (EndsWith(path, ".vtm"))
+  {
+    return LoadBlocks(path, array, scene, error);
+  }
   vtkSmartPointer<vtkDataSet> data;
   if (EndsWith(path, ".vtu"))
   {
@@ -209,7 +296,7 @@ bool LoadSceneFile(
   }
   else
   {
-    error = "'" + path + "' is neither .vtu nor .vtk";
+    error = "'" + path + "' is none of .vtu, .vtk and .vtm";
     return false;
   }
   if (!data || data->GetNumberOfCells() == 0)
@@ -284,7 +371,7 @@ vtkSmartPointer<vtkVolumeProperty> MakeProperty(const Scene& scene)
 const std::vector<std::string>& ContenderNames()
 {
   static const std::vector<std::string> names = { "mtpt", "mtpt-cpu", "mtpt-gl", "vtk-pt",
-    "raycast", "zsweep" };
+    "vtk-multiblock", "raycast", "zsweep" };
   return names;
 }
 
@@ -310,6 +397,10 @@ vtkSmartPointer<vtkUnstructuredGridVolumeMapper> MakeMapper(
   {
     return vtkSmartPointer<vtkProjectedTetrahedraMapper>::New();
   }
+  if (name == "vtk-multiblock")
+  {
+    return vtkSmartPointer<vtkMultiBlockUnstructuredGridVolumeMapper>::New();
+  }
   if (name == "raycast")
   {
     auto mapper = vtkSmartPointer<vtkUnstructuredGridVolumeRayCastMapper>::New();
@@ -332,7 +423,9 @@ Stage::Stage(const Scene& scene, vtkVolumeProperty* property,
   : Mapper(mapper)
   , StartCamera(options.view)
 {
-  mapper->SetInputData(scene.grid);
+  mapper->SetInputDataObject(scene.blocks && TakesBlocks(mapper)
+      ? scene.blocks.Get()
+      : static_cast<vtkDataObject*>(scene.grid));
   this->Volume->SetMapper(mapper);
   this->Volume->SetProperty(property);
   this->Renderer->SetBackground(options.background[0], options.background[1],
@@ -349,10 +442,10 @@ Stage::~Stage()
   this->Mapper->ReleaseGraphicsResources(this->Window);
 }
 
-void Stage::SetMapper(vtkUnstructuredGridVolumeMapper* mapper)
+void Stage::SetMapper(vtkUnstructuredGridVolumeMapper* mapper, vtkDataObject* input)
 {
   this->Mapper->ReleaseGraphicsResources(this->Window);
-  mapper->SetInputData(this->Mapper->GetInput());
+  mapper->SetInputDataObject(input ? input : this->Mapper->GetInputDataObject(0, 0));
   this->Mapper = mapper;
   this->Volume->SetMapper(mapper);
 }

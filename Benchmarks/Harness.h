@@ -40,6 +40,7 @@ class App;
 }
 
 VTK_ABI_NAMESPACE_BEGIN
+class vtkDataObject;
 class vtkRenderWindow;
 class vtkRenderer;
 class vtkUnstructuredGrid;
@@ -62,6 +63,9 @@ struct Scene
   std::shared_ptr<void> storage; ///< arrays the grid uses in place, if not VTK's own
   std::string arrayName;         ///< the scalars coloured by
   bool cellScalars = false;      ///< one value per cell rather than per point
+  /// A composite data set (a multi-block file): drawn instead of `grid` by the mappers that
+  /// take one (MTPT, VTK's multi-block mapper); `grid` then holds its blocks appended.
+  vtkSmartPointer<vtkDataObject> blocks;
 };
 
 /**
@@ -80,8 +84,10 @@ bool LoadScene(const std::string& name, const std::string& dataFolder, Scene& sc
  * A scene from a VTK file (.vtu, or legacy .vtk of any data set), split into tetrahedra
  * (vtkDataSetTriangleFilter, every array passed), coloured by the array named `array`
  * (point data first, then cell data), else the active point scalars, else the first point
- * array, else the first cell array; that array is made the active scalars. Returns false
- * with `error` set when the file cannot be read, holds no cells or no such array.
+ * array, else the first cell array; that array is made the active scalars. A multi-block
+ * file (.vtm) keeps its blocks (Scene::blocks), the array chosen in the first block with
+ * cells and made active in every block. Returns false with `error` set when the file cannot
+ * be read, holds no cells or no such array.
  */
 bool LoadSceneFile(const std::string& path, const std::string& array, Scene& scene,
   std::string& error);
@@ -101,7 +107,8 @@ struct MapperSettings
 /**
  * Contenders by name: "mtpt" (vtkMultiThreadedProjectedTetrahedraMapper choosing its
  * backend), "mtpt-cpu" and "mtpt-gl" (with the CPU or the OpenGL backend), "vtk-pt"
- * (vtkProjectedTetrahedraMapper), "raycast" (vtkUnstructuredGridVolumeRayCastMapper) and
+ * (vtkProjectedTetrahedraMapper), "vtk-multiblock" (vtkMultiBlockUnstructuredGridVolumeMapper:
+ * VTK's PT block after block), "raycast" (vtkUnstructuredGridVolumeRayCastMapper) and
  * "zsweep" (vtkUnstructuredGridVolumeZSweepMapper). Null for an unknown name.
  */
 vtkSmartPointer<vtkUnstructuredGridVolumeMapper> MakeMapper(
@@ -127,7 +134,8 @@ struct StageOptions
   bool onScreen = false; ///< a window on the display (default: off-screen)
 };
 
-/// A volume in a renderer in a window as VTK makes it by default.
+/// A volume in a renderer in a window as VTK makes it by default. Its input is the scene's
+/// blocks for the mappers that take a composite data set, else its grid.
 class Stage
 {
 public:
@@ -143,8 +151,8 @@ public:
   double Frame();
   /// The window's RGB image as drawn by the last frame.
   vtkSmartPointer<vtkImageData> Image();
-  /// Draws the volume with another mapper from now on.
-  void SetMapper(vtkUnstructuredGridVolumeMapper* mapper);
+  /// Draws the volume with another mapper from now on, of `input` (null: the same input).
+  void SetMapper(vtkUnstructuredGridVolumeMapper* mapper, vtkDataObject* input = nullptr);
 
   vtkRenderer* GetRenderer() { return this->Renderer; }
   vtkRenderWindow* GetWindow() { return this->Window; }
