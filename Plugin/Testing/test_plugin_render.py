@@ -96,14 +96,16 @@ def main():
     display.MTPTShadingMode = "VTK-compatible"
     simple.Hide(reader, view)
 
-    # A multi-block input: the mesh cut into two blocks of whole cells (crinkle clips of
-    # either side of a plane), grouped. ParaView hands the representation its blocks merged
-    # into one grid, so one order covers both: the image is that of the single grid.
+    # A multi-block input: the mesh cut into two blocks of whole cells (the cells inside a
+    # plane, with those it cuts, and the cells wholly outside: every cell exactly once),
+    # grouped. ParaView hands the representation its blocks merged into one grid, so one
+    # order covers both: the image is that of the single grid.
     halves = []
-    for invert in (0, 1):
-        half = simple.Clip(Input=reader, ClipType="Plane", Crinkleclip=1, Invert=invert)
-        half.ClipType.Origin = [3.0, 0.0, 0.0]
-        half.ClipType.Normal = [1.0, 0.2, 0.0]
+    for side, cut in (("inside", 1), ("outside", 0)):
+        half = simple.ExtractCellsByRegion(Input=reader, IntersectWith="Plane",
+                                           ExtractionSide=side, Extractintersected=cut)
+        half.IntersectWith.Origin = [3.0, 0.0, 0.0]
+        half.IntersectWith.Normal = [1.0, 0.2, 0.0]
         halves.append(half)
     blocks = simple.GroupDatasets(Input=halves)
     block_display = testing.show_volume(blocks, view, testing.MTPT_REPRESENTATION)

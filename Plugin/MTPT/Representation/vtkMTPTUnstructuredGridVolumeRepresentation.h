@@ -18,14 +18,11 @@
 #ifndef vtkMTPTUnstructuredGridVolumeRepresentation_h
 #define vtkMTPTUnstructuredGridVolumeRepresentation_h
 
-#include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
 #include "vtkNew.h"                      // for vtkNew
 #include "vtkRepresentationMTPTModule.h" // for export macro
 #include "vtkUnstructuredGridVolumeRepresentation.h"
 
-VTK_ABI_NAMESPACE_BEGIN
-class vtkMultiThreadedProjectedTetrahedraMapper;
-VTK_ABI_NAMESPACE_END
+class vtkMultiThreadedProjectedTetrahedraMapper; // MTPT's own: not in VTK's ABI namespace
 
 class VTKREPRESENTATIONMTPT_EXPORT vtkMTPTUnstructuredGridVolumeRepresentation
   : public vtkUnstructuredGridVolumeRepresentation
