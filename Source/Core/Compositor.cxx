@@ -354,7 +354,30 @@ void ForEachPixel(const PixelRegion& region, int imageWidth, int tilesX,
 
 } // namespace
 
-void Compositor::Resolve(const PixelRegion& region, const float* below, float* rgba, int threads)
+namespace
+{
+/// A colour value in [0, 1] from a float or an 8-bit channel, and back (8 bits: clamped and
+/// rounded to nearest).
+inline float Unit(float value)
+{
+  return value;
+}
+inline float Unit(std::uint8_t value)
+{
+  return value * (1.0f / 255.0f);
+}
+inline void Store(float value, float& out)
+{
+  out = value;
+}
+inline void Store(float value, std::uint8_t& out)
+{
+  out = static_cast<std::uint8_t>(std::min(1.0f, std::max(0.0f, value)) * 255.0f + 0.5f);
+}
+} // namespace
+
+template <typename T>
+void Compositor::ResolveInto(const PixelRegion& region, const T* below, T* rgba, int threads)
 {
   const auto start = Clock::now();
   ForEachPixel(region, this->Settings.width, this->TilesX, this->Cleared, this->Image.data(),
@@ -365,30 +388,21 @@ void Compositor::Resolve(const PixelRegion& region, const float* below, float* r
       for (int c = 0; c < 4; ++c)
       {
         const float drawn = p ? p[c * TilePixels] : 0.0f;
-        rgba[4 * i + c] = below ? drawn + rest * below[4 * j + c] : drawn;
+        Store(below ? drawn + rest * Unit(below[4 * j + c]) : drawn, rgba[4 * i + c]);
       }
     });
   this->Statistics.resolveSeconds += detail::SecondsSince(start);
 }
 
+void Compositor::Resolve(const PixelRegion& region, const float* below, float* rgba, int threads)
+{
+  this->ResolveInto(region, below, rgba, threads);
+}
+
 void Compositor::Resolve(
   const PixelRegion& region, const std::uint8_t* below, std::uint8_t* rgba, int threads)
 {
-  const auto start = Clock::now();
-  ForEachPixel(region, this->Settings.width, this->TilesX, this->Cleared, this->Image.data(),
-    threads,
-    [&](std::size_t i, std::size_t j, const float* p)
-    {
-      const float alpha = p ? p[3 * TilePixels] : 0.0f, rest = 1.0f - alpha;
-      for (int c = 0; c < 4; ++c)
-      {
-        const float drawn = p ? p[c * TilePixels] : 0.0f;
-        const float under = below ? below[4 * j + c] * (1.0f / 255.0f) : 0.0f;
-        const float value = std::min(1.0f, std::max(0.0f, drawn + rest * under));
-        rgba[4 * i + c] = static_cast<std::uint8_t>(value * 255.0f + 0.5f);
-      }
-    });
-  this->Statistics.resolveSeconds += detail::SecondsSince(start);
+  this->ResolveInto(region, below, rgba, threads);
 }
 
 void Compositor::Composite(const TetVertex* vertices, const std::uint32_t* indices,

@@ -185,6 +185,8 @@ public:
 
 private:
   void Bin(const Fan* fans, std::size_t count, int threads);
+  template <typename T>
+  void ResolveInto(const PixelRegion& region, const T* below, T* rgba, int threads);
   void Rasterize(int threads);
   float* Tile(int tile);
 
