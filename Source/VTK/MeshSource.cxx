@@ -97,6 +97,13 @@ bool MeshSource::PrepareGrid(Grid& grid, vtkUnstructuredGridBase* input, const s
     report(input, what + " has no cells: nothing to draw" + (single ? "" : " from it"), false);
     return false;
   }
+  if (input->GetNumberOfPoints() == 0)
+  {
+    // Before anything visits the cells: their point ids name no point (and VTK 9.6's
+    // vtkUnstructuredGrid::IsHomogeneous reads the points of a cell to answer).
+    report(input, what + " has no points: nothing to draw" + (single ? "" : " from it"), single);
+    return false;
+  }
   // Hexahedra, wedges, pyramids... are split into tetrahedra once per input change.
   grid.Tetrahedra = grid.Split.Update(input);
   if (!grid.Split.Warning().empty())

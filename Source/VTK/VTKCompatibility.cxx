@@ -4,6 +4,8 @@
 #include "vtkCellIterator.h"
 #include "vtkCellType.h"
 #include "vtkCellTypes.h"
+#include "vtkDataArray.h"
+#include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
 
 #if VTK_VERSION_NUMBER >= VTK_VERSION_CHECK(9, 6, 0)
@@ -37,7 +39,20 @@ bool OnlyTetrahedra(vtkUnstructuredGrid* grid)
   {
     return true;
   }
-  return grid->IsHomogeneous() && grid->GetCellType(0) == VTK_TETRA;
+  // The range of the types array, which VTK caches until the array changes (VTK 9.6 keeps
+  // the types of a grid of one cell type as an implicit constant array).
+#if VTK_VERSION_NUMBER >= VTK_VERSION_CHECK(9, 6, 0)
+  vtkDataArray* types = grid->GetCellTypes();
+#else
+  vtkDataArray* types = grid->GetCellTypesArray();
+#endif
+  if (!types || types->GetNumberOfTuples() != grid->GetNumberOfCells())
+  {
+    return false;
+  }
+  double range[2];
+  types->GetRange(range, 0);
+  return range[0] == VTK_TETRA && range[1] == VTK_TETRA;
 }
 
 } // namespace mtpt

@@ -10,12 +10,12 @@ work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 cmake --install "$build_dir" --prefix "$work/prefix" >/dev/null
 # The VTK the build used (Debian's, or another one given with VTK_DIR).
-vtk_dir="$(sed -n 's/^VTK_DIR:PATH=//p' "$build_dir/CMakeCache.txt")"
+vtk_dir="$(sed -n 's/^VTK_DIR:[A-Z]*=//p' "$build_dir/CMakeCache.txt")"
 cmake -S "$source_dir/Examples" -B "$work/example" -G Ninja -DCMAKE_BUILD_TYPE=Release \
   -DCMAKE_PREFIX_PATH="$work/prefix" ${vtk_dir:+-DVTK_DIR="$vtk_dir"} >/dev/null
 cmake --build "$work/example" >/dev/null
 "$source_dir/Testing/xvfb-launch.sh" "$work/example/mtpt_render" --size 160x120 --frames 1 \
-  --output "$work/out.png"
+  --background white --output "$work/out.png"
 /usr/bin/python3 - "$work/out.png" <<'PY'
 import sys
 from vtkmodules.vtkIOImage import vtkPNGReader
