@@ -32,6 +32,7 @@ namespace HWY_NAMESPACE
 namespace hn = hwy::HWY_NAMESPACE;
 
 constexpr int T = Compositor::TileSize;
+static_assert(T % 8 == 0, "tile rows hold whole vectors of the widest lane count used");
 /// Sub-pixel precision of the fixed-point rasterizer (as GPUs and Mesa snap vertices).
 constexpr double SubpixelScale = 256.0;
 /// Window coordinates within +-2^22 pixels keep every edge-function product below 2^62.
@@ -440,12 +441,16 @@ void ShadeCompatible(const RasterFrame& f, const TileTarget& tile, const Planes&
   float start[6];
   RowStart(p, y - tile.y0, start);
   const int first = lo - tile.x0, last = hi - tile.x0;
-  const auto firstLane = hn::Set(d, static_cast<float>(first));
   const auto lastLane = hn::Set(d, static_cast<float>(last));
-  for (int x = first - first % lanes; x <= last; x += lanes)
+  // Vectors start at the span's first pixel (not at a multiple of the lane count: fewer
+  // idle lanes on short spans), moved back so as not to reach past the row's end; lanes
+  // before `from` are done already (or not in the span) and stay as they are.
+  for (int from = first; from <= last; from += lanes)
   {
+    const int x = std::min(from, T - lanes);
     const auto i = hn::Iota(d, static_cast<float>(x));
-    ShadeVector(d, f, row, p, start, x, hn::And(hn::Ge(i, firstLane), hn::Le(i, lastLane)));
+    ShadeVector(d, f, row, p, start, x,
+      hn::And(hn::Ge(i, hn::Set(d, static_cast<float>(from))), hn::Le(i, lastLane)));
   }
 }
 
@@ -465,7 +470,7 @@ void ShadeSmall(const RasterFrame& f, const TileTarget& tile, const Edges& edges
   const FragmentTag d;
   const int lanes = static_cast<int>(hn::Lanes(d));
   const int first = x0 - tile.x0, last = x1 - tile.x0;
-  const int begin = first - first % lanes;
+  const int begin = std::min(first, T - lanes); // see ShadeCompatible
   float edgeRow[3], stepX[3], stepY[3], least[3];
   for (int k = 0; k < 3; ++k)
   {
@@ -474,18 +479,18 @@ void ShadeSmall(const RasterFrame& f, const TileTarget& tile, const Edges& edges
     stepY[k] = static_cast<float>(edges.B[k] * 256);
     least[k] = edges.owns[k] ? 0.0f : 1.0f;
   }
-  const auto firstLane = hn::Set(d, static_cast<float>(first));
   const auto lastLane = hn::Set(d, static_cast<float>(last));
   for (int y = y0; y <= y1; ++y)
   {
     const TileRow row = RowOf(tile, y);
     float start[6];
     const Planes* p = nullptr; // set up when the row has a covered pixel
-    for (int x = begin; x <= last; x += lanes)
+    for (int from = first; from <= last; from += lanes)
     {
+      const int x = std::min(from, T - lanes);
       const auto i = hn::Iota(d, static_cast<float>(x));
       const auto offset = hn::Iota(d, static_cast<float>(x - begin));
-      auto keep = hn::And(hn::Ge(i, firstLane), hn::Le(i, lastLane));
+      auto keep = hn::And(hn::Ge(i, hn::Set(d, static_cast<float>(from))), hn::Le(i, lastLane));
       for (int k = 0; k < 3; ++k)
       {
         const auto e = hn::MulAdd(hn::Set(d, stepX[k]), offset, hn::Set(d, edgeRow[k]));

@@ -140,7 +140,7 @@ class Compositor
 {
 public:
   /// Pixels per side of a tile.
-  static constexpr int TileSize = 32;
+  static constexpr int TileSize = 64;
 
   /**
    * Starts a new image of settings.width x height, transparent. `settings` (and what it
