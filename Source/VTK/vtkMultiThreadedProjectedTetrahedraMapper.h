@@ -59,7 +59,7 @@
  *   centre (sub-pixel cells in a small image; not for multisampled OpenGL targets, which
  *   sample elsewhere too). The counts of each are available after every Render;
  * - the CPU backend's compositing work follows the covered pixels: each tetrahedron is
- *   binned into the 32x32 screen tiles it touches and rasterized there, several pixels at a
+ *   binned into the 64x64 screen tiles it touches and rasterized there, several pixels at a
  *   time with the widest SIMD instructions of the processor (chosen at run time);
  * - reuse (ReuseResults, on by default): an unchanged view, volume matrix and input redraw
  *   without any CPU stage or buffer upload (the CPU backend reuses its composited image too
