@@ -326,11 +326,10 @@ PixelRegion Compositor::TouchedRegion() const
 namespace
 {
 
-/// Calls pixel(i, j, image) for each pixel of `region`: i counts region pixels, j image
-/// pixels, and image points at its premultiplied R (G, B, A one plane apart), or is null
-/// where nothing was drawn.
+/// Calls pixel(i, image) for each pixel of `region`: i counts region pixels, and image points
+/// at its premultiplied R (G, B, A one plane apart), or is null where nothing was drawn.
 template <typename Pixel>
-void ForEachPixel(const PixelRegion& region, int imageWidth, int tilesX,
+void ForEachPixel(const PixelRegion& region, int tilesX,
   const std::vector<std::uint8_t>& cleared, const float* image, int threads, Pixel&& pixel)
 {
   const int width = region.x1 - region.x0;
@@ -344,8 +343,7 @@ void ForEachPixel(const PixelRegion& region, int imageWidth, int tilesX,
     {
       const int tile = (y / TileSize) * tilesX + x / TileSize;
       const std::size_t i = static_cast<std::size_t>(y - region.y0) * width + (x - region.x0);
-      const std::size_t j = static_cast<std::size_t>(y) * imageWidth + x;
-      pixel(i, j,
+      pixel(i,
         cleared[tile] ? image + 4 * TilePixels * tile + (y % TileSize) * TileSize + x % TileSize
                       : nullptr);
     }
@@ -380,15 +378,14 @@ template <typename T>
 void Compositor::ResolveInto(const PixelRegion& region, const T* below, T* rgba, int threads)
 {
   const auto start = Clock::now();
-  ForEachPixel(region, this->Settings.width, this->TilesX, this->Cleared, this->Image.data(),
-    threads,
-    [&](std::size_t i, std::size_t j, const float* p)
+  ForEachPixel(region, this->TilesX, this->Cleared, this->Image.data(), threads,
+    [&](std::size_t i, const float* p)
     {
       const float alpha = p ? p[3 * TilePixels] : 0.0f, rest = 1.0f - alpha;
       for (int c = 0; c < 4; ++c)
       {
         const float drawn = p ? p[c * TilePixels] : 0.0f;
-        Store(below ? drawn + rest * Unit(below[4 * j + c]) : drawn, rgba[4 * i + c]);
+        Store(below ? drawn + rest * Unit(below[4 * i + c]) : drawn, rgba[4 * i + c]);
       }
     });
   this->Statistics.resolveSeconds += detail::SecondsSince(start);

@@ -6,7 +6,11 @@
 #include "mtpt/FramePipeline.h"
 #include "mtpt/Timing.h"
 
+#include "vtkActor2D.h"
 #include "vtkOpenGLRenderWindow.h"
+#include "vtkPropCollection.h"
+#include "vtkRenderer.h"
+#include "vtkVolume.h"
 #include "vtkOpenGLState.h"
 #include "vtkTextureObject.h"
 #include "vtkType.h"
@@ -48,9 +52,19 @@ bool CPUBackend::Draw(const BackendFrame& frame, BackendTimes& times)
 {
   this->ErrorMessage.clear();
   TakeOpenGLErrors(); // errors left by others are not this backend's to report
-  if (!this->ReadBack(frame, times))
+  // The window's colour and depth, resolved to one sample per pixel; nothing is written to
+  // the window before every read succeeded.
+  auto start = Clock::now();
+  if (!this->Target.Capture(frame.window, frame.origin, frame.size, this->ErrorMessage))
   {
-    return false; // nothing was written
+    return false;
+  }
+  const bool depthRead = this->ReadDepth(frame);
+  times.upload += SecondsSince(start);
+  if (!depthRead)
+  {
+    this->Target.Restore(frame.window);
+    return false;
   }
   const ImageKey key = ImageKey::Of(frame);
   times.imageReused = this->HaveImage && key == this->Kept && this->Depth == this->KeptDepth;
@@ -67,7 +81,59 @@ bool CPUBackend::Draw(const BackendFrame& frame, BackendTimes& times)
     this->Kept = key;
     this->Depth.swap(this->KeptDepth); // read into the other buffer next frame
   }
-  return this->WriteBack(frame, times);
+  // The colour beneath: of the region the volume touched only.
+  start = Clock::now();
+  const PixelRegion region = this->Compositing.TouchedRegion();
+  const bool colourRead = region.Empty() || this->ReadColour(frame, region);
+  this->Target.Restore(frame.window);
+  times.upload += SecondsSince(start);
+  return colourRead && this->WriteBack(frame, region, times);
+}
+
+bool CPUBackend::MayHaveOpaqueGeometry(vtkRenderer* renderer)
+{
+  // Volumes are drawn after the opaque and translucent geometry, and 2D props after the
+  // volumes: with only those in the renderer, and its depth cleared, the depth buffer holds
+  // the clear value, which occludes nothing.
+  if (!renderer || renderer->GetPreserveDepthBuffer())
+  {
+    return true;
+  }
+  vtkPropCollection* props = renderer->GetViewProps();
+  vtkCollectionSimpleIterator it;
+  props->InitTraversal(it);
+  while (vtkProp* prop = props->GetNextProp(it))
+  {
+    if (prop->GetVisibility() && !vtkVolume::SafeDownCast(prop) && !vtkActor2D::SafeDownCast(prop))
+    {
+      return true;
+    }
+  }
+  return false;
+}
+
+bool CPUBackend::ReadDepth(const BackendFrame& frame)
+{
+  if (ReadBackFaultInjected())
+  {
+    glReadPixels(0, 0, 1, 1, GL_RGBA, GL_DEPTH_COMPONENT, nullptr); // an invalid read
+  }
+  if (!MayHaveOpaqueGeometry(frame.renderer))
+  {
+    this->Depth.clear(); // no occlusion; Read still reports the errors of the capture
+    return this->Target.Read(frame.window, 0, 0, 0, 0, nullptr, nullptr, this->ErrorMessage);
+  }
+  this->Depth.resize(static_cast<std::size_t>(frame.size[0]) * frame.size[1]);
+  return this->Target.Read(frame.window, 0, 0, frame.size[0], frame.size[1], this->Depth.data(),
+    nullptr, this->ErrorMessage);
+}
+
+bool CPUBackend::ReadColour(const BackendFrame& frame, const PixelRegion& region)
+{
+  const int width = region.x1 - region.x0, height = region.y1 - region.y0;
+  this->Below.resize(4 * static_cast<std::size_t>(width) * height);
+  return this->Target.Read(frame.window, region.x0, region.y0, width, height, nullptr,
+    this->Below.data(), this->ErrorMessage);
 }
 
 CPUBackend::ImageKey CPUBackend::ImageKey::Of(const BackendFrame& frame)
@@ -95,27 +161,6 @@ bool CPUBackend::ImageKey::operator==(const ImageKey& o) const
     a.scaleX == b.scaleX && a.shiftX == b.shiftX && a.scaleY == b.scaleY && a.shiftY == b.shiftY;
 }
 
-bool CPUBackend::ReadBack(const BackendFrame& frame, BackendTimes& times)
-{
-  const auto start = Clock::now();
-  if (!this->Target.Capture(frame.window, frame.origin, frame.size, this->ErrorMessage))
-  {
-    return false;
-  }
-  const std::size_t pixels = static_cast<std::size_t>(frame.size[0]) * frame.size[1];
-  this->Depth.resize(pixels);
-  this->Below.resize(4 * pixels);
-  if (ReadBackFaultInjected())
-  {
-    glReadPixels(0, 0, frame.size[0], frame.size[1], GL_RGBA, GL_DEPTH_COMPONENT, nullptr);
-  }
-  const bool read = this->Target.Read(frame.window, 0, 0, frame.size[0], frame.size[1],
-    this->Depth.data(), this->Below.data(), this->ErrorMessage);
-  this->Target.Restore(frame.window);
-  times.upload += SecondsSince(start);
-  return read;
-}
-
 void CPUBackend::Composite(const BackendFrame& frame, BackendTimes& times)
 {
   CompositeSettings& settings = this->Settings;
@@ -124,7 +169,7 @@ void CPUBackend::Composite(const BackendFrame& frame, BackendTimes& times)
   settings.height = frame.size[1];
   settings.transferFunction = frame.tables->Table();
   settings.unitDistance = frame.unitDistance;
-  settings.opaqueDepth = this->Depth.data();
+  settings.opaqueDepth = this->Depth.empty() ? nullptr : this->Depth.data();
   if (frame.shading == Shading::PreIntegrated)
   {
     settings.UsePreIntegration(frame.tables->PreIntegration(), frame.interpolation);
@@ -154,13 +199,12 @@ void CPUBackend::Composite(const BackendFrame& frame, BackendTimes& times)
   }
 }
 
-bool CPUBackend::WriteBack(const BackendFrame& frame, BackendTimes& times)
+bool CPUBackend::WriteBack(const BackendFrame& frame, const PixelRegion& region, BackendTimes& times)
 {
   // Only the region the volume touched changes. It is composited over the colour that was
   // there on the CPU and written with blending off: blending it in OpenGL would round the
   // volume's colour to 8 bits before the blend (llvmpipe blends 8-bit targets in 8-bit
   // arithmetic), a second rounding the OpenGL path does not have.
-  const PixelRegion region = this->Compositing.TouchedRegion();
   if (region.Empty())
   {
     return true;

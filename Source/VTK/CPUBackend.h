@@ -34,6 +34,7 @@
 #include <vector>
 
 VTK_ABI_NAMESPACE_BEGIN
+class vtkRenderer;
 class vtkTextureObject;
 VTK_ABI_NAMESPACE_END
 
@@ -77,9 +78,14 @@ private:
     bool operator==(const ImageKey& other) const;
   };
 
-  bool ReadBack(const BackendFrame& frame, BackendTimes& times);
+  /// Whether opaque geometry may have written depth that the volume must respect.
+  static bool MayHaveOpaqueGeometry(vtkRenderer* renderer);
+  /// The captured depth of the viewport into Depth, or Depth empty where it is the clear value.
+  bool ReadDepth(const BackendFrame& frame);
+  /// The captured colour of `region` into Below.
+  bool ReadColour(const BackendFrame& frame, const PixelRegion& region);
   void Composite(const BackendFrame& frame, BackendTimes& times);
-  bool WriteBack(const BackendFrame& frame, BackendTimes& times);
+  bool WriteBack(const BackendFrame& frame, const PixelRegion& region, BackendTimes& times);
 
   Compositor Compositing;
   CompositeSettings Settings;
@@ -87,10 +93,10 @@ private:
   bool HaveImage = false; ///< the compositor holds the complete image of Kept
   ImageKey Kept;
   std::vector<float> KeptDepth; ///< the opaque depth the kept image was composited with
+  std::vector<float> Depth;     ///< this frame's opaque depth (empty: nothing opaque)
   BlendTarget Target;
   vtkNew<vtkTextureObject> Image;
-  std::vector<float> Depth;
-  std::vector<std::uint8_t> Below, Region;
+  std::vector<std::uint8_t> Below, Region; ///< of the touched region
 };
 
 } // namespace mtpt

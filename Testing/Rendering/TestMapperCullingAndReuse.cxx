@@ -277,6 +277,20 @@ TEST(MapperImageReuse, OnlyAFrameThatChangesNothingReusesTheCompositedImage)
   stage.Frame();
   EXPECT_TRUE(isReused());
 
+  // The opaque geometry goes (nothing occludes the volume: its depth is not even read back)
+  // and comes back.
+  stage.renderer->RemoveActor(opaque);
+  auto alone = stage.Frame();
+  EXPECT_FALSE(isReused());
+  EXPECT_GT(Compare(alone, moved).worst, 0.05);
+  EXPECT_EQ(Compare(alone, stage.Fresh()).worst, 0.0);
+  stage.Frame();
+  EXPECT_TRUE(isReused());
+  stage.renderer->AddActor(opaque);
+  auto back = stage.Frame();
+  EXPECT_FALSE(isReused());
+  EXPECT_EQ(Compare(back, moved).worst, 0.0);
+
   // The transfer function's colour and the unit distance.
   property->GetRGBTransferFunction()->AddRGBPoint(0.5, 0.1, 0.9, 0.2);
   auto recoloured = stage.Frame();

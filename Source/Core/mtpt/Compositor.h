@@ -158,9 +158,9 @@ public:
 
   /**
    * The image composited over `below` in `region` (a sub-rectangle of the image): `below`
-   * holds the whole image's width x height RGBA values (null: transparent black, which
-   * gives the premultiplied image itself), `rgba` receives the region's, both row-major,
-   * row 0 at the bottom.
+   * holds the region's RGBA values beneath the volume (null: transparent black, which gives
+   * the premultiplied image itself), `rgba` receives the region's, both row-major, row 0 at
+   * the bottom.
    */
   void Resolve(const PixelRegion& region, const float* below, float* rgba, int threads);
   /// The same in 8 bits per channel (rounded to nearest), as a window holds it.
