@@ -18,7 +18,7 @@ cmake -S "$here/Examples" -B "$build/example" -G Ninja -DCMAKE_BUILD_TYPE=Releas
   -DCMAKE_PREFIX_PATH="$build/install" >/dev/null
 cmake --build "$build/example"
 
-args=(--compare-vtk --shading pre-integrated --azimuth 35 --elevation 25 --zoom 1.3
+args=(--compare-vtk --azimuth 35 --elevation 25 --zoom 1.3
   --output "$build/mtpt_default.png")
 if [ $# -gt 0 ]; then args=("$@"); fi
 exec "$here/Testing/xvfb-launch.sh" "$build/example/mtpt_render" "${args[@]}"
