@@ -108,7 +108,10 @@ bool ReleaseIdleThreads()
 {
   // OpenMP 5.0's pause API: GCC's libgomp has it from GCC 10 on while still announcing
   // OpenMP 4.5 in _OPENMP.
-#if defined(_OPENMP) &&                                                                            \
+// LLVM's libomp (its omp.h defines KMP_VERSION_MAJOR) accepts the soft pause but, up to at
+// least LLVM 14, its workers keep spinning until their KMP_BLOCKTIME (200 ms) runs out, so
+// there it releases nothing and says so.
+#if defined(_OPENMP) && !defined(KMP_VERSION_MAJOR) &&                                             \
   (_OPENMP >= 201811 || (defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 10))
   return omp_in_parallel() == 0 && omp_pause_resource_all(omp_pause_soft) == 0;
 #else

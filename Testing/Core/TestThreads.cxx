@@ -92,6 +92,12 @@ TEST(Threads, ReleasedWorkersStopBusyWaiting)
     }
     return team;
   };
+  EXPECT_EQ(region(), 2);
+  if (!mtpt::ReleaseIdleThreads())
+  {
+    // LLVM's libomp (the sanitizer builds): see ReleaseIdleThreads.
+    GTEST_SKIP() << "this OpenMP runtime cannot release its idle workers";
+  }
   for (int attempt = 0; attempt < 3; ++attempt)
   {
     EXPECT_EQ(region(), 2);
