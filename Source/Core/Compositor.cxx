@@ -183,6 +183,9 @@ void Compositor::Bin(const Fan* fans, std::size_t count, int threads)
     for (int b = omp_get_thread_num(); b < blocks; b += omp_get_num_threads())
     {
       std::uint32_t* counts = this->Counts.data() + b * tiles;
+      // Counted in locals, stored once: the blocks' entries share cache lines.
+      std::size_t blockBinned = 0;
+      PixelRegion region = touched[b];
       for (std::size_t i = count * b / blocks; i < count * (b + 1) / blocks; ++i)
       {
         int x0, x1, y0, y1;
@@ -192,8 +195,7 @@ void Compositor::Bin(const Fan* fans, std::size_t count, int threads)
           range = TileRange{ 1, 0, 0, 0 };
           continue;
         }
-        ++binned[b];
-        PixelRegion& region = touched[b];
+        ++blockBinned;
         region = { std::min(region.x0, x0), std::min(region.y0, y0), std::max(region.x1, x1 + 1),
           std::max(region.y1, y1 + 1) };
         range = TileRange{ static_cast<std::uint16_t>(x0 / TileSize),
@@ -207,6 +209,8 @@ void Compositor::Bin(const Fan* fans, std::size_t count, int threads)
           }
         }
       }
+      binned[b] = blockBinned;
+      touched[b] = region;
     }
   }
   // Places: tile by tile, block by block; each count becomes its block's cursor.
