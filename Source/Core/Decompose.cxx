@@ -548,6 +548,12 @@ void DecomposeAllByRank(const Access& cells, const DecomposeInput& input, const 
   int threads)
 {
   const float* cellScalars = CellScalars(input);
+  // Cells the depth keys already found to cover a pixel centre are not tested again.
+  DecomposeInput cellInput = input;
+  if (input.cellsCoverPixels)
+  {
+    cellInput.viewportWidth = cellInput.viewportHeight = 0;
+  }
   ParallelSlots(static_cast<std::int64_t>(input.cells.cellCount), threads,
     [&](std::int64_t c)
     {
@@ -555,7 +561,7 @@ void DecomposeAllByRank(const Access& cells, const DecomposeInput& input, const 
       const std::uint64_t k = static_cast<std::uint64_t>(rank[c]) - firstRank;
       if (rank[c] != NotInOrder && k < count)
       {
-        DecomposeCell(cells, input, cellScalars, static_cast<std::uint32_t>(c),
+        DecomposeCell(cells, cellInput, cellScalars, static_cast<std::uint32_t>(c),
           static_cast<std::int64_t>(k), writer, classes);
       }
     });

@@ -192,6 +192,7 @@ bool FramePipeline::Prepare(const FrameInput& input, int threads)
   d.scalars = input.scalars;
   d.viewportWidth = input.viewportWidth;
   d.viewportHeight = input.viewportHeight;
+  d.cellsCoverPixels = true; // UpdateOrder's keys culled with this viewport (KeyCulling)
   return this->Continue(Stage::Order);
 }
 

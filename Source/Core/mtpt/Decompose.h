@@ -144,6 +144,10 @@ struct DecomposeInput
   /// centre (sub-pixel cells, cells off screen) become CoversNoPixel slots: same image,
   /// much less work for small images. 0: no culling.
   int viewportWidth = 0, viewportHeight = 0;
+  /// Set when the cells of the order were already tested against this viewport (the depth
+  /// keys' culling, KeyCulling): the by-rank decompositions then skip the test for cells
+  /// and keep it for near-plane pieces (DecomposeIntoSlot, DecomposeIntoFan).
+  bool cellsCoverPixels = false;
 };
 
 /**
