@@ -333,8 +333,8 @@ namespace
 /// Calls pixel(i, image) for each pixel of `region`: i counts region pixels, and image points
 /// at its premultiplied R (G, B, A one plane apart), or is null where nothing was drawn.
 template <typename Pixel>
-void ForEachPixel(const PixelRegion& region, int tilesX,
-  const std::vector<std::uint8_t>& cleared, const float* image, int threads, Pixel&& pixel)
+void ForEachPixel(const PixelRegion& region, int tilesX, const std::vector<std::uint8_t>& cleared,
+  const float* image, int threads, Pixel&& pixel)
 {
   const int width = region.x1 - region.x0;
   const std::size_t pixels = static_cast<std::size_t>(std::max(width, 0)) *

@@ -312,8 +312,7 @@ inline Projection Decompose(const ProjectedPoint* const c[4], const float scalar
 }
 
 /// The decomposition of one tetrahedron into a fan (Decompose.h).
-inline Projection DecomposeToFan(
-  const ProjectedPoint* const c[4], const float scalars[4], Fan& fan)
+inline Projection DecomposeToFan(const ProjectedPoint* const c[4], const float scalars[4], Fan& fan)
 {
   double x[4], y[4];
   FanGeometry g;

@@ -51,8 +51,7 @@ bool FramePipeline::Inputs::operator==(const Inputs& o) const
 {
   return points == o.points && pointCount == o.pointCount && connectivity == o.connectivity &&
     offsets == o.offsets && cellSize == o.cellSize && cellCount == o.cellCount &&
-    scalars == o.scalars &&
-    association == o.association && dataVersion == o.dataVersion;
+    scalars == o.scalars && association == o.association && dataVersion == o.dataVersion;
 }
 
 FramePipeline::FramePipeline()
@@ -80,8 +79,7 @@ std::size_t FramePipeline::MemoryBytes() const
   return Bytes(this->ProjectedPoints) + Bytes(this->CellRanges) + Bytes(this->Visible) +
     Bytes(this->NewVisible) + Bytes(this->SortedKeys) + Bytes(this->Scratch) + Bytes(this->Rank) +
     Bytes(this->VertexBuffer) + Bytes(this->IndexBuffer) + Bytes(this->FanBuffer) +
-    Bytes(this->Classes) +
-    Bytes(this->Pieces) + Bytes(this->PieceKeys) + Bytes(this->Crossing) +
+    Bytes(this->Classes) + Bytes(this->Pieces) + Bytes(this->PieceKeys) + Bytes(this->Crossing) +
     this->Order->MemoryBytes();
 }
 
@@ -287,9 +285,8 @@ bool FramePipeline::UpdateOrder(
   culling.frustum = input.cullFrustum;
   culling.viewportWidth = input.viewportWidth;
   culling.viewportHeight = input.viewportHeight;
-  const KeyCounts counts = ComputeVisibleDepthKeys(this->ProjectedPoints.data(),
-    input.points.count, input.cells, list, listCount, input.perspective, culling,
-    this->SortedKeys.data(), threads);
+  const KeyCounts counts = ComputeVisibleDepthKeys(this->ProjectedPoints.data(), input.points.count,
+    input.cells, list, listCount, input.perspective, culling, this->SortedKeys.data(), threads);
   const std::size_t frustumCulled = counts.frustumCulled;
   std::size_t count = counts.kept;
   this->SortedKeys.resize(count);
@@ -313,9 +310,8 @@ bool FramePipeline::UpdateOrder(
     this->OrderVisibleVersion == this->VisibleVersion &&
     this->OrderPerspective == input.perspective && this->OrderFrustumCulled == 0 &&
     frustumCulled == 0 && this->OrderPixelCulled == 0 && counts.pixelCulled == 0 &&
-    nearClipped == 0 && this->OrderNearClipped == 0 &&
-    count == this->SortedSize && angle < NearlySortedMaxAngle &&
-    this->Mutation == OrderMutation::None;
+    nearClipped == 0 && this->OrderNearClipped == 0 && count == this->SortedSize &&
+    angle < NearlySortedMaxAngle && this->Mutation == OrderMutation::None;
   bool fromPrevious = false;
   if (samePermutation)
   {
@@ -549,14 +545,15 @@ bool FramePipeline::DecomposeWindow(Window& window, std::size_t& first, std::siz
   this->LastTimes.decompose += detail::SecondsSince(start);
   this->LastStats.pixelCulled += pixelCulled;
   this->LastStats.notDrawable += notDrawable;
-  window = Window{ true, this->OrderVersion, first, count,
-    { in.viewportWidth, in.viewportHeight }, pixelCulled, notDrawable };
+  window = Window{ true, this->OrderVersion, first, count, { in.viewportWidth, in.viewportHeight },
+    pixelCulled, notDrawable };
   return true;
 }
 
 void FramePipeline::DecomposeBatch(std::size_t first, std::size_t count, int threads)
 {
-  const bool decomposed = this->DecomposeWindow(this->SlotWindow, first, count, threads,
+  const bool decomposed = this->DecomposeWindow(
+    this->SlotWindow, first, count, threads,
     [&](const DecomposeInput& in, std::size_t from, std::size_t n, int team)
     {
       EnsureSize(this->VertexBuffer, VerticesPerTetrahedron * n);
@@ -576,7 +573,8 @@ void FramePipeline::DecomposeBatch(std::size_t first, std::size_t count, int thr
 
 void FramePipeline::DecomposeFans(std::size_t first, std::size_t count, int threads)
 {
-  const bool decomposed = this->DecomposeWindow(this->FanWindow, first, count, threads,
+  const bool decomposed = this->DecomposeWindow(
+    this->FanWindow, first, count, threads,
     [&](const DecomposeInput& in, std::size_t from, std::size_t n, int team)
     {
       EnsureSize(this->FanBuffer, n);

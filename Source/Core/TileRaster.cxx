@@ -321,8 +321,8 @@ void CoverSpans(const Edges& edges, int x0, int x1, int y0, int y1, Span&& span)
  * Clips the triangle (X, Y) to the box [lo, hiX] x [lo, hiY] (Sutherland-Hodgman), writing
  * the polygon's vertices to px, py (at most 7) and returning their number.
  */
-int ClipToBox(const double X[3], const double Y[3], double lo, double hiX, double hiY,
-  double px[9], double py[9])
+int ClipToBox(const double X[3], const double Y[3], double lo, double hiX, double hiY, double px[9],
+  double py[9])
 {
   double ax[9], ay[9];
   int n = 3;
@@ -432,8 +432,8 @@ inline void RowStart(const Planes& p, int j, float start[6])
 }
 
 /// VTK-compatible shading of the pixels [lo, hi] of row y.
-void ShadeCompatible(const RasterFrame& f, const TileTarget& tile, const Planes& p, int y,
-  int lo, int hi)
+void ShadeCompatible(
+  const RasterFrame& f, const TileTarget& tile, const Planes& p, int y, int lo, int hi)
 {
   const FragmentTag d;
   const int lanes = static_cast<int>(hn::Lanes(d));
@@ -519,31 +519,362 @@ void ShadeSmall(const RasterFrame& f, const TileTarget& tile, const Edges& edges
   }
 }
 
-/// Pre-integrated shading of the pixels [lo, hi] of row y, pixel by pixel (the table's
-/// integrals are looked up per fragment).
-void ShadeIntegrated(const RasterFrame& f, const TileTarget& tile, Mode mode, const Planes& p,
-  int y, int lo, int hi)
+/// Pre-integrated fragments are shaded this many at a time, a double-precision lane each.
+using SegmentTag = hn::CappedTag<double, 4>;
+constexpr int SegmentLanes = 4;
+
+/// Whether `tf` and `table` can shade pre-integrated fragments (else every segment is
+/// transparent, as PreIntegrationTable::Segment returns it).
+inline bool CanPreIntegrate(const TransferFunctionTable& tf, const PreIntegrationTable& table)
 {
+  return tf.size >= 1 && table.integrals.size() >= 4 * static_cast<std::size_t>(tf.size);
+}
+
+/**
+ * What the vector functions below share: the transfer-function table, its prefix integrals
+ * and the lane count. They compute what PreIntegrationTable::Segment and its helpers
+ * (TransferFunctionTable.cxx) compute, with the same formulas in the same order, one
+ * fragment per lane; only the exponential is Highway's (within a few ulp of std::expm1).
+ * Table reads are per lane: the table is small and stays in cache. Arrays hold
+ * SegmentLanes values, of which the first hn::Lanes(d) are used.
+ */
+struct SegmentTable
+{
+  const TransferFunctionTable& tf;
+  const double* integrals;
+};
+
+/// Entry coordinate u as interval index (a whole number, in a double) and fraction, as
+/// Split: the index is clamped to the table's last interval and to 0, so lanes past the
+/// end of their segment (masked off later) read inside the table too.
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE void SplitLanes(D d, const SegmentTable& t, V u, V& index, V& fraction)
+{
+  const double lastInterval = std::max(t.tf.size - 2, 0);
+  index = hn::Max(hn::Zero(d), hn::Min(hn::Floor(u), hn::Set(d, lastInterval)));
+  fraction = hn::Sub(u, index);
+}
+
+/// IntervalAt per lane: attenuation and colour at the interval's start and their changes.
+template <class D, class V = hn::Vec<D>>
+struct IntervalLanes
+{
+  V tau, dTau, c[3], dC[3];
+};
+
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE IntervalLanes<D> IntervalsAt(D d, const SegmentTable& t, V index)
+{
+  HWY_ALIGN double at[SegmentLanes] = {}, start[4][SegmentLanes] = {}, change[4][SegmentLanes] = {};
+  hn::Store(index, d, at);
+  for (std::size_t l = 0; l < hn::Lanes(d); ++l)
+  {
+    const int i = static_cast<int>(at[l]);
+    const int j = std::min(i + 1, t.tf.size - 1);
+    const float* a = t.tf.table + 4 * i;
+    const float* b = t.tf.table + 4 * j;
+    for (int k = 0; k < 4; ++k)
+    {
+      start[k][l] = a[k];
+      change[k][l] = static_cast<double>(b[k]) - a[k];
+    }
+  }
+  IntervalLanes<D> v;
+  v.tau = hn::Load(d, start[3]);
+  v.dTau = hn::Load(d, change[3]);
+  for (int k = 0; k < 3; ++k)
+  {
+    v.c[k] = hn::Load(d, start[k]);
+    v.dC[k] = hn::Load(d, change[k]);
+  }
+  return v;
+}
+
+/// Partial per lane: integrals of tau and c tau from the interval's start to fraction f.
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE void PartialLanes(D d, const IntervalLanes<D>& v, V f, V& t, V e[3])
+{
+  const V half = hn::Set(d, 0.5), third = hn::Set(d, 3.0);
+  t = hn::Mul(f, hn::Add(v.tau, hn::Mul(hn::Mul(half, f), v.dTau)));
+  for (int k = 0; k < 3; ++k)
+  {
+    const V linear =
+      hn::Mul(hn::Mul(half, f), hn::Add(hn::Mul(v.c[k], v.dTau), hn::Mul(v.dC[k], v.tau)));
+    const V quadratic = hn::Div(hn::Mul(hn::Mul(hn::Mul(f, f), v.dC[k]), v.dTau), third);
+    e[k] = hn::Mul(f, hn::Add(hn::Add(hn::Mul(v.c[k], v.tau), linear), quadratic));
+  }
+}
+
+/// The prefix integrals (T, E_r, E_g, E_b) at each lane's interval index.
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE void IntegralsAt(D d, const SegmentTable& t, V index, V values[4])
+{
+  HWY_ALIGN double at[SegmentLanes] = {}, gathered[4][SegmentLanes] = {};
+  hn::Store(index, d, at);
+  for (std::size_t l = 0; l < hn::Lanes(d); ++l)
+  {
+    const double* source = t.integrals + 4 * static_cast<std::size_t>(at[l]);
+    for (int k = 0; k < 4; ++k)
+    {
+      gathered[k][l] = source[k];
+    }
+  }
+  for (int k = 0; k < 4; ++k)
+  {
+    values[k] = hn::Load(d, gathered[k]);
+  }
+}
+
+/// SpanMeans per lane: means of tau and of c tau over the entry interval [u0, u1].
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE void SpanMeansLanes(D d, const SegmentTable& t, V u0, V u1, V& tau, V e[3])
+{
+  V i0, f0, i1, f1;
+  SplitLanes(d, t, u0, i0, f0);
+  SplitLanes(d, t, u1, i1, f1);
+  const auto same = hn::Eq(i0, i1);
+  const IntervalLanes<D> v0 = IntervalsAt(d, t, i0);
+  tau = hn::Zero(d);
+  for (int k = 0; k < 3; ++k)
+  {
+    e[k] = hn::Zero(d);
+  }
+  if (!hn::AllFalse(d, same))
+  {
+    // Inside one interval: the means in factored form, exact as u1 -> u0.
+    const V s1 = hn::Mul(hn::Set(d, 0.5), hn::Add(f0, f1));
+    const V s2 =
+      hn::Div(hn::Add(hn::Add(hn::Mul(f0, f0), hn::Mul(f0, f1)), hn::Mul(f1, f1)), hn::Set(d, 3.0));
+    tau = hn::Add(v0.tau, hn::Mul(s1, v0.dTau));
+    for (int k = 0; k < 3; ++k)
+    {
+      e[k] = hn::Add(hn::Add(hn::Mul(v0.c[k], v0.tau),
+                       hn::Mul(s1, hn::Add(hn::Mul(v0.c[k], v0.dTau), hn::Mul(v0.dC[k], v0.tau)))),
+        hn::Mul(hn::Mul(s2, v0.dC[k]), v0.dTau));
+    }
+    if (hn::AllTrue(d, same))
+    {
+      return;
+    }
+  }
+  V t0, t1, e0[3], e1[3], below[4], above[4];
+  PartialLanes(d, v0, f0, t0, e0);
+  PartialLanes(d, IntervalsAt(d, t, i1), f1, t1, e1);
+  IntegralsAt(d, t, i0, below);
+  IntegralsAt(d, t, i1, above);
+  // Lanes inside one interval keep the factored form (their quotient may be 0 / 0).
+  const V inverse = hn::Div(hn::Set(d, 1.0), hn::Sub(u1, u0));
+  const V spanTau = hn::Mul(hn::Sub(hn::Sub(hn::Add(above[0], t1), below[0]), t0), inverse);
+  tau = hn::IfThenElse(same, tau, spanTau);
+  for (int k = 0; k < 3; ++k)
+  {
+    const V span =
+      hn::Mul(hn::Sub(hn::Sub(hn::Add(above[1 + k], e1[k]), below[1 + k]), e0[k]), inverse);
+    e[k] = hn::IfThenElse(same, e[k], span);
+  }
+}
+
+/// LookupEntry per lane: the table's colour at entry coordinate u, rounded to float as
+/// LookupEntry rounds it.
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE void LookupLanes(D d, const SegmentTable& t, V u, V rgb[3])
+{
+  V index, fraction;
+  SplitLanes(d, t, u, index, fraction);
+  HWY_ALIGN double at[SegmentLanes] = {}, start[3][SegmentLanes] = {}, change[3][SegmentLanes] = {};
+  hn::Store(index, d, at);
+  for (std::size_t l = 0; l < hn::Lanes(d); ++l)
+  {
+    const int i = static_cast<int>(at[l]);
+    const int j = std::min(i + 1, t.tf.size - 1);
+    for (int k = 0; k < 3; ++k)
+    {
+      start[k][l] = t.tf.table[4 * i + k];
+      change[k][l] = t.tf.table[4 * j + k] - t.tf.table[4 * i + k]; // in float, as there
+    }
+  }
+  const hn::Rebind<float, D> df;
+  for (int k = 0; k < 3; ++k)
+  {
+    const V value = hn::Add(hn::Load(d, start[k]), hn::Mul(fraction, hn::Load(d, change[k])));
+    rgb[k] = hn::PromoteTo(d, hn::DemoteTo(df, value));
+  }
+}
+
+/// TransferFunctionTable::EntryCoordinate per lane (NaN gives 0).
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE V EntryCoordinates(D d, const TransferFunctionTable& tf, V scalar)
+{
+  const double span = tf.high > tf.low ? tf.high - tf.low : 1.0;
+  const V u = hn::Div(
+    hn::Mul(hn::Sub(scalar, hn::Set(d, tf.low)), hn::Set(d, tf.size - 1.0)), hn::Set(d, span));
+  return hn::IfThenElseZero(hn::Gt(u, hn::Zero(d)), hn::Min(u, hn::Set(d, tf.size - 1.0)));
+}
+
+/**
+ * PreIntegrationTable::Segment for the fragments front[l], back[l], length[l], l < Lanes(d):
+ * rgba[k][l] its colour (k < 3, not premultiplied) and opacity (k = 3). The caller checks
+ * CanPreIntegrate once.
+ */
+template <class D, class V = hn::Vec<D>>
+void SegmentsOfLanes(D d, const SegmentTable& t, float inverseUnit, const float* front,
+  const float* back, const float* length, float rgba[4][SegmentLanes])
+{
+  HWY_ALIGN double in[3][SegmentLanes] = {};
+  for (std::size_t l = 0; l < hn::Lanes(d); ++l)
+  {
+    in[0][l] = front[l];
+    in[1][l] = back[l];
+    in[2][l] = length[l];
+  }
+  const V zero = hn::Zero(d), one = hn::Set(d, 1.0);
+  const V ua = EntryCoordinates(d, t.tf, hn::Load(d, in[0]));
+  const V ub = EntryCoordinates(d, t.tf, hn::Load(d, in[1]));
+  const V len = hn::Load(d, in[2]);
+  const auto drawn = hn::Gt(len, zero);
+  const V depth = hn::Mul(len, hn::Set(d, static_cast<double>(inverseUnit)));
+  // Steps: one per PreIntegrationStepEntries entries crossed and one per unit of optical
+  // depth, at most MaxPreIntegrationSteps.
+  V whole, wholeE[3];
+  SpanMeansLanes(d, t, ua, ub, whole, wholeE);
+  const V wanted = hn::Max(hn::Div(hn::Abs(hn::Sub(ub, ua)), hn::Set(d, PreIntegrationStepEntries)),
+    hn::Mul(whole, depth));
+  const V steps = hn::Min(
+    hn::Set(d, static_cast<double>(MaxPreIntegrationSteps)), hn::Max(one, hn::Ceil(wanted)));
+  HWY_ALIGN double stepCounts[SegmentLanes] = {};
+  hn::Store(hn::IfThenElseZero(drawn, steps), d, stepCounts);
+  const int most = static_cast<int>(*std::max_element(stepCounts, stepCounts + hn::Lanes(d)));
+  const auto several = hn::Gt(steps, one);
+  V colour[3] = { zero, zero, zero }, alpha = zero;
+  const V half = hn::Set(d, 0.5);
+  for (int s = 0; s < most; ++s)
+  {
+    const V u0 =
+      hn::Add(ua, hn::Div(hn::Mul(hn::Sub(ub, ua), hn::Set(d, static_cast<double>(s))), steps));
+    const V u1 = hn::Add(ua, hn::Div(hn::Mul(hn::Sub(ub, ua), hn::Set(d, s + 1.0)), steps));
+    V tau = whole, e[3] = { wholeE[0], wholeE[1], wholeE[2] };
+    if (most > 1)
+    {
+      V stepTau, stepE[3];
+      SpanMeansLanes(d, t, u0, u1, stepTau, stepE);
+      tau = hn::IfThenElse(several, stepTau, tau);
+      for (int k = 0; k < 3; ++k)
+      {
+        e[k] = hn::IfThenElse(several, stepE[k], e[k]);
+      }
+    }
+    const auto active = hn::And(hn::And(drawn, hn::Lt(hn::Set(d, s), steps)), hn::Gt(tau, zero));
+    if (hn::AllFalse(d, active))
+    {
+      continue;
+    }
+    const V depthOfStep = hn::Div(hn::Mul(tau, depth), steps);
+    const V a = hn::Neg(hn::Expm1(d, hn::Neg(depthOfStep)));
+    // 1 / (e^d - 1) = (1 - a) / a, as in Segment.
+    const V h = hn::IfThenElse(hn::Lt(depthOfStep, hn::Set(d, 1e-3)),
+      hn::Sub(half, hn::Div(depthOfStep, hn::Set(d, 12.0))),
+      hn::Sub(hn::Div(one, depthOfStep), hn::Div(hn::Sub(one, a), a)));
+    V c0[3], c1[3];
+    LookupLanes(d, t, u0, c0);
+    LookupLanes(d, t, u1, c1);
+    const V weight = hn::Mul(hn::Sub(one, alpha), a);
+    for (int k = 0; k < 3; ++k)
+    {
+      const V mean = hn::Div(e[k], tau);
+      const V low = hn::Min(hn::Min(mean, c0[k]), c1[k]);
+      const V high = hn::Max(hn::Max(mean, c0[k]), c1[k]);
+      const V c = hn::Add(mean, hn::Mul(hn::Sub(c0[k], c1[k]), hn::Sub(half, h)));
+      colour[k] = hn::IfThenElse(
+        active, hn::Add(colour[k], hn::Mul(weight, hn::Min(high, hn::Max(low, c)))), colour[k]);
+    }
+    alpha = hn::IfThenElse(active, hn::Add(alpha, hn::Mul(hn::Sub(one, alpha), a)), alpha);
+  }
+  const auto seen = hn::Gt(alpha, zero);
+  const hn::Rebind<float, D> df;
+  HWY_ALIGN float out[SegmentLanes] = {};
+  for (int k = 0; k < 3; ++k)
+  {
+    hn::Store(hn::DemoteTo(df, hn::IfThenElseZero(seen, hn::Div(colour[k], alpha))), df, out);
+    std::copy(out, out + hn::Lanes(d), rgba[k]);
+  }
+  hn::Store(hn::DemoteTo(df, hn::IfThenElseZero(seen, alpha)), df, out);
+  std::copy(out, out + hn::Lanes(d), rgba[3]);
+}
+
+/**
+ * Pre-integrated fragments waiting to be shaded, a vector's worth at a time. They may come
+ * from any rows and triangles of the tile: a segment's colour does not depend on the image,
+ * and ShadeWaiting blends them one after another in the order they came, so a pixel covered
+ * twice is blended as it would be one fragment at a time. The rasterizer shades what is
+ * left at the end of the tile.
+ */
+struct WaitingFragments
+{
+  float front[SegmentLanes] = {}, back[SegmentLanes] = {}, length[SegmentLanes] = {};
+  int x[SegmentLanes] = {}, y[SegmentLanes] = {}; ///< tile column, image row
+  std::size_t count = 0;
+};
+
+void ShadeWaiting(const RasterFrame& f, const TileTarget& tile, WaitingFragments& w)
+{
+  if (w.count == 0)
+  {
+    return;
+  }
+  const SegmentTag d;
+  std::fill(w.length + w.count, w.length + SegmentLanes, 0.0f); // unused lanes: no segment
+  float rgba[4][SegmentLanes] = {};
+  SegmentsOfLanes(d, SegmentTable{ f.transferFunction, f.preIntegration->integrals.data() },
+    f.inverseUnit, w.front, w.back, w.length, rgba);
+  for (std::size_t l = 0; l < w.count; ++l)
+  {
+    const float opacity = rgba[3][l];
+    if (!(opacity > 0.0f))
+    {
+      continue;
+    }
+    const TileRow row = RowOf(tile, w.y[l]);
+    const int x = w.x[l];
+    const float rest = 1.0f - opacity;
+    row.r[x] = opacity * rgba[0][l] + rest * row.r[x];
+    row.g[x] = opacity * rgba[1][l] + rest * row.g[x];
+    row.b[x] = opacity * rgba[2][l] + rest * row.b[x];
+    row.a[x] = opacity + rest * row.a[x];
+  }
+  w.count = 0;
+}
+
+/// Pre-integrated shading of the pixels [lo, hi] of row y: each fragment's scalars and
+/// length from the planes, queued in `waiting` (shaded whenever a vector's worth waits).
+void ShadeIntegrated(const RasterFrame& f, const TileTarget& tile, Mode mode, const Planes& p,
+  int y, int lo, int hi, WaitingFragments& waiting)
+{
+  if (!CanPreIntegrate(f.transferFunction, *f.preIntegration))
+  {
+    return; // every segment transparent
+  }
   const TileRow row = RowOf(tile, y);
   const float j = static_cast<float>(y - tile.y0);
+  const std::size_t lanes = hn::Lanes(SegmentTag());
   for (int x = lo - tile.x0; x <= hi - tile.x0; ++x)
   {
     const float i = static_cast<float>(x);
     auto value = [&](int k) { return p.base[k] + p.dx[k] * i + p.dy[k] * j; };
-    float front, back, length, z;
+    const std::size_t n = waiting.count;
+    float z;
     if (mode == Mode::Integrated)
     {
-      front = value(0);
-      back = value(1);
-      length = value(2);
+      waiting.front[n] = value(0);
+      waiting.back[n] = value(1);
+      waiting.length[n] = value(2);
       z = value(3);
     }
     else
     {
       const double frontW = value(1), backW = value(3), rayX = value(4), rayY = value(5);
-      front = static_cast<float>(value(0) / frontW);
-      back = static_cast<float>(value(2) / backW);
-      length = static_cast<float>(
+      waiting.front[n] = static_cast<float>(value(0) / frontW);
+      waiting.back[n] = static_cast<float>(value(2) / backW);
+      waiting.length[n] = static_cast<float>(
         std::max(0.0, 1.0 / backW - 1.0 / frontW) * std::sqrt(1.0 + rayX * rayX + rayY * rayY));
       z = value(6);
     }
@@ -551,18 +882,12 @@ void ShadeIntegrated(const RasterFrame& f, const TileTarget& tile, Mode mode, co
     {
       continue; // clipped by the near or far plane, or behind opaque geometry
     }
-    float rgba[4];
-    f.preIntegration->Segment(f.transferFunction, front, back, length, f.inverseUnit, rgba);
-    const float opacity = rgba[3];
-    if (!(opacity > 0.0f))
+    waiting.x[n] = x;
+    waiting.y[n] = y;
+    if (++waiting.count == lanes)
     {
-      continue;
+      ShadeWaiting(f, tile, waiting);
     }
-    const float rest = 1.0f - opacity;
-    row.r[x] = opacity * rgba[0] + rest * row.r[x];
-    row.g[x] = opacity * rgba[1] + rest * row.g[x];
-    row.b[x] = opacity * rgba[2] + rest * row.b[x];
-    row.a[x] = opacity + rest * row.a[x];
   }
 }
 
@@ -571,7 +896,7 @@ void ShadeIntegrated(const RasterFrame& f, const TileTarget& tile, Mode mode, co
  * values and the attribute planes are set up only once a pixel is known to be covered.
  */
 void DrawTriangle(const RasterFrame& f, const TileTarget& tile, Mode mode, Corner* const v[3],
-  RasterCounts& counts)
+  WaitingFragments& waiting, RasterCounts& counts)
 {
   double minX = v[0]->X, maxX = minX, minY = v[0]->Y, maxY = minY;
   for (int k = 1; k < 3; ++k)
@@ -584,8 +909,10 @@ void DrawTriangle(const RasterFrame& f, const TileTarget& tile, Mode mode, Corne
   // Pixel centres x + 0.5 within the bounding box and the tile.
   const double tx0 = tile.x0, tx1 = tile.x0 + tile.width - 1.0;
   const double ty0 = tile.y0, ty1 = tile.y0 + tile.height - 1.0;
-  const double bx0 = std::max(tx0, std::ceil(minX - 0.5)), bx1 = std::min(tx1, std::floor(maxX - 0.5));
-  const double by0 = std::max(ty0, std::ceil(minY - 0.5)), by1 = std::min(ty1, std::floor(maxY - 0.5));
+  const double bx0 = std::max(tx0, std::ceil(minX - 0.5)),
+               bx1 = std::min(tx1, std::floor(maxX - 0.5));
+  const double by0 = std::max(ty0, std::ceil(minY - 0.5)),
+               by1 = std::min(ty1, std::floor(maxY - 0.5));
   if (!(bx0 <= bx1 && by0 <= by1))
   {
     return;
@@ -623,7 +950,7 @@ void DrawTriangle(const RasterFrame& f, const TileTarget& tile, Mode mode, Corne
     }
     else
     {
-      ShadeIntegrated(f, tile, mode, *p, y, lo, hi);
+      ShadeIntegrated(f, tile, mode, *p, y, lo, hi, waiting);
     }
   };
   const int x0 = static_cast<int>(bx0), x1 = static_cast<int>(bx1);
@@ -666,6 +993,7 @@ void RasterizeTileImpl(const RasterFrame& f, const TileTarget& tile, const Fan* 
   const Mode mode = !f.preIntegration
     ? Mode::Compatible
     : (f.interpolation.perspective ? Mode::ExactIntegral : Mode::Integrated);
+  WaitingFragments waiting; // pre-integrated fragments
   for (std::size_t e = 0; e < count; ++e)
   {
     const Fan& fan = fans[e];
@@ -684,9 +1012,10 @@ void RasterizeTileImpl(const RasterFrame& f, const TileTarget& tile, const Fan* 
     for (int k = 0; k < triangles; ++k)
     {
       Corner* v[3] = { &corners[k], &corners[(k + 1) % n], &corners[n] };
-      DrawTriangle(f, tile, mode, v, counts);
+      DrawTriangle(f, tile, mode, v, waiting, counts);
     }
   }
+  ShadeWaiting(f, tile, waiting);
 }
 
 const char* TargetName()
@@ -709,6 +1038,36 @@ void OpacitiesOfDensitiesImpl(const float* density, float* opacity, std::size_t 
   }
 }
 
+void PreIntegratedSegmentsImpl(const TransferFunctionTable& tf, const PreIntegrationTable& table,
+  const float* front, const float* back, const float* length, float inverseUnit, float* rgba,
+  std::size_t count)
+{
+  std::fill(rgba, rgba + 4 * count, 0.0f);
+  if (!CanPreIntegrate(tf, table))
+  {
+    return;
+  }
+  const SegmentTag d;
+  const SegmentTable t{ tf, table.integrals.data() };
+  for (std::size_t i = 0; i < count; i += hn::Lanes(d))
+  {
+    const std::size_t n = std::min(hn::Lanes(d), count - i);
+    float f[SegmentLanes] = {}, b[SegmentLanes] = {}, l[SegmentLanes] = {},
+          out[4][SegmentLanes] = {};
+    std::copy(front + i, front + i + n, f);
+    std::copy(back + i, back + i + n, b);
+    std::copy(length + i, length + i + n, l);
+    SegmentsOfLanes(d, t, inverseUnit, f, b, l, out);
+    for (std::size_t k = 0; k < n; ++k)
+    {
+      for (int c = 0; c < 4; ++c)
+      {
+        rgba[4 * (i + k) + c] = out[c][k];
+      }
+    }
+  }
+}
+
 } // namespace HWY_NAMESPACE
 } // namespace detail
 } // namespace mtpt
@@ -723,6 +1082,7 @@ namespace detail
 HWY_EXPORT(RasterizeTileImpl);
 HWY_EXPORT(TargetName);
 HWY_EXPORT(OpacitiesOfDensitiesImpl);
+HWY_EXPORT(PreIntegratedSegmentsImpl);
 
 void RasterizeTile(const RasterFrame& frame, const TileTarget& tile, const Fan* fans,
   std::size_t count, RasterCounts& counts)
@@ -738,6 +1098,14 @@ const char* RasterTargetName()
 void OpacitiesOfDensities(const float* density, float* opacity, std::size_t count)
 {
   HWY_DYNAMIC_DISPATCH(OpacitiesOfDensitiesImpl)(density, opacity, count);
+}
+
+void PreIntegratedSegments(const TransferFunctionTable& tf, const PreIntegrationTable& table,
+  const float* front, const float* back, const float* length, float inverseUnit, float* rgba,
+  std::size_t count)
+{
+  HWY_DYNAMIC_DISPATCH(PreIntegratedSegmentsImpl)
+  (tf, table, front, back, length, inverseUnit, rgba, count);
 }
 
 } // namespace detail

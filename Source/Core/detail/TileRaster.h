@@ -59,6 +59,14 @@ const char* RasterTargetName();
  */
 void OpacitiesOfDensities(const float* density, float* opacity, std::size_t count);
 
+/**
+ * rgba[4i, 4i + 4) = PreIntegrationTable::Segment of fragment i, computed as RasterizeTile's
+ * pre-integrated fragments compute it (several fragments per SIMD vector), for tests.
+ */
+void PreIntegratedSegments(const TransferFunctionTable& tf, const PreIntegrationTable& table,
+  const float* front, const float* back, const float* length, float inverseUnit, float* rgba,
+  std::size_t count);
+
 } // namespace detail
 } // namespace mtpt
 
