@@ -531,8 +531,8 @@ inline bool CanPreIntegrate(const TransferFunctionTable& tf, const PreIntegratio
 }
 
 /**
- * What the vector functions below share: the transfer-function table, its prefix integrals
- * and the lane count. They compute what PreIntegrationTable::Segment and its helpers
+ * What the vector functions below share: the transfer-function table and its prefix
+ * integrals. They compute what PreIntegrationTable::Segment and its helpers
  * (TransferFunctionTable.cxx) compute, with the same formulas in the same order, one
  * fragment per lane; only the exponential is Highway's (within a few ulp of std::expm1).
  * Table reads are per lane: the table is small and stays in cache. Arrays hold
