@@ -523,13 +523,6 @@ void ShadeSmall(const RasterFrame& f, const TileTarget& tile, const Edges& edges
 using SegmentTag = hn::CappedTag<double, 4>;
 constexpr int SegmentLanes = 4;
 
-/// Whether `tf` and `table` can shade pre-integrated fragments (else every segment is
-/// transparent, as PreIntegrationTable::Segment returns it).
-inline bool CanPreIntegrate(const TransferFunctionTable& tf, const PreIntegrationTable& table)
-{
-  return tf.size >= 1 && table.integrals.size() >= 4 * static_cast<std::size_t>(tf.size);
-}
-
 /**
  * What the vector functions below share: the transfer-function table and its prefix
  * integrals. They compute what PreIntegrationTable::Segment and its helpers
@@ -714,7 +707,7 @@ HWY_INLINE V EntryCoordinates(D d, const TransferFunctionTable& tf, V scalar)
 /**
  * PreIntegrationTable::Segment for the fragments front[l], back[l], length[l], l < Lanes(d):
  * rgba[k][l] its colour (k < 3, not premultiplied) and opacity (k = 3). The caller checks
- * CanPreIntegrate once.
+ * PreIntegrationTable::Covers once.
  */
 template <class D, class V = hn::Vec<D>>
 void SegmentsOfLanes(D d, const SegmentTable& t, float inverseUnit, const float* front,
@@ -849,7 +842,7 @@ void ShadeWaiting(const RasterFrame& f, const TileTarget& tile, WaitingFragments
 void ShadeIntegrated(const RasterFrame& f, const TileTarget& tile, Mode mode, const Planes& p,
   int y, int lo, int hi, WaitingFragments& waiting)
 {
-  if (!CanPreIntegrate(f.transferFunction, *f.preIntegration))
+  if (!f.preIntegration->Covers(f.transferFunction))
   {
     return; // every segment transparent
   }
@@ -1043,7 +1036,7 @@ void PreIntegratedSegmentsImpl(const TransferFunctionTable& tf, const PreIntegra
   std::size_t count)
 {
   std::fill(rgba, rgba + 4 * count, 0.0f);
-  if (!CanPreIntegrate(tf, table))
+  if (!table.Covers(tf))
   {
     return;
   }

@@ -146,8 +146,7 @@ void PreIntegrationTable::Segment(const TransferFunctionTable& tf, float front, 
   float length, float inverseUnit, float rgba[4]) const
 {
   rgba[0] = rgba[1] = rgba[2] = rgba[3] = 0.0f;
-  if (tf.size < 1 || this->integrals.size() < 4 * static_cast<std::size_t>(tf.size) ||
-    !(length > 0.0f))
+  if (!this->Covers(tf) || !(length > 0.0f))
   {
     return;
   }

@@ -24,8 +24,8 @@
  *   1 - exp(-a * length / unitDistance).
  *   Pre-integrated: the front scalar, back scalar and segment length are interpolated
  *   (in perspective views exactly, see PerspectiveInterpolation) and each fragment is
- *   shaded by PreIntegrationTable::Segment, so transfer-function features between the
- *   vertex scalars are not missed.
+ *   shaded with PreIntegrationTable::Segment's formulas (several per SIMD vector), so
+ *   transfer-function features between the vertex scalars are not missed.
  * - Blending, as glBlendFuncSeparate(SRC_ALPHA, ONE_MINUS_SRC_ALPHA, ONE,
  *   ONE_MINUS_SRC_ALPHA) starting from a transparent image: the image holds premultiplied
  *   colour and coverage alpha; Resolve composites it over what lies below.

@@ -8,6 +8,7 @@
 #ifndef mtpt_TransferFunctionTable_h
 #define mtpt_TransferFunctionTable_h
 
+#include <cstddef>
 #include <vector>
 
 namespace mtpt
@@ -57,10 +58,18 @@ struct PreIntegrationTable
   /// Builds the prefix sums of `tf` (recompute whenever the table changes).
   void Build(const TransferFunctionTable& tf);
 
+  /// Whether the prefix sums cover `tf` (built from it, not empty); if not, every segment
+  /// is transparent.
+  bool Covers(const TransferFunctionTable& tf) const
+  {
+    return tf.size >= 1 && this->integrals.size() >= 4 * static_cast<std::size_t>(tf.size);
+  }
+
   /**
    * Colour (not premultiplied) and opacity of a segment of eye-space length `length`
    * from scalar `front` to `back`, with `inverseUnit` = 1 / ScalarOpacityUnitDistance.
-   * The OpenGL fragment shader evaluates the same formulas.
+   * The OpenGL fragment shader evaluates the same formulas, and the CPU compositor too,
+   * several fragments per SIMD vector (detail/TileRaster.cxx, tested against this function).
    */
   void Segment(const TransferFunctionTable& tf, float front, float back, float length,
     float inverseUnit, float rgba[4]) const;
