@@ -19,10 +19,11 @@ namespace
 {
 
 /// One cell's stretch of one pixel's ray: ray parameters (0 at the near plane, 1 at the far
-/// plane) and the scalar at both ends.
+/// plane) and the values of the data's C channels at both ends (ScalarMapping).
+template <int C>
 struct Segment
 {
-  double enter, exit, scalarEnter, scalarExit;
+  double enter, exit, front[C], back[C];
   bool operator<(const Segment& o) const
   {
     if (this->enter != o.enter)
@@ -33,11 +34,21 @@ struct Segment
     {
       return this->exit < o.exit;
     }
-    if (this->scalarEnter != o.scalarEnter)
+    for (int k = 0; k < C; ++k)
     {
-      return this->scalarEnter < o.scalarEnter;
+      if (this->front[k] != o.front[k])
+      {
+        return this->front[k] < o.front[k];
+      }
     }
-    return this->scalarExit < o.scalarExit;
+    for (int k = 0; k < C; ++k)
+    {
+      if (this->back[k] != o.back[k])
+      {
+        return this->back[k] < o.back[k];
+      }
+    }
+    return false;
   }
 };
 
@@ -295,23 +306,107 @@ void IntegrateSegment(
   }
 }
 
+/**
+ * Dependent components, colour scalar and opacity scalar: along the segment the colour
+ * scalar runs linearly from c0 to c1 and the opacity scalar from o0 to o1. Split where
+ * either crosses a node of its function: on each piece colour and extinction are linear.
+ */
+void IntegrateColourAndOpacity(const TransferFunctions& tf, double length, double c0, double c1,
+  double o0, double o1, RayState& ray)
+{
+  if (!(length > 0))
+  {
+    return;
+  }
+  thread_local std::vector<double> cuts;
+  cuts.assign({ 0.0, 1.0 });
+  auto addCuts = [](const std::vector<double>& nodes, double v0, double v1)
+  {
+    const double low = std::min(v0, v1), high = std::max(v0, v1);
+    for (auto it = std::upper_bound(nodes.begin(), nodes.end(), low);
+         it != nodes.end() && *it < high; ++it)
+    {
+      cuts.push_back((*it - v0) / (v1 - v0));
+    }
+  };
+  addCuts(tf.colorScalar, c0, c1);
+  addCuts(tf.opacityScalar, o0, o1);
+  std::sort(cuts.begin(), cuts.end());
+  double colourStart[3];
+  tf.Color(c0, colourStart);
+  double tauStart = tf.Tau(o0);
+  for (std::size_t j = 1; j < cuts.size() && !ray.Done(); ++j)
+  {
+    const double f = cuts[j];
+    double colourEnd[3];
+    tf.Color(c0 + f * (c1 - c0), colourEnd);
+    const double tauEnd = tf.Tau(o0 + f * (o1 - o0));
+    const double pieceLength = (f - cuts[j - 1]) * length;
+    if (pieceLength > 0)
+    {
+      IntegratePiece(pieceLength, colourStart, colourEnd, tauStart, tauEnd, ray);
+    }
+    std::copy(colourEnd, colourEnd + 3, colourStart);
+    tauStart = tauEnd;
+  }
+}
+
+/// Dependent components, colours: RGB and attenuation run linearly from `front` to `back`
+/// (each clamped to [0, 1], as the mapper clamps them).
+void IntegrateColours(const TransferFunctions& tf, double length, const double front[4],
+  const double back[4], RayState& ray)
+{
+  if (!(length > 0))
+  {
+    return;
+  }
+  auto unit = [](double v) { return std::min(1.0, std::max(0.0, v)); };
+  const double c0[3] = { unit(front[0]), unit(front[1]), unit(front[2]) };
+  const double c1[3] = { unit(back[0]), unit(back[1]), unit(back[2]) };
+  IntegratePiece(
+    length, c0, c1, unit(front[3]) * tf.inverseUnit, unit(back[3]) * tf.inverseUnit, ray);
+}
+
+/// The segment integrated as its mapping says (one overload per channel count).
+inline void Integrate(
+  const TransferFunctions& tf, double length, const Segment<1>& s, RayState& ray)
+{
+  IntegrateSegment(tf, length, s.front[0], s.back[0], ray);
+}
+inline void Integrate(
+  const TransferFunctions& tf, double length, const Segment<2>& s, RayState& ray)
+{
+  IntegrateColourAndOpacity(tf, length, s.front[0], s.back[0], s.front[1], s.back[1], ray);
+}
+inline void Integrate(
+  const TransferFunctions& tf, double length, const Segment<4>& s, RayState& ray)
+{
+  IntegrateColours(tf, length, s.front, s.back, ray);
+}
+
 /// A cell prepared for ray clipping: face planes through its first point's frame.
 struct CellPlanes
 {
-  double origin[3];    ///< eye coordinates of the first point
-  double normal[4][3]; ///< inward normal of the face opposite point k, times |det|
-  double offset[4][3]; ///< a point of that face, relative to the first point
-  double scalar[4];
-  double scalarLow, scalarHigh;
+  double origin[3];       ///< eye coordinates of the first point
+  double normal[4][3];    ///< inward normal of the face opposite point k, times |det|
+  double offset[4][3];    ///< a point of that face, relative to the first point
+  double value[4][4];     ///< per point, the data's channels (ScalarMapping)
+  double low[4], high[4]; ///< per channel, over the points
 };
 
-/// Sets up `cell` (points ids[0..3]); false if it has no volume or is not finite.
-bool SetUpCell(
-  const EyePoint* eye, const std::int64_t ids[4], const double scalar[4], CellPlanes& c)
+/// Sets up `cell` (points ids[0..3], the first `channels` of `values` per point); false if it
+/// has no volume or is not finite.
+bool SetUpCell(const EyePoint* eye, const std::int64_t ids[4], const double values[4][4],
+  int channels, CellPlanes& c)
 {
   for (int k = 0; k < 4; ++k)
   {
-    if (!eye[ids[k]].finite || !std::isfinite(scalar[k]))
+    bool finite = eye[ids[k]].finite;
+    for (int ch = 0; ch < channels; ++ch)
+    {
+      finite = finite && std::isfinite(values[k][ch]);
+    }
+    if (!finite)
     {
       return false;
     }
@@ -353,16 +448,24 @@ bool SetUpCell(
       c.normal[k][d] *= sign;
       c.offset[k][d] = k == 0 ? q[1][d] : 0.0; // faces 1-3 contain the first point
     }
-    c.scalar[k] = scalar[k];
+    for (int ch = 0; ch < channels; ++ch)
+    {
+      c.value[k][ch] = values[k][ch];
+    }
   }
-  c.scalarLow = std::min(std::min(scalar[0], scalar[1]), std::min(scalar[2], scalar[3]));
-  c.scalarHigh = std::max(std::max(scalar[0], scalar[1]), std::max(scalar[2], scalar[3]));
+  for (int ch = 0; ch < channels; ++ch)
+  {
+    const double* v[4] = { &values[0][ch], &values[1][ch], &values[2][ch], &values[3][ch] };
+    c.low[ch] = std::min(std::min(*v[0], *v[1]), std::min(*v[2], *v[3]));
+    c.high[ch] = std::max(std::max(*v[0], *v[1]), std::max(*v[2], *v[3]));
+  }
   return true;
 }
 
 /// Clips the ray origin + u * direction, u in [0, 1], by the cell; false if it misses.
+template <int C>
 inline bool Clip(
-  const CellPlanes& c, const double origin[3], const double direction[3], Segment& out)
+  const CellPlanes& c, const double origin[3], const double direction[3], Segment<C>& out)
 {
   double o[3] = { origin[0] - c.origin[0], origin[1] - c.origin[1], origin[2] - c.origin[2] };
   double enter = 0, exit = 1;
@@ -391,22 +494,28 @@ inline bool Clip(
   }
   // Barycentric coordinates are n_k . (x - a_k) / det; their sum is 1, so normalizing by
   // the sum needs no determinant.
-  auto scalarAt = [&](double u)
+  auto valuesAt = [&](double u, double values[C])
   {
-    double weighted = 0, total = 0;
+    double weighted[C] = {}, total = 0;
     for (int k = 0; k < 4; ++k)
     {
       const double lambda = std::max(0.0, num[k] + u * den[k]);
-      weighted += lambda * c.scalar[k];
+      for (int ch = 0; ch < C; ++ch)
+      {
+        weighted[ch] += lambda * c.value[k][ch];
+      }
       total += lambda;
     }
-    const double s = total > 0 ? weighted / total : c.scalar[0];
-    return std::min(c.scalarHigh, std::max(c.scalarLow, s));
+    for (int ch = 0; ch < C; ++ch)
+    {
+      const double v = total > 0 ? weighted[ch] / total : c.value[0][ch];
+      values[ch] = std::min(c.high[ch], std::max(c.low[ch], v));
+    }
   };
   out.enter = enter;
   out.exit = exit;
-  out.scalarEnter = scalarAt(enter);
-  out.scalarExit = scalarAt(exit);
+  valuesAt(enter, out.front);
+  valuesAt(exit, out.back);
   return true;
 }
 
@@ -419,85 +528,68 @@ bool Fail(std::string* error, const std::string& message)
   return false;
 }
 
-} // namespace
-
-bool RenderReference(const PointsView& points, const CellsView& cells, const ScalarsView& scalars,
-  const ReferenceSettings& settings, std::vector<double>& rgb, int threads, std::string* error,
-  ReferenceStats* stats)
+/// The transfer functions of `settings` as sorted node arrays; false (with `error`) when a
+/// node is not finite or an opacity is negative.
+bool BuildTransferFunctions(
+  const ReferenceSettings& settings, TransferFunctions& tf, std::string* error)
 {
-  const auto start = std::chrono::steady_clock::now();
-  const int width = settings.width, height = settings.height;
-  if (width <= 0 || height <= 0)
-  {
-    return Fail(error, "the image size must be positive");
-  }
-  if (!(settings.unitDistance > 0) || !std::isfinite(settings.unitDistance))
-  {
-    return Fail(error, "the unit distance must be positive and finite");
-  }
-  Matrix4 inverseProjection;
-  if (!Invert(settings.projection, inverseProjection))
-  {
-    return Fail(error, "the projection matrix is singular");
-  }
-  TransferFunctions tf;
   tf.inverseUnit = 1.0 / settings.unitDistance;
+  std::vector<ColorNode> color = settings.color;
+  std::vector<OpacityNode> opacity = settings.opacity;
+  for (const ColorNode& n : color)
   {
-    std::vector<ColorNode> color = settings.color;
-    std::vector<OpacityNode> opacity = settings.opacity;
-    for (const ColorNode& n : color)
+    if (!std::isfinite(n.scalar) || !std::isfinite(n.r) || !std::isfinite(n.g) ||
+      !std::isfinite(n.b))
     {
-      if (!std::isfinite(n.scalar) || !std::isfinite(n.r) || !std::isfinite(n.g) ||
-        !std::isfinite(n.b))
-      {
-        return Fail(error, "a colour node is not finite");
-      }
+      return Fail(error, "a colour node is not finite");
     }
-    for (const OpacityNode& n : opacity)
-    {
-      if (!std::isfinite(n.scalar) || !std::isfinite(n.opacity) || n.opacity < 0)
-      {
-        return Fail(error, "an opacity node is not finite or negative");
-      }
-    }
-    std::stable_sort(color.begin(), color.end(),
-      [](const ColorNode& a, const ColorNode& b) { return a.scalar < b.scalar; });
-    std::stable_sort(opacity.begin(), opacity.end(),
-      [](const OpacityNode& a, const OpacityNode& b) { return a.scalar < b.scalar; });
-    for (const ColorNode& n : color)
-    {
-      if (!tf.colorScalar.empty() && n.scalar == tf.colorScalar.back())
-      {
-        continue; // a repeated scalar: the first node wins
-      }
-      tf.colorScalar.push_back(n.scalar);
-      tf.red.push_back(n.r);
-      tf.green.push_back(n.g);
-      tf.blue.push_back(n.b);
-      tf.breaks.push_back(n.scalar);
-    }
-    for (const OpacityNode& n : opacity)
-    {
-      if (!tf.opacityScalar.empty() && n.scalar == tf.opacityScalar.back())
-      {
-        continue;
-      }
-      tf.opacityScalar.push_back(n.scalar);
-      tf.opacity.push_back(n.opacity);
-      tf.breaks.push_back(n.scalar);
-    }
-    std::sort(tf.breaks.begin(), tf.breaks.end());
-    tf.breaks.erase(std::unique(tf.breaks.begin(), tf.breaks.end()), tf.breaks.end());
   }
+  for (const OpacityNode& n : opacity)
+  {
+    if (!std::isfinite(n.scalar) || !std::isfinite(n.opacity) || n.opacity < 0)
+    {
+      return Fail(error, "an opacity node is not finite or negative");
+    }
+  }
+  std::stable_sort(color.begin(), color.end(),
+    [](const ColorNode& a, const ColorNode& b) { return a.scalar < b.scalar; });
+  std::stable_sort(opacity.begin(), opacity.end(),
+    [](const OpacityNode& a, const OpacityNode& b) { return a.scalar < b.scalar; });
+  for (const ColorNode& n : color)
+  {
+    if (!tf.colorScalar.empty() && n.scalar == tf.colorScalar.back())
+    {
+      continue; // a repeated scalar: the first node wins
+    }
+    tf.colorScalar.push_back(n.scalar);
+    tf.red.push_back(n.r);
+    tf.green.push_back(n.g);
+    tf.blue.push_back(n.b);
+    tf.breaks.push_back(n.scalar);
+  }
+  for (const OpacityNode& n : opacity)
+  {
+    if (!tf.opacityScalar.empty() && n.scalar == tf.opacityScalar.back())
+    {
+      continue;
+    }
+    tf.opacityScalar.push_back(n.scalar);
+    tf.opacity.push_back(n.opacity);
+    tf.breaks.push_back(n.scalar);
+  }
+  std::sort(tf.breaks.begin(), tf.breaks.end());
+  tf.breaks.erase(std::unique(tf.breaks.begin(), tf.breaks.end()), tf.breaks.end());
+  return true;
+}
 
-  const int nthreads = detail::ResolveThreads(threads);
-  const std::size_t pixelCount = static_cast<std::size_t>(width) * height;
-  rgb.assign(3 * pixelCount, 0.0);
-
-  // Points to eye and window coordinates, once; a mesh of parts part after part.
+/// Every point to eye and window coordinates, once; a mesh of parts part after part.
+std::vector<EyePoint> EyePoints(
+  const PointsView& points, const ReferenceSettings& settings, int nthreads)
+{
   std::vector<EyePoint> eye(points.count);
   const Matrix4& mv = settings.modelView;
   const Matrix4& p = settings.projection;
+  const int width = settings.width, height = settings.height;
   std::vector<PointsView> pointParts;
   for (std::size_t k = 0; k < (points.parts ? points.partCount : 1); ++k)
   {
@@ -542,21 +634,17 @@ bool RenderReference(const PointsView& points, const CellsView& cells, const Sca
     }
     first += part.count;
   }
+  return eye;
+}
 
-  // Pixel boxes of the cells, and an estimate of segments per row (box widths) for banding.
+/// The pixels whose rays may cross each cell (empty for cells that cannot be integrated or
+/// lie outside the image; the whole image for cells reaching the eye plane).
+std::vector<PixelBox> PixelBoxes(const CellsView& cells, std::size_t pointCount,
+  const std::vector<EyePoint>& eye, int width, int height, int nthreads)
+{
   const std::size_t cellCount = cells.cellCount;
   std::vector<PixelBox> boxes(cellCount);
-  const bool perCell = scalars.association == ScalarsView::Association::Cells;
-  auto cellScalars = [&](std::size_t cell, const std::int64_t ids[4], double s[4])
-  {
-    for (int k = 0; k < 4; ++k)
-    {
-      s[k] = scalars.values == nullptr
-        ? 0.0
-        : static_cast<double>(perCell ? scalars.values[cell] : scalars.values[ids[k]]);
-    }
-  };
-  detail::DispatchCells(cells, points.count,
+  detail::DispatchCells(cells, pointCount,
     [&](const auto& access)
     {
 #pragma omp parallel for num_threads(nthreads) schedule(static)
@@ -602,19 +690,17 @@ bool RenderReference(const PointsView& points, const CellsView& cells, const Sca
         }
       }
     });
-  std::vector<double> rowEstimate(static_cast<std::size_t>(height) + 1, 0.0);
-  for (const PixelBox& b : boxes)
-  {
-    if (b.xmin <= b.xmax && b.ymin <= b.ymax)
-    {
-      rowEstimate[b.ymin] += b.xmax - b.xmin + 1;
-      rowEstimate[b.ymax + 1] -= b.xmax - b.xmin + 1;
-    }
-  }
+  return boxes;
+}
 
-  // The rays: origin on the near plane, direction to the far plane, both in eye
-  // coordinates, from the window point through the inverse projection.
-  auto ray = [&](int x, int y, double origin[3], double direction[3])
+/// The rays: origin on the near plane, direction to the far plane, both in eye
+/// coordinates, from the window point through the inverse projection.
+struct Rays
+{
+  Matrix4 inverseProjection;
+  int width, height;
+
+  void operator()(int x, int y, double origin[3], double direction[3]) const
   {
     const double nx = 2.0 * (x + 0.5 + PixelOffsetX) / width - 1.0;
     const double ny = 2.0 * (y + 0.5 + PixelOffsetY) / height - 1.0;
@@ -639,128 +725,251 @@ bool RenderReference(const PointsView& points, const CellsView& cells, const Sca
       origin[d] = nearPoint[d];
       direction[d] = farPoint[d] - nearPoint[d];
     }
-  };
+  }
+};
 
-  std::vector<std::uint32_t> counts;
-  std::vector<std::size_t> offsets;
-  std::vector<Segment> segments;
-  std::size_t totalSegments = 0, passes = 0;
-  int bandStart = 0;
-  double running = 0;
-  while (bandStart < height)
+/// Everything the bands of one image share.
+struct Scene
+{
+  const CellsView& cells;
+  std::size_t pointCount;
+  const ScalarsView& scalars;
+  const ReferenceSettings& settings;
+  const TransferFunctions& tf;
+  const std::vector<EyePoint>& eye;
+  const std::vector<PixelBox>& boxes;
+  Rays ray;
+  int nthreads;
+
+  /// The first `channels` values of the cell's points (values[k] of point ids[k]).
+  void CellValues(
+    std::size_t cell, const std::int64_t ids[4], int channels, double values[4][4]) const
   {
-    // The band: rows while the estimate stays below the budget (at least one row).
-    int bandEnd = bandStart;
-    double estimate = 0;
+    const bool perCell = this->scalars.association == ScalarsView::Association::Cells;
+    for (int k = 0; k < 4; ++k)
     {
-      double r = running;
-      while (bandEnd < height)
+      const std::size_t tuple = perCell ? cell : static_cast<std::size_t>(ids[k]);
+      for (int ch = 0; ch < channels; ++ch)
       {
-        r += rowEstimate[bandEnd];
-        const double next = estimate + r * 1.0;
-        if (bandEnd > bandStart && next > static_cast<double>(settings.maxSegmentsPerPass))
-        {
-          r -= rowEstimate[bandEnd];
-          break;
-        }
-        estimate = next;
-        ++bandEnd;
+        values[k][ch] = this->scalars.values == nullptr
+          ? 0.0
+          : static_cast<double>(this->scalars.values[channels * tuple + ch]);
       }
-      running = r;
     }
-    ++passes;
-    const std::size_t bandPixels = static_cast<std::size_t>(bandEnd - bandStart) * width;
-    counts.assign(bandPixels, 0);
+  }
+};
 
-    // Two passes over the cells that reach the band: count, then fill.
-    for (int fill = 0; fill < 2; ++fill)
+/// Rows [bandStart, end) whose estimated segments stay within `budget` (at least one row);
+/// `running` carries the row estimate's prefix from row to row.
+int BandEnd(
+  const std::vector<double>& rowEstimate, int bandStart, int height, double budget, double& running)
+{
+  int bandEnd = bandStart;
+  double estimate = 0;
+  double r = running;
+  while (bandEnd < height)
+  {
+    r += rowEstimate[bandEnd];
+    const double next = estimate + r * 1.0;
+    if (bandEnd > bandStart && next > budget)
     {
-      if (fill == 1)
+      r -= rowEstimate[bandEnd];
+      break;
+    }
+    estimate = next;
+    ++bandEnd;
+  }
+  running = r;
+  return bandEnd;
+}
+
+/// The segments of the band's pixels, pixel after pixel (`offsets` per pixel, +1): two
+/// passes over the cells that reach the band, counting, then filling.
+template <int C>
+void GatherSegments(const Scene& scene, int bandStart, int bandEnd,
+  std::vector<std::size_t>& offsets, std::vector<Segment<C>>& segments)
+{
+  const int width = scene.settings.width;
+  const std::size_t bandPixels = static_cast<std::size_t>(bandEnd - bandStart) * width;
+  std::vector<std::uint32_t> counts(bandPixels, 0);
+  for (int fill = 0; fill < 2; ++fill)
+  {
+    if (fill == 1)
+    {
+      offsets.assign(bandPixels + 1, 0);
+      for (std::size_t i = 0; i < bandPixels; ++i)
       {
-        offsets.assign(bandPixels + 1, 0);
-        for (std::size_t i = 0; i < bandPixels; ++i)
-        {
-          offsets[i + 1] = offsets[i] + counts[i];
-        }
-        segments.resize(offsets[bandPixels]);
-        std::fill(counts.begin(), counts.end(), 0);
+        offsets[i + 1] = offsets[i] + counts[i];
       }
-      detail::DispatchCells(cells, points.count,
-        [&](const auto& access)
+      segments.resize(offsets[bandPixels]);
+      std::fill(counts.begin(), counts.end(), 0);
+    }
+    detail::DispatchCells(scene.cells, scene.pointCount,
+      [&](const auto& access)
+      {
+#pragma omp parallel for num_threads(scene.nthreads) schedule(dynamic, 256)
+        for (std::int64_t c = 0; c < static_cast<std::int64_t>(scene.cells.cellCount); ++c)
         {
-#pragma omp parallel for num_threads(nthreads) schedule(dynamic, 256)
-          for (std::int64_t c = 0; c < static_cast<std::int64_t>(cellCount); ++c)
+          const PixelBox& box = scene.boxes[c];
+          if (box.xmin > box.xmax || box.ymax < bandStart || box.ymin >= bandEnd)
           {
-            const PixelBox& box = boxes[c];
-            if (box.xmin > box.xmax || box.ymax < bandStart || box.ymin >= bandEnd)
+            continue;
+          }
+          std::int64_t ids[4];
+          access.TetrahedronPoints(static_cast<std::size_t>(c), ids);
+          double values[4][4];
+          scene.CellValues(static_cast<std::size_t>(c), ids, C, values);
+          CellPlanes planes;
+          if (!SetUpCell(scene.eye.data(), ids, values, C, planes))
+          {
+            continue;
+          }
+          const int y0 = std::max(box.ymin, bandStart), y1 = std::min(box.ymax, bandEnd - 1);
+          for (int y = y0; y <= y1; ++y)
+          {
+            for (int x = box.xmin; x <= box.xmax; ++x)
             {
-              continue;
-            }
-            std::int64_t ids[4];
-            access.TetrahedronPoints(static_cast<std::size_t>(c), ids);
-            double s[4];
-            cellScalars(static_cast<std::size_t>(c), ids, s);
-            CellPlanes planes;
-            if (!SetUpCell(eye.data(), ids, s, planes))
-            {
-              continue;
-            }
-            const int y0 = std::max(box.ymin, bandStart), y1 = std::min(box.ymax, bandEnd - 1);
-            for (int y = y0; y <= y1; ++y)
-            {
-              for (int x = box.xmin; x <= box.xmax; ++x)
+              double origin[3], direction[3];
+              scene.ray(x, y, origin, direction);
+              Segment<C> segment;
+              if (!Clip(planes, origin, direction, segment))
               {
-                double origin[3], direction[3];
-                ray(x, y, origin, direction);
-                Segment segment;
-                if (!Clip(planes, origin, direction, segment))
-                {
-                  continue;
-                }
-                const std::size_t pixel = static_cast<std::size_t>(y - bandStart) * width + x;
-                std::uint32_t slot;
+                continue;
+              }
+              const std::size_t pixel = static_cast<std::size_t>(y - bandStart) * width + x;
+              std::uint32_t slot;
 #pragma omp atomic capture
-                slot = counts[pixel]++;
-                if (fill == 1)
-                {
-                  segments[offsets[pixel] + slot] = segment;
-                }
+              slot = counts[pixel]++;
+              if (fill == 1)
+              {
+                segments[offsets[pixel] + slot] = segment;
               }
             }
           }
-        });
-    }
-    totalSegments += segments.size();
+        }
+      });
+  }
+}
 
-    // Per pixel: sort by depth, integrate front to back, then the background.
-#pragma omp parallel for num_threads(nthreads) schedule(dynamic, 64)
-    for (std::int64_t i = 0; i < static_cast<std::int64_t>(bandPixels); ++i)
+/// Per pixel of the band: its segments sorted by depth, integrated front to back, then the
+/// background.
+template <int C>
+void IntegratePixels(const Scene& scene, int bandStart, int bandEnd,
+  const std::vector<std::size_t>& offsets, std::vector<Segment<C>>& segments, double* rgb)
+{
+  const int width = scene.settings.width;
+  const std::size_t bandPixels = static_cast<std::size_t>(bandEnd - bandStart) * width;
+#pragma omp parallel for num_threads(scene.nthreads) schedule(dynamic, 64)
+  for (std::int64_t i = 0; i < static_cast<std::int64_t>(bandPixels); ++i)
+  {
+    Segment<C>* begin = segments.data() + offsets[i];
+    Segment<C>* end = segments.data() + offsets[i + 1];
+    std::sort(begin, end);
+    const int x = static_cast<int>(i % width);
+    const int y = bandStart + static_cast<int>(i / width);
+    double origin[3], direction[3];
+    scene.ray(x, y, origin, direction);
+    const double scale = std::sqrt(Dot(direction, direction));
+    RayState state;
+    for (Segment<C>* s = begin; s != end && !state.Done(); ++s)
     {
-      Segment* begin = segments.data() + offsets[i];
-      Segment* end = segments.data() + offsets[i + 1];
-      std::sort(begin, end);
-      const int x = static_cast<int>(i % width);
-      const int y = bandStart + static_cast<int>(i / width);
-      double origin[3], direction[3];
-      ray(x, y, origin, direction);
-      const double scale = std::sqrt(Dot(direction, direction));
-      RayState state;
-      for (Segment* s = begin; s != end && !state.Done(); ++s)
-      {
-        IntegrateSegment(tf, (s->exit - s->enter) * scale, s->scalarEnter, s->scalarExit, state);
-      }
-      double* out = rgb.data() + 3 * (static_cast<std::size_t>(y) * width + x);
-      for (int k = 0; k < 3; ++k)
-      {
-        out[k] = state.color[k] + state.transmittance * settings.background[k];
-      }
+      Integrate(scene.tf, (s->exit - s->enter) * scale, *s, state);
     }
+    double* out = rgb + 3 * (static_cast<std::size_t>(y) * width + x);
+    for (int k = 0; k < 3; ++k)
+    {
+      out[k] = state.color[k] + state.transmittance * scene.settings.background[k];
+    }
+  }
+}
+
+/// The image in bands of rows that keep the gathered segments within the settings' budget.
+template <int C>
+void IntegrateBands(const Scene& scene, double* rgb, ReferenceStats& stats)
+{
+  const int height = scene.settings.height;
+  // Segments per row, from the cells' box widths.
+  std::vector<double> rowEstimate(static_cast<std::size_t>(height) + 1, 0.0);
+  for (const PixelBox& b : scene.boxes)
+  {
+    if (b.xmin <= b.xmax && b.ymin <= b.ymax)
+    {
+      rowEstimate[b.ymin] += b.xmax - b.xmin + 1;
+      rowEstimate[b.ymax + 1] -= b.xmax - b.xmin + 1;
+    }
+  }
+  // The budget is in bytes of the scalar mapping's segments.
+  const double budget = static_cast<double>(scene.settings.maxSegmentsPerPass) *
+    sizeof(Segment<1>) / sizeof(Segment<C>);
+  std::vector<std::size_t> offsets;
+  std::vector<Segment<C>> segments;
+  double running = 0;
+  for (int bandStart = 0; bandStart < height;)
+  {
+    const int bandEnd = BandEnd(rowEstimate, bandStart, height, budget, running);
+    ++stats.passes;
+    GatherSegments<C>(scene, bandStart, bandEnd, offsets, segments);
+    stats.segments += segments.size();
+    IntegratePixels<C>(scene, bandStart, bandEnd, offsets, segments, rgb);
     bandStart = bandEnd;
+  }
+}
+
+} // namespace
+
+int ChannelsOf(ScalarMapping mapping)
+{
+  return mapping == ScalarMapping::TransferFunctions
+    ? 1
+    : (mapping == ScalarMapping::ColourAndOpacityScalars ? 2 : 4);
+}
+
+bool RenderReference(const PointsView& points, const CellsView& cells, const ScalarsView& scalars,
+  const ReferenceSettings& settings, std::vector<double>& rgb, int threads, std::string* error,
+  ReferenceStats* stats)
+{
+  const auto start = std::chrono::steady_clock::now();
+  const int width = settings.width, height = settings.height;
+  if (width <= 0 || height <= 0)
+  {
+    return Fail(error, "the image size must be positive");
+  }
+  if (!(settings.unitDistance > 0) || !std::isfinite(settings.unitDistance))
+  {
+    return Fail(error, "the unit distance must be positive and finite");
+  }
+  Matrix4 inverseProjection;
+  if (!Invert(settings.projection, inverseProjection))
+  {
+    return Fail(error, "the projection matrix is singular");
+  }
+  TransferFunctions tf;
+  if (!BuildTransferFunctions(settings, tf, error))
+  {
+    return false;
+  }
+  const int nthreads = detail::ResolveThreads(threads);
+  rgb.assign(3 * static_cast<std::size_t>(width) * height, 0.0);
+  const std::vector<EyePoint> eye = EyePoints(points, settings, nthreads);
+  const std::vector<PixelBox> boxes = PixelBoxes(cells, points.count, eye, width, height, nthreads);
+  const Scene scene{ cells, points.count, scalars, settings, tf, eye, boxes,
+    Rays{ inverseProjection, width, height }, nthreads };
+  ReferenceStats counted;
+  switch (settings.mapping)
+  {
+    case ScalarMapping::TransferFunctions:
+      IntegrateBands<1>(scene, rgb.data(), counted);
+      break;
+    case ScalarMapping::ColourAndOpacityScalars:
+      IntegrateBands<2>(scene, rgb.data(), counted);
+      break;
+    case ScalarMapping::Colours:
+      IntegrateBands<4>(scene, rgb.data(), counted);
+      break;
   }
   if (stats)
   {
-    stats->segments = totalSegments;
-    stats->passes = passes;
+    *stats = counted;
     stats->seconds = detail::SecondsSince(start);
   }
   return true;

@@ -493,3 +493,95 @@ TEST(ReferenceRenderer, CompareImagesMetrics)
   EXPECT_EQ(e.worstPixel, 0u);
   EXPECT_TRUE(std::isinf(mtpt::CompareImages(a.data(), a.data(), 2).psnr));
 }
+
+namespace
+{
+
+/// The reference image of `mesh` with `values` (`channels` per point) under `mapping`.
+std::vector<double> RenderMapped(const Mesh& mesh, const std::vector<float>& values,
+  ReferenceSettings settings, mtpt::ScalarMapping mapping)
+{
+  settings.mapping = mapping;
+  std::vector<double> rgb;
+  std::string error;
+  EXPECT_TRUE(mtpt::RenderReference(mesh.Points(), mesh.Cells(),
+    { values.data(), mtpt::ScalarsView::Association::Points }, settings, rgb, 2, &error))
+    << error;
+  return rgb;
+}
+
+double LargestDifference(const std::vector<double>& a, const std::vector<double>& b)
+{
+  double worst = 0;
+  for (std::size_t i = 0; i < a.size(); ++i)
+  {
+    worst = std::max(worst, std::fabs(a[i] - b[i]));
+  }
+  return worst;
+}
+
+} // namespace
+
+TEST(ReferenceRenderer, DependentColoursIntegrateLinearColourAndAttenuation)
+{
+  // Colours given per point (dependent components, four channels) that equal a linear
+  // transfer function of the scalar: the integral along every ray is the same function.
+  const double unit = 0.4, k = 0.9;
+  const double c0[3] = { 0.2, 0.9, 0.4 }, c1[3] = { 1.0, 0.1, 0.6 };
+  Mesh mesh;
+  const double lo[3] = { 0, 0, 0 }, hi[3] = { 1, 1, 0.75 };
+  const int n[3] = { 3, 2, 4 };
+  AddBox(mesh, lo, hi, n,
+    [](double x, double y, double z) { return 0.5 + 0.3 * std::sin(3 * x + 2 * y) * (1 - z); });
+  ReferenceSettings s = OrthoDownZ(24, -0.1, 1.1, -0.1, 1.1);
+  s.modelView = mtpt::test::LookAt({ 1.5, 2.0, 9.0 }, { 0.5, 0.5, 0.4 }, { 0, 1, 0 });
+  s.unitDistance = unit;
+  s.color = { { 0, c0[0], c0[1], c0[2] }, { 1, c1[0], c1[1], c1[2] } };
+  s.opacity = { { 0, 0 }, { 1, k } };
+  std::vector<float> rgba;
+  for (float v : mesh.scalars)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      rgba.push_back(static_cast<float>(c0[c] + (c1[c] - c0[c]) * v));
+    }
+    rgba.push_back(static_cast<float>(k * v));
+  }
+  // The float colours are the scalar's function up to float rounding.
+  const auto expected = Render(mesh, s);
+  const auto colours = RenderMapped(mesh, rgba, s, mtpt::ScalarMapping::Colours);
+  EXPECT_LT(LargestDifference(colours, expected), 1e-6);
+  EXPECT_GT(LargestDifference(expected, Render(Mesh(), s)), 0.1) << "the slab is visible";
+}
+
+TEST(ReferenceRenderer, ColourAndOpacityScalarsDriveTheirOwnFunctions)
+{
+  Mesh mesh;
+  const double lo[3] = { 0, 0, 0 }, hi[3] = { 1, 1, 0.75 };
+  const int n[3] = { 3, 3, 3 };
+  AddBox(mesh, lo, hi, n, [](double x, double y, double z) { return x + 0.5 * y - 0.3 * z; });
+  ReferenceSettings s = OrthoDownZ(24, -0.1, 1.1, -0.1, 1.1);
+  s.unitDistance = 0.5;
+  s.color = { { -0.3, 0.1, 0.2, 0.9 }, { 0.4, 1.0, 0.9, 0.2 }, { 1.5, 0.8, 0.1, 0.1 } };
+  s.opacity = { { 0, 0.1 }, { 0.5, 3.0 }, { 1, 0.4 } };
+  // Both channels the scalar: the one-scalar integral, whose cuts are the union of both
+  // functions' nodes.
+  std::vector<float> same, constantOpacity;
+  for (float v : mesh.scalars)
+  {
+    same.insert(same.end(), { v, v });
+    constantOpacity.insert(constantOpacity.end(), { v, 0.75f });
+  }
+  const auto expected = Render(mesh, s);
+  EXPECT_LT(LargestDifference(
+              RenderMapped(mesh, same, s, mtpt::ScalarMapping::ColourAndOpacityScalars), expected),
+    1e-12);
+  // A constant opacity scalar: the colour function of the first channel under the constant
+  // opacity the opacity function gives at 0.75 (3.0 + 0.5 * (0.4 - 3.0)).
+  ReferenceSettings constant = s;
+  constant.opacity = { { 0, 1.7 } };
+  EXPECT_LT(LargestDifference(
+              RenderMapped(mesh, constantOpacity, s, mtpt::ScalarMapping::ColourAndOpacityScalars),
+              Render(mesh, constant)),
+    1e-12);
+}

@@ -70,6 +70,27 @@ struct OpacityNode
   double scalar, opacity;
 };
 
+/**
+ * How the data become colour and opacity (VTK's vtkVolumeProperty::IndependentComponents).
+ * - TransferFunctions: one scalar per tuple, through both transfer functions (independent
+ *   components; the file comment's model).
+ * - ColourAndOpacityScalars: two per tuple (dependent components): the first through the
+ *   colour function, the second through the opacity function; both linear inside a cell,
+ *   so each segment is split where either crosses a node of its function.
+ * - Colours: four per tuple (dependent components): red, green, blue and the attenuation
+ *   per unit distance themselves, each clamped to [0, 1]; linear inside a cell, so colour
+ *   and extinction are linear along each segment. The transfer functions are not read.
+ */
+enum class ScalarMapping
+{
+  TransferFunctions,
+  ColourAndOpacityScalars,
+  Colours
+};
+
+/// Values per tuple of each mapping: 1, 2 or 4.
+int ChannelsOf(ScalarMapping mapping);
+
 /// Pixel-centre offset of the reference's rays, in pixels (see the file comment).
 constexpr double PixelOffsetX = 2.7e-6;
 constexpr double PixelOffsetY = 1.4e-6;
@@ -87,8 +108,11 @@ struct ReferenceSettings
   std::vector<OpacityNode> opacity;
   double unitDistance = 1.0;
   double background[3] = { 0, 0, 0 };
+  /// How the scalars' values become colour and opacity; the scalars then hold
+  /// ChannelsOf(mapping) floats per point or cell.
+  ScalarMapping mapping = ScalarMapping::TransferFunctions;
   /// Segments gathered at most per pass; the image is done in bands of rows that stay
-  /// below it (memory: 32 bytes per segment).
+  /// below it (memory: 32 bytes per segment with one scalar, as much in all with more).
   std::size_t maxSegmentsPerPass = std::size_t(1) << 23;
 };
 
