@@ -63,7 +63,15 @@ bool FanPixels(const Fan& fan, int width, int height, int& x0, int& x1, int& y0,
 /// Whether the settings can shade anything.
 bool Usable(const CompositeSettings& s)
 {
-  if (s.width <= 0 || s.height <= 0 || !s.transferFunction.table || s.transferFunction.size < 1)
+  if (s.width <= 0 || s.height <= 0)
+  {
+    return false;
+  }
+  if (s.vertexColours)
+  {
+    return true; // the records hold the colours: no table is read
+  }
+  if (!s.transferFunction.table || s.transferFunction.size < 1)
   {
     return false;
   }
@@ -275,7 +283,9 @@ void Compositor::Rasterize(int threads)
   frame.width = s.width;
   frame.height = s.height;
   frame.transferFunction = s.transferFunction;
-  frame.preIntegration = s.shading == Shading::PreIntegrated ? s.preIntegration : nullptr;
+  frame.preIntegration =
+    s.shading == Shading::PreIntegrated && !s.vertexColours ? s.preIntegration : nullptr;
+  frame.vertexColours = s.vertexColours;
   frame.interpolation = s.interpolation;
   frame.inverseUnit = static_cast<float>(1.0 / s.unitDistance);
   const auto jobs = static_cast<std::int64_t>(this->Tiles.size());

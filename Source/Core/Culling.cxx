@@ -63,8 +63,16 @@ void ComputeCellScalarRanges(const CellsView& cells, std::size_t pointCount,
     });
 }
 
+void OpacityCulling::SetAttenuations()
+{
+  this->Attenuations = true;
+  this->NonZeroBefore.clear();
+  this->Size = 0;
+}
+
 void OpacityCulling::SetTable(const TransferFunctionTable& table)
 {
+  this->Attenuations = false;
   this->Size = table.table ? std::max(0, table.size) : 0;
   this->NonZeroBefore.assign(static_cast<std::size_t>(this->Size) + 1, 0);
   for (int i = 0; i < this->Size; ++i)
@@ -79,6 +87,10 @@ void OpacityCulling::SetTable(const TransferFunctionTable& table)
 
 bool OpacityCulling::Visible(float low, float high) const
 {
+  if (this->Attenuations)
+  {
+    return low <= high && high > 0.0f; // false for NaN
+  }
   if (this->Size == 0 || !(low <= high))
   {
     return false; // no table or NaN: nothing drawn

@@ -188,6 +188,9 @@ struct FanGeometry
   int boundary[4] = { 0, 0, 0, 0 }; ///< corners in cyclic order around the thick vertex
   int count = 0;                    ///< 3 (triangle projection) or 4 (quadrilateral)
   int thickSlot = 4;                ///< the slot vertex the thick vertex takes
+  /// The thick vertex's value as a mix of the corners' (the mean of its segment's front and
+  /// back): what dependent components' colours are interpolated with.
+  double weights[4] = { 0, 0, 0, 0 };
 };
 
 /// False (with projection NotDrawable) when the tetrahedron cannot be drawn.
@@ -219,6 +222,10 @@ inline bool ComputeFanGeometry(const ProjectedPoint* const c[4], const float sca
     secondZ = c[d0]->z + p.beta * (c[d1]->z - c[d0]->z);
     thickX = x[a] + p.alpha * (x[b] - x[a]);
     thickY = y[a] + p.alpha * (y[b] - y[a]);
+    g.weights[a] = 0.5 * (1.0 - tab);
+    g.weights[b] = 0.5 * tab;
+    g.weights[d0] = 0.5 * (1.0 - tcd);
+    g.weights[d1] = 0.5 * tcd;
     g.thickSlot = 4;
     // The quadrilateral's boundary runs a, d0, b, d1.
     g.count = 4;
@@ -248,6 +255,10 @@ inline bool ComputeFanGeometry(const ProjectedPoint* const c[4], const float sca
     secondZ = p.weights[0] * c[j0]->z + p.weights[1] * c[j1]->z + p.weights[2] * c[j2]->z;
     thickX = x[t];
     thickY = y[t];
+    g.weights[t] = 0.5;
+    g.weights[j0] = 0.5 * u0;
+    g.weights[j1] = 0.5 * u1;
+    g.weights[j2] = 0.5 * u2;
     g.thickSlot = t;
     g.count = 3;
     g.boundary[0] = j0;
@@ -264,6 +275,26 @@ inline bool ComputeFanGeometry(const ProjectedPoint* const c[4], const float sca
   return true;
 }
 
+/// Dependent components: the records of corner `k` and of the thick vertex hold colours.
+inline void ColourCorner(const float* const* colours, int k, TetVertex& vertex)
+{
+  StoreVertexColour(vertex, colours[k]);
+}
+inline void ColourThick(const float* const* colours, const FanGeometry& g, TetVertex& thick)
+{
+  float rgba[4];
+  for (int c = 0; c < 4; ++c)
+  {
+    double mixed = 0;
+    for (int k = 0; k < 4; ++k)
+    {
+      mixed += g.weights[k] * colours[k][c];
+    }
+    rgba[c] = static_cast<float>(mixed);
+  }
+  StoreVertexColour(thick, rgba);
+}
+
 /// The projected (x, y) of the corners, and whether the tetrahedron can be drawn at all.
 inline bool Corners(
   const ProjectedPoint* const c[4], const float scalars[4], double x[4], double y[4])
@@ -278,7 +309,7 @@ inline bool Corners(
 
 /// The decomposition of one tetrahedron into a slot whose indices start at `base`.
 inline Projection Decompose(const ProjectedPoint* const c[4], const float scalars[4],
-  TetVertex out[5], std::uint32_t indices[12], std::uint32_t base)
+  const float* const* colours, TetVertex out[5], std::uint32_t indices[12], std::uint32_t base)
 {
   double x[4], y[4];
   FanGeometry g;
@@ -291,6 +322,14 @@ inline Projection Decompose(const ProjectedPoint* const c[4], const float scalar
   {
     out[i] = TetVertex{ static_cast<float>(x[i]), static_cast<float>(y[i]),
       static_cast<float>(c[i]->z), scalars[i], scalars[i], 0.0f };
+    if (colours)
+    {
+      ColourCorner(colours, i, out[i]);
+    }
+  }
+  if (colours)
+  {
+    ColourThick(colours, g, g.thick);
   }
   out[g.thickSlot] = g.thick;
   if (g.thickSlot != 4)
@@ -312,7 +351,8 @@ inline Projection Decompose(const ProjectedPoint* const c[4], const float scalar
 }
 
 /// The decomposition of one tetrahedron into a fan (Decompose.h).
-inline Projection DecomposeToFan(const ProjectedPoint* const c[4], const float scalars[4], Fan& fan)
+inline Projection DecomposeToFan(
+  const ProjectedPoint* const c[4], const float scalars[4], const float* const* colours, Fan& fan)
 {
   double x[4], y[4];
   FanGeometry g;
@@ -321,12 +361,20 @@ inline Projection DecomposeToFan(const ProjectedPoint* const c[4], const float s
   {
     return g.projection;
   }
+  if (colours)
+  {
+    ColourThick(colours, g, g.thick);
+  }
   fan.centre = g.thick;
   for (int i = 0; i < g.count; ++i)
   {
     const int k = g.boundary[i];
     fan.boundary[i] = TetVertex{ static_cast<float>(x[k]), static_cast<float>(y[k]),
       static_cast<float>(c[k]->z), scalars[k], scalars[k], 0.0f };
+    if (colours)
+    {
+      ColourCorner(colours, k, fan.boundary[i]);
+    }
   }
   fan.count = static_cast<std::uint8_t>(g.count);
   fan.closed = 1;
@@ -387,8 +435,8 @@ inline bool CanStream(const TetVertex* vertices, const std::uint32_t* indices)
 /// The tetrahedron `corners` into slot-local records with global index base `base`,
 /// culled when it covers no pixel centre of the viewport.
 inline ProjectionClass DecomposeCorners(const DecomposeInput& input,
-  const ProjectedPoint* const corners[4], const float scalars[4], std::uint32_t base,
-  TetVertex slotVertices[5], std::uint32_t slotIndices[12])
+  const ProjectedPoint* const corners[4], const float scalars[4], const float* const* colours,
+  std::uint32_t base, TetVertex slotVertices[5], std::uint32_t slotIndices[12])
 {
   const bool cull = input.viewportWidth > 0 && input.viewportHeight > 0 && AllUsable(corners) &&
     !detail::CoversPixelCentre(corners, input.viewportWidth, input.viewportHeight);
@@ -397,7 +445,7 @@ inline ProjectionClass DecomposeCorners(const DecomposeInput& input,
     WriteDegenerateSlot(slotVertices, slotIndices, base);
     return ProjectionClass::CoversNoPixel;
   }
-  return Decompose(corners, scalars, slotVertices, slotIndices, base).kind;
+  return Decompose(corners, scalars, colours, slotVertices, slotIndices, base).kind;
 }
 
 /// Writes slots (the OpenGL buffers): slot k at vertices[5k], indices[12k].
@@ -408,12 +456,12 @@ struct SlotWriter
   bool streaming;
 
   ProjectionClass Cell(const DecomposeInput& input, const ProjectedPoint* const corners[4],
-    const float scalars[4], std::int64_t k) const
+    const float scalars[4], const float* const* colours, std::int64_t k) const
   {
     TetVertex slotVertices[5];
     std::uint32_t slotIndices[12];
-    const ProjectionClass kind = DecomposeCorners(
-      input, corners, scalars, static_cast<std::uint32_t>(5 * k), slotVertices, slotIndices);
+    const ProjectionClass kind = DecomposeCorners(input, corners, scalars, colours,
+      static_cast<std::uint32_t>(5 * k), slotVertices, slotIndices);
     StoreSlot(slotVertices, slotIndices, vertices + 5 * k, indices + 12 * k, streaming);
     return kind;
   }
@@ -428,7 +476,8 @@ struct SlotWriter
 
 /// The tetrahedron `corners` as a fan, count 0 when it covers no pixel centre.
 inline ProjectionClass DecomposeFanCorners(const DecomposeInput& input,
-  const ProjectedPoint* const corners[4], const float scalars[4], Fan& fan)
+  const ProjectedPoint* const corners[4], const float scalars[4], const float* const* colours,
+  Fan& fan)
 {
   const bool cull = input.viewportWidth > 0 && input.viewportHeight > 0 && AllUsable(corners) &&
     !detail::CoversPixelCentre(corners, input.viewportWidth, input.viewportHeight);
@@ -437,7 +486,7 @@ inline ProjectionClass DecomposeFanCorners(const DecomposeInput& input,
     fan = Fan{};
     return ProjectionClass::CoversNoPixel;
   }
-  return DecomposeToFan(corners, scalars, fan).kind;
+  return DecomposeToFan(corners, scalars, colours, fan).kind;
 }
 
 /// Copies a fan to its place with non-temporal stores where available (see StoreSlot).
@@ -467,10 +516,10 @@ struct FanWriter
   bool streaming;
 
   ProjectionClass Cell(const DecomposeInput& input, const ProjectedPoint* const corners[4],
-    const float scalars[4], std::int64_t k) const
+    const float scalars[4], const float* const* colours, std::int64_t k) const
   {
     Fan fan;
-    const ProjectionClass kind = DecomposeFanCorners(input, corners, scalars, fan);
+    const ProjectionClass kind = DecomposeFanCorners(input, corners, scalars, colours, fan);
     StoreFan(fan, fans + k, streaming);
     return kind;
   }
@@ -490,11 +539,16 @@ inline void DecomposeCell(const Access& cells, const DecomposeInput& input,
     const ProjectedPoint* corners[4] = { input.points + ids[0], input.points + ids[1],
       input.points + ids[2], input.points + ids[3] };
     float scalars[4];
+    const float* colours[4] = { nullptr, nullptr, nullptr, nullptr };
     for (int i = 0; i < 4; ++i)
     {
       scalars[i] = cellScalars ? cellScalars[cell] : corners[i]->scalar;
+      if (input.colours)
+      {
+        colours[i] = input.colours + 4 * (cellScalars ? static_cast<std::int64_t>(cell) : ids[i]);
+      }
     }
-    kind = writer.Cell(input, corners, scalars, k);
+    kind = writer.Cell(input, corners, scalars, input.colours ? colours : nullptr, k);
   }
   else
   {
@@ -569,17 +623,17 @@ void DecomposeAllByRank(const Access& cells, const DecomposeInput& input, const 
 } // namespace
 
 Projection DecomposeTetrahedron(const ProjectedPoint* const corners[4], const float scalars[4],
-  TetVertex vertices[5], std::uint32_t indices[12])
+  TetVertex vertices[5], std::uint32_t indices[12], const float* const* colours)
 {
-  return Decompose(corners, scalars, vertices, indices, 0);
+  return Decompose(corners, scalars, colours, vertices, indices, 0);
 }
 
 ProjectionClass DecomposeIntoSlot(const DecomposeInput& input,
   const ProjectedPoint* const corners[4], const float scalars[4], std::size_t k,
-  TetVertex* vertices, std::uint32_t* indices)
+  TetVertex* vertices, std::uint32_t* indices, const float* const* colours)
 {
-  return DecomposeCorners(
-    input, corners, scalars, static_cast<std::uint32_t>(5 * k), vertices + 5 * k, indices + 12 * k);
+  return DecomposeCorners(input, corners, scalars, colours, static_cast<std::uint32_t>(5 * k),
+    vertices + 5 * k, indices + 12 * k);
 }
 
 void DecomposeTetrahedra(const DecomposeInput& input, const SortKey* order, std::size_t count,
@@ -636,16 +690,17 @@ void DecomposeFansByRank(const DecomposeInput& input, const std::uint32_t* rank,
     { DecomposeAllByRank(cells, input, rank, firstRank, count, writer, classes, nthreads); });
 }
 
-Projection DecomposeTetrahedronToFan(
-  const ProjectedPoint* const corners[4], const float scalars[4], Fan& fan)
+Projection DecomposeTetrahedronToFan(const ProjectedPoint* const corners[4], const float scalars[4],
+  Fan& fan, const float* const* colours)
 {
-  return DecomposeToFan(corners, scalars, fan);
+  return DecomposeToFan(corners, scalars, colours, fan);
 }
 
 ProjectionClass DecomposeIntoFan(const DecomposeInput& input,
-  const ProjectedPoint* const corners[4], const float scalars[4], Fan& fan)
+  const ProjectedPoint* const corners[4], const float scalars[4], Fan& fan,
+  const float* const* colours)
 {
-  return DecomposeFanCorners(input, corners, scalars, fan);
+  return DecomposeFanCorners(input, corners, scalars, colours, fan);
 }
 
 } // namespace mtpt

@@ -51,7 +51,8 @@ bool FramePipeline::Inputs::operator==(const Inputs& o) const
 {
   return points == o.points && pointCount == o.pointCount && connectivity == o.connectivity &&
     offsets == o.offsets && cellSize == o.cellSize && cellCount == o.cellCount &&
-    scalars == o.scalars && association == o.association && dataVersion == o.dataVersion;
+    scalars == o.scalars && colours == o.colours && association == o.association &&
+    dataVersion == o.dataVersion;
 }
 
 FramePipeline::FramePipeline()
@@ -147,6 +148,7 @@ bool FramePipeline::Prepare(const FrameInput& input, int threads)
   data.cellSize = input.cells.cellSize;
   data.cellCount = n;
   data.scalars = input.scalars.values;
+  data.colours = input.colours;
   data.association = input.scalars.association;
   data.dataVersion = input.dataVersion;
   const bool dataChanged = !this->Reuse || !(data == this->Data);
@@ -188,6 +190,7 @@ bool FramePipeline::Prepare(const FrameInput& input, int threads)
   d.pointCount = input.points.count;
   d.cells = input.cells;
   d.scalars = input.scalars;
+  d.colours = input.colours;
   d.viewportWidth = input.viewportWidth;
   d.viewportHeight = input.viewportHeight;
   d.cellsCoverPixels = true; // UpdateOrder's keys culled with this viewport (KeyCulling)
@@ -211,7 +214,8 @@ bool FramePipeline::Continue(Stage finished)
 void FramePipeline::UpdateCulling(const FrameInput& input, int threads, bool dataChanged)
 {
   const std::size_t n = input.cells.cellCount;
-  const bool cull = input.opacity.table && input.opacity.size > 0;
+  const bool byAttenuation = input.colours != nullptr;
+  const bool cull = byAttenuation || (input.opacity.table && input.opacity.size > 0);
   if (!cull)
   {
     if (this->CullByOpacity)
@@ -231,13 +235,24 @@ void FramePipeline::UpdateCulling(const FrameInput& input, int threads, bool dat
     this->HaveVisible = false;
   }
   const TransferFunctionTable& t = input.opacity;
+  // With dependent components the scalars are the attenuations: no table is read.
   const bool tableChanged = !this->HaveVisible || !this->Reuse ||
-    input.opacityVersion != this->OpacityVersion || t.table != this->OpacityTable.table ||
-    t.size != this->OpacityTable.size || t.low != this->OpacityTable.low ||
-    t.high != this->OpacityTable.high;
+    byAttenuation != this->CullByAttenuation ||
+    (!byAttenuation &&
+      (input.opacityVersion != this->OpacityVersion || t.table != this->OpacityTable.table ||
+        t.size != this->OpacityTable.size || t.low != this->OpacityTable.low ||
+        t.high != this->OpacityTable.high));
   if (tableChanged)
   {
-    this->Opacity.SetTable(t);
+    if (byAttenuation)
+    {
+      this->Opacity.SetAttenuations();
+    }
+    else
+    {
+      this->Opacity.SetTable(t);
+    }
+    this->CullByAttenuation = byAttenuation;
     this->NewVisible.resize(n);
     this->NewVisible.resize(this->Opacity.SelectVisibleCells(
       this->CellRanges.data(), n, this->NewVisible.data(), threads));
@@ -463,12 +478,19 @@ std::size_t FramePipeline::ClipNearPlane(const FrameInput& input, int threads)
         const ProjectedPoint* corners[4] = { points + ids[0], points + ids[1], points + ids[2],
           points + ids[3] };
         float scalars[4];
+        const float* colours[4] = { nullptr, nullptr, nullptr, nullptr };
         for (int i = 0; i < 4; ++i)
         {
           scalars[i] = cellScalars ? cellScalars[cell] : corners[i]->scalar;
+          if (input.colours)
+          {
+            colours[i] =
+              input.colours + 4 * (cellScalars ? static_cast<std::int64_t>(cell) : ids[i]);
+          }
         }
         const std::size_t before = this->Pieces.size();
-        CutTetrahedron(corners, scalars, plane, input.projection, this->Pieces);
+        CutTetrahedron(corners, scalars, plane, input.projection, this->Pieces,
+          input.colours ? colours : nullptr);
         ++clipped;
         for (std::size_t j = before; j < this->Pieces.size(); ++j)
         {
@@ -530,7 +552,10 @@ bool FramePipeline::DecomposeWindow(Window& window, std::size_t& first, std::siz
       const NearPiece& piece = this->Pieces[j];
       const ProjectedPoint* corners[4] = { &piece.corners[0], &piece.corners[1], &piece.corners[2],
         &piece.corners[3] };
-      this->Classes[k] = decomposePiece(in, corners, piece.scalars, k);
+      const float* colours[4] = { piece.colours[0], piece.colours[1], piece.colours[2],
+        piece.colours[3] };
+      this->Classes[k] =
+        decomposePiece(in, corners, piece.scalars, in.colours ? colours : nullptr, k);
     }
   }
   std::size_t pixelCulled = 0, notDrawable = 0;
@@ -562,10 +587,10 @@ void FramePipeline::DecomposeBatch(std::size_t first, std::size_t count, int thr
         this->IndexBuffer.data(), this->Classes.data(), team);
     },
     [&](const DecomposeInput& in, const ProjectedPoint* const corners[4], const float* scalars,
-      std::uint64_t k)
+      const float* const* colours, std::uint64_t k)
     {
       return DecomposeIntoSlot(
-        in, corners, scalars, k, this->VertexBuffer.data(), this->IndexBuffer.data());
+        in, corners, scalars, k, this->VertexBuffer.data(), this->IndexBuffer.data(), colours);
     });
   this->BatchCount = count;
   this->BuffersVersion += decomposed ? 1 : 0;
@@ -582,7 +607,8 @@ void FramePipeline::DecomposeFans(std::size_t first, std::size_t count, int thre
         in, this->Rank.data(), from, n, this->FanBuffer.data(), this->Classes.data(), team);
     },
     [&](const DecomposeInput& in, const ProjectedPoint* const corners[4], const float* scalars,
-      std::uint64_t k) { return DecomposeIntoFan(in, corners, scalars, this->FanBuffer[k]); });
+      const float* const* colours, std::uint64_t k)
+    { return DecomposeIntoFan(in, corners, scalars, this->FanBuffer[k], colours); });
   this->FanBatchCount = count;
   this->FansVersion += decomposed ? 1 : 0;
 }

@@ -2,8 +2,6 @@
 #include "mtpt/NearPlane.h"
 
 #include <cmath>
-#include <tuple>
-#include <utility>
 
 namespace mtpt
 {
@@ -51,7 +49,8 @@ ProjectedPoint Project(double ex, double ey, double ez, float scalar, const Matr
 } // namespace
 
 int CutTetrahedron(const ProjectedPoint* const corners[4], const float scalars[4],
-  const NearPlane& plane, const Matrix4& projection, std::vector<NearPiece>& pieces)
+  const NearPlane& plane, const Matrix4& projection, std::vector<NearPiece>& pieces,
+  const float* const* colours)
 {
   double d[4];
   int in[4], out[4], nin = 0, nout = 0;
@@ -74,23 +73,31 @@ int CutTetrahedron(const ProjectedPoint* const corners[4], const float scalars[4
   // Corner records: 0..3 the originals, then the crossings of edges (in, out).
   ProjectedPoint records[10];
   float values[10];
+  float rgba[10][4] = {};
   for (int i = 0; i < 4; ++i)
   {
     records[i] = *corners[i];
     values[i] = scalars[i];
+    for (int c = 0; colours && c < 4; ++c)
+    {
+      rgba[i][c] = colours[i][c];
+    }
   }
-  // A visible corner (d >= 0) lies beyond the near plane, so its projection is usable.
-  auto crossing = [&](int a, int b)
+  // Record k: where edge (a, b) crosses the plane. A visible corner (d >= 0) lies beyond the
+  // near plane, so its projection is usable.
+  auto crossing = [&](int k, int a, int b)
   {
     const ProjectedPoint& pa = *corners[a];
     const ProjectedPoint& pb = *corners[b];
     const double t = d[a] / (d[a] - d[b]); // in [0, 1): d[a] >= 0 > d[b]
     const auto lerp = [t](double u, double v) { return u + t * (v - u); };
-    const float scalar = static_cast<float>(lerp(scalars[a], scalars[b]));
-    return std::make_pair(
-      Project(lerp(pa.eyeX, pb.eyeX), lerp(pa.eyeY, pb.eyeY), lerp(pa.eyeZ, pb.eyeZ),
-        static_cast<float>(lerp(pa.scalar, pb.scalar)), projection),
-      scalar);
+    records[k] = Project(lerp(pa.eyeX, pb.eyeX), lerp(pa.eyeY, pb.eyeY), lerp(pa.eyeZ, pb.eyeZ),
+      static_cast<float>(lerp(pa.scalar, pb.scalar)), projection);
+    values[k] = static_cast<float>(lerp(scalars[a], scalars[b]));
+    for (int c = 0; colours && c < 4; ++c)
+    {
+      rgba[k][c] = static_cast<float>(lerp(colours[a][c], colours[b][c]));
+    }
   };
   auto emit = [&](const int ids[4])
   {
@@ -99,6 +106,10 @@ int CutTetrahedron(const ProjectedPoint* const corners[4], const float scalars[4
     {
       piece.corners[i] = records[ids[i]];
       piece.scalars[i] = values[ids[i]];
+      for (int c = 0; c < 4; ++c)
+      {
+        piece.colours[i][c] = rgba[ids[i]][c];
+      }
     }
     pieces.push_back(piece);
   };
@@ -112,7 +123,7 @@ int CutTetrahedron(const ProjectedPoint* const corners[4], const float scalars[4
   {
     for (int k = 0; k < 3; ++k)
     {
-      std::tie(records[4 + k], values[4 + k]) = crossing(in[0], out[k]);
+      crossing(4 + k, in[0], out[k]);
     }
     const int ids[4] = { in[0], 4, 5, 6 };
     emit(ids);
@@ -125,7 +136,7 @@ int CutTetrahedron(const ProjectedPoint* const corners[4], const float scalars[4
     for (int k = 0; k < 3; ++k)
     {
       a[k] = in[k];
-      std::tie(records[4 + k], values[4 + k]) = crossing(in[k], out[0]);
+      crossing(4 + k, in[k], out[0]);
       b[k] = 4 + k;
     }
   }
@@ -133,10 +144,10 @@ int CutTetrahedron(const ProjectedPoint* const corners[4], const float scalars[4
   {
     a[0] = in[0];
     b[0] = in[1];
-    std::tie(records[4], values[4]) = crossing(in[0], out[0]);
-    std::tie(records[5], values[5]) = crossing(in[0], out[1]);
-    std::tie(records[6], values[6]) = crossing(in[1], out[0]);
-    std::tie(records[7], values[7]) = crossing(in[1], out[1]);
+    crossing(4, in[0], out[0]);
+    crossing(5, in[0], out[1]);
+    crossing(6, in[1], out[0]);
+    crossing(7, in[1], out[1]);
     a[1] = 4;
     a[2] = 5;
     b[1] = 6;

@@ -94,6 +94,16 @@ void ValueCorner(const RasterFrame& f, Mode mode, Corner& c)
 {
   const TetVertex& v = *c.vertex;
   c.valued = true;
+  if (mode == Mode::Compatible && f.vertexColours)
+  {
+    // Dependent components: the decomposition classified the vertex already.
+    float rgba[4];
+    LoadVertexColour(v, rgba);
+    std::copy(rgba, rgba + 4, c.values);
+    c.values[4] = v.thickness;
+    c.values[5] = v.z;
+    return;
+  }
   if (mode == Mode::Compatible)
   {
     // Vertex classification: the mean of the transfer function at the front and back

@@ -6,6 +6,7 @@
 
 #include "mtpt/Decompose.h"
 #include "mtpt/FramePipeline.h"
+#include "mtpt/NearPlane.h"
 
 #include <gtest/gtest.h>
 
@@ -441,6 +442,199 @@ TEST(Decompose, DegenerateInputGivesFiniteBuffersAndValidIndices)
   };
   EXPECT_LT(thicknessOf(1), 1e-12f);
   EXPECT_NEAR(thicknessOf(12), 1.0f, 1e-6);
+}
+
+TEST(VertexColours, StoredAsSixteenBitsClampedToTheUnitRange)
+{
+  const float in[][4] = { { 0.0f, 1.0f, 0.5f, 0.25f }, { -1.0f, 2.0f, NAN, 1e-6f },
+    { 0.123456f, 0.999999f, 1.0f / 65535.0f, 0.5f / 65535.0f } };
+  for (const auto& rgba : in)
+  {
+    TetVertex v{ 0.25f, -0.5f, 0.75f, 0, 0, 2.0f };
+    mtpt::StoreVertexColour(v, rgba);
+    float out[4];
+    mtpt::LoadVertexColour(v, out);
+    for (int c = 0; c < 4; ++c)
+    {
+      const float expected = std::isnan(rgba[c]) ? 0.0f : std::min(1.0f, std::max(0.0f, rgba[c]));
+      EXPECT_NEAR(out[c], expected, 0.5 / 65535 + 1e-7) << c;
+    }
+    EXPECT_EQ(v.x, 0.25f); // the other fields are untouched
+    EXPECT_EQ(v.thickness, 2.0f);
+  }
+}
+
+TEST(VertexColours, CornersKeepTheirColourAndTheThickVertexMeansItsSegment)
+{
+  // Colours are linear inside a tetrahedron, as scalars are: decomposing with a channel as
+  // the scalar gives its value at the front and the back of the thick vertex's segment, and
+  // the coloured records must hold the corners' colours and, at the thick vertex, the mean
+  // of those two (VTK's PT's vertex classification).
+  std::mt19937_64 random(7);
+  std::uniform_real_distribution<double> coordinate(-1.0, 1.0), unit(0.0, 1.0);
+  const View view = PerspectiveView();
+  int checked = 0;
+  for (int t = 0; t < 3000; ++t)
+  {
+    float coords[12], rgba[4][4];
+    for (int i = 0; i < 4; ++i)
+    {
+      for (int k = 0; k < 3; ++k)
+      {
+        coords[3 * i + k] = static_cast<float>(coordinate(random));
+      }
+      for (float& c : rgba[i])
+      {
+        c = static_cast<float>(unit(random));
+      }
+    }
+    const float attenuation[4] = { rgba[0][3], rgba[1][3], rgba[2][3], rgba[3][3] };
+    mtpt::ProjectedPoint ndc[4];
+    mtpt::ProjectPoints(mtpt::PointsView::FromFloat(coords, 4),
+      { attenuation, mtpt::ScalarsView::Association::Points }, view.modelView, view.projection, ndc,
+      1);
+    const mtpt::ProjectedPoint* corners[4] = { &ndc[0], &ndc[1], &ndc[2], &ndc[3] };
+    const float* colours[4] = { rgba[0], rgba[1], rgba[2], rgba[3] };
+    TetVertex coloured[5];
+    std::uint32_t indices[12];
+    mtpt::Fan fan;
+    const auto projection =
+      mtpt::DecomposeTetrahedron(corners, attenuation, coloured, indices, colours);
+    mtpt::DecomposeTetrahedronToFan(corners, attenuation, fan, colours);
+    if (projection.kind == ProjectionClass::NotDrawable)
+    {
+      continue;
+    }
+    ++checked;
+    const int thick = projection.kind == ProjectionClass::Quadrilateral ? 4 : projection.vertex[3];
+    for (int c = 0; c < 4; ++c)
+    {
+      const float channel[4] = { rgba[0][c], rgba[1][c], rgba[2][c], rgba[3][c] };
+      TetVertex plain[5];
+      std::uint32_t plainIndices[12];
+      mtpt::DecomposeTetrahedron(corners, channel, plain, plainIndices);
+      for (int v = 0; v < 5; ++v)
+      {
+        float got[4];
+        mtpt::LoadVertexColour(coloured[v], got);
+        const double expected = v == thick
+          ? 0.5 * (static_cast<double>(plain[v].scalarFront) + plain[v].scalarBack)
+          : (v < 4 ? channel[v] : got[c]); // an unused vertex 4 copies the thick one
+        ASSERT_NEAR(got[c], expected, 0.5 / 65535 + 1e-6) << "tetrahedron " << t << " vertex " << v;
+        ASSERT_EQ(coloured[v].thickness, plain[v].thickness);
+        ASSERT_EQ(coloured[v].x, plain[v].x);
+      }
+      // The fan holds the same records.
+      float centre[4], slot[4];
+      mtpt::LoadVertexColour(fan.centre, centre);
+      mtpt::LoadVertexColour(coloured[thick], slot);
+      ASSERT_EQ(centre[c], slot[c]);
+    }
+  }
+  EXPECT_GT(checked, 2500);
+}
+
+TEST(VertexColours, NearPlanePiecesInterpolateColoursAsScalars)
+{
+  std::mt19937_64 random(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), unit(0.0, 1.0);
+  const mtpt::Matrix4 projection = Perspective(60, 1.0, 0.5, 10);
+  const mtpt::NearPlane plane(projection);
+  int pieces = 0;
+  for (int trial = 0; trial < 500; ++trial)
+  {
+    mtpt::ProjectedPoint records[4];
+    const mtpt::ProjectedPoint* corners[4];
+    float rgba[4][4];
+    const float* colours[4];
+    float zero[4] = { 0, 0, 0, 0 };
+    for (int i = 0; i < 4; ++i)
+    {
+      records[i] = mtpt::ProjectedPoint{};
+      records[i].eyeX = u(random);
+      records[i].eyeY = u(random);
+      records[i].eyeZ = -0.5 + 0.6 * u(random); // around the near plane at z = -0.5
+      records[i].usable = 1;
+      corners[i] = &records[i];
+      for (float& c : rgba[i])
+      {
+        c = static_cast<float>(unit(random));
+      }
+      colours[i] = rgba[i];
+    }
+    std::vector<mtpt::NearPiece> coloured;
+    mtpt::CutTetrahedron(corners, zero, plane, projection, coloured, colours);
+    pieces += static_cast<int>(coloured.size());
+    for (int c = 0; c < 4; ++c)
+    {
+      const float channel[4] = { rgba[0][c], rgba[1][c], rgba[2][c], rgba[3][c] };
+      std::vector<mtpt::NearPiece> plain;
+      mtpt::CutTetrahedron(corners, channel, plane, projection, plain);
+      ASSERT_EQ(plain.size(), coloured.size());
+      for (std::size_t j = 0; j < plain.size(); ++j)
+      {
+        for (int i = 0; i < 4; ++i)
+        {
+          ASSERT_EQ(coloured[j].colours[i][c], plain[j].scalars[i]) << trial;
+        }
+      }
+    }
+  }
+  EXPECT_GT(pieces, 100);
+}
+
+TEST(VertexColours, PipelineBuffersAreBitIdenticalForEveryThreadCount)
+{
+  const TetMesh mesh = JitteredGrid(12, 5);
+  std::vector<float> rgba(4 * mesh.points.size() / 3), attenuation(mesh.points.size() / 3);
+  for (std::size_t p = 0; p < attenuation.size(); ++p)
+  {
+    for (int c = 0; c < 4; ++c)
+    {
+      rgba[4 * p + c] = 0.5f + 0.5f * std::sin(static_cast<float>(p * (c + 3)));
+    }
+    // Transparent on one side: whole cells there are culled.
+    attenuation[p] = mesh.points[3 * p] < 0.4f ? 0.0f : rgba[4 * p + 3];
+    rgba[4 * p + 3] = attenuation[p];
+  }
+  mtpt::FrameInput input;
+  input.points = mesh.Points();
+  input.cells = mesh.Cells();
+  input.scalars = { attenuation.data(), mtpt::ScalarsView::Association::Points };
+  input.colours = rgba.data();
+  const View view = PerspectiveView();
+  input.modelView = view.modelView;
+  input.projection = view.projection;
+  input.perspective = true;
+  mtpt::FramePipeline reference;
+  ASSERT_TRUE(reference.Run(input, 1));
+  reference.DecomposeFans(0, reference.SortedCount(), 1);
+  for (int threads : { 2, 3, 8 })
+  {
+    mtpt::FramePipeline pipeline;
+    ASSERT_TRUE(pipeline.Run(input, threads));
+    pipeline.DecomposeFans(0, pipeline.SortedCount(), threads);
+    ASSERT_EQ(pipeline.Keys(), reference.Keys());
+    ASSERT_EQ(0,
+      std::memcmp(pipeline.Vertices().data(), reference.Vertices().data(),
+        reference.Vertices().size() * sizeof(TetVertex)));
+    ASSERT_EQ(0,
+      std::memcmp(
+        pipeline.Fans().data(), reference.Fans().data(), reference.FanCount() * sizeof(mtpt::Fan)));
+  }
+  // Culled: exactly the cells whose four attenuations are 0 (no table is given).
+  std::size_t transparent = 0;
+  for (std::size_t c = 0; c < mesh.CellCount(); ++c)
+  {
+    bool zero = true;
+    for (int k = 0; k < 4; ++k)
+    {
+      zero = zero && attenuation[mesh.connectivity[4 * c + k]] == 0.0f;
+    }
+    transparent += zero ? 1 : 0;
+  }
+  EXPECT_GT(transparent, 0u);
+  EXPECT_EQ(reference.Stats().opacityCulled, transparent);
 }
 
 TEST(FramePipeline, RejectsMeshesBeyondThirtyTwoBitIndices)

@@ -22,6 +22,7 @@ struct RasterFrame
   int width = 0, height = 0; ///< the image
   TransferFunctionTable transferFunction;
   const PreIntegrationTable* preIntegration = nullptr; ///< null: VTK-compatible shading
+  bool vertexColours = false; ///< the records hold colours (CompositeSettings::vertexColours)
   PerspectiveInterpolation interpolation;
   float inverseUnit = 1.0f; ///< 1 / ScalarOpacityUnitDistance
 };

@@ -19,7 +19,9 @@
  *   clipped to a guard band around the viewport, as OpenGL clips it.
  * - Shading, exactly as the OpenGL path's shaders, in one of two modes (Shading):
  *   VTK-compatible: each vertex is classified as the mean of the transfer function at its
- *   front and back scalars (colour rgb, attenuation a); colour, attenuation and segment
+ *   front and back scalars (colour rgb, attenuation a), or, with dependent components,
+ *   carries its colour and attenuation (CompositeSettings::vertexColours); colour,
+ *   attenuation and segment
  *   length are interpolated linearly in screen space; fragment opacity =
  *   1 - exp(-a * length / unitDistance).
  *   Pre-integrated: the front scalar, back scalar and segment length are interpolated
@@ -100,6 +102,12 @@ struct CompositeSettings
   const float* opaqueDepth = nullptr;
   /// Pre-integrated shading in perspective views: see PerspectiveInterpolation.
   PerspectiveInterpolation interpolation;
+  /**
+   * Dependent components: the records hold their vertex's colour (StoreVertexColour, from
+   * a decomposition with DecomposeInput::colours) instead of scalars, and shading is
+   * VTK-compatible with those colours whatever `shading` says; the table is not read.
+   */
+  bool vertexColours = false;
 
   /// Switches to pre-integrated shading with `table` (the integral functions of
   /// transferFunction, kept alive by the caller) and the view's `interpolation`.
@@ -114,14 +122,14 @@ struct CompositeSettings
 /// What the compositor did since Begin, and how long it took.
 struct CompositorStats
 {
-  std::size_t fans = 0;        ///< fans given that touch the image
-  std::size_t binEntries = 0;  ///< (fan, tile) pairs
-  std::size_t triangles = 0;   ///< (triangle, tile) pairs that covered a pixel (set up)
-  std::size_t fragments = 0;   ///< pixels covered by a triangle and shaded
-  std::size_t tiles = 0;       ///< tiles that had fans
-  double binSeconds = 0;       ///< binning
-  double rasterSeconds = 0;    ///< set-up and fragments
-  double resolveSeconds = 0;   ///< Resolve
+  std::size_t fans = 0;       ///< fans given that touch the image
+  std::size_t binEntries = 0; ///< (fan, tile) pairs
+  std::size_t triangles = 0;  ///< (triangle, tile) pairs that covered a pixel (set up)
+  std::size_t fragments = 0;  ///< pixels covered by a triangle and shaded
+  std::size_t tiles = 0;      ///< tiles that had fans
+  double binSeconds = 0;      ///< binning
+  double rasterSeconds = 0;   ///< set-up and fragments
+  double resolveSeconds = 0;  ///< Resolve
 };
 
 /// A rectangle of pixels: [x0, x1) x [y0, y1) (empty when x0 >= x1 or y0 >= y1).
@@ -199,13 +207,13 @@ private:
   CompositeSettings Settings;
   CompositorStats Statistics;
   int TilesX = 0, TilesY = 0;
-  std::vector<float> Image;             ///< per tile: R, G, B, A planes
-  std::vector<std::uint8_t> Cleared;    ///< per tile: cleared since Begin
-  std::vector<TileRange> Ranges;        ///< per fan of the last Composite
-  std::vector<std::uint32_t> Counts;    ///< per (block, tile): pairs, then the block's cursor
-  std::vector<std::size_t> TileStart;   ///< per tile: its first entry (tiles + 1 values)
-  std::vector<Fan> Entries;             ///< the fans, tile by tile, in visibility order
-  std::vector<int> Tiles;               ///< tiles with fans in the last Composite
+  std::vector<float> Image;           ///< per tile: R, G, B, A planes
+  std::vector<std::uint8_t> Cleared;  ///< per tile: cleared since Begin
+  std::vector<TileRange> Ranges;      ///< per fan of the last Composite
+  std::vector<std::uint32_t> Counts;  ///< per (block, tile): pairs, then the block's cursor
+  std::vector<std::size_t> TileStart; ///< per tile: its first entry (tiles + 1 values)
+  std::vector<Fan> Entries;           ///< the fans, tile by tile, in visibility order
+  std::vector<int> Tiles;             ///< tiles with fans in the last Composite
   PixelRegion Touched;
   std::vector<Fan> SlotFans; ///< the slot entry point's fans
 };

@@ -45,6 +45,13 @@ public:
   /// Reads the opacity channel of `table` (copied: the table may change afterwards).
   void SetTable(const TransferFunctionTable& table);
 
+  /**
+   * Dependent components: the scalars are the attenuations themselves (FrameInput::colours),
+   * interpolated linearly inside a cell and never negative, so a cell is visible exactly when
+   * its largest is above 0. Replaces the table until the next SetTable.
+   */
+  void SetAttenuations();
+
   /// True if a scalar in [low, high] can read a non-zero opacity. False for NaN bounds.
   bool Visible(float low, float high) const;
 
@@ -59,6 +66,7 @@ public:
 private:
   std::vector<std::uint32_t> NonZeroBefore; ///< entries before i with opacity != 0
   int Size = 0;
+  bool Attenuations = false; ///< SetAttenuations: visible when the range's top is above 0
   float Low = 0, Scale = 0;
 };
 

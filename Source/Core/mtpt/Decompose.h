@@ -35,6 +35,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 
 namespace mtpt
 {
@@ -47,6 +48,38 @@ struct TetVertex
   float scalarBack;  ///< scalar where the ray leaves it
   float thickness;   ///< eye-space length of the ray segment inside the tetrahedron
 };
+
+/**
+ * Dependent components (Documentation/algorithm.md, "Dependent components"): where the data
+ * give colour and opacity themselves rather than a scalar to look up, the decomposition
+ * classifies at the vertices (DecomposeInput::colours) and the bytes of a record's
+ * scalarFront and scalarBack hold the vertex's colour instead: red, green, blue and the
+ * attenuation (per ScalarOpacityUnitDistance), each clamped to [0, 1] and stored as a
+ * 16-bit unsigned normalized integer, in that memory order. OpenGL reads them as a
+ * normalized GL_UNSIGNED_SHORT vec4; VTK's PT keeps 8 bits per channel.
+ */
+inline void StoreVertexColour(TetVertex& vertex, const float rgba[4])
+{
+  std::uint16_t packed[4];
+  for (int c = 0; c < 4; ++c)
+  {
+    const float v = rgba[c] > 0.0f ? (rgba[c] < 1.0f ? rgba[c] : 1.0f) : 0.0f; // NaN: 0
+    packed[c] = static_cast<std::uint16_t>(v * 65535.0f + 0.5f);
+  }
+  static_assert(sizeof(packed) == 2 * sizeof(float), "two record fields hold the colour");
+  std::memcpy(&vertex.scalarFront, packed, sizeof(packed));
+}
+
+/// The colour StoreVertexColour put in `vertex`.
+inline void LoadVertexColour(const TetVertex& vertex, float rgba[4])
+{
+  std::uint16_t packed[4];
+  std::memcpy(packed, &vertex.scalarFront, sizeof(packed));
+  for (int c = 0; c < 4; ++c)
+  {
+    rgba[c] = static_cast<float>(packed[c]) * (1.0f / 65535.0f);
+  }
+}
 
 constexpr std::size_t VerticesPerTetrahedron = 5;
 constexpr std::size_t IndicesPerTetrahedron = 12;
@@ -126,11 +159,14 @@ Projection ClassifyProjection(const double x[4], const double y[4]);
  * @param scalars    the scalar at each corner (the cell's scalar four times for cell data)
  * @param vertices   5 records written
  * @param indices    12 slot-local indices (0..4) written
+ * @param colours    null, or each corner's RGBA (dependent components): the records then
+ *                   hold colours (StoreVertexColour), the thick vertex's the mean of the
+ *                   colours interpolated at the front and back of its segment
  * @return the classification (NotDrawable: the slot is degenerate, all zeros)
  * Thread safety: pure function of its arguments.
  */
 Projection DecomposeTetrahedron(const ProjectedPoint* const corners[4], const float scalars[4],
-  TetVertex vertices[5], std::uint32_t indices[12]);
+  TetVertex vertices[5], std::uint32_t indices[12], const float* const* colours = nullptr);
 
 /// Inputs of the decomposition stage that stay fixed during a frame.
 struct DecomposeInput
@@ -140,6 +176,11 @@ struct DecomposeInput
   CellsView cells;
   /// Only cell scalars are read from here; point scalars travel in the records.
   ScalarsView scalars;
+  /// Dependent components: RGBA (4 floats in [0, 1], the attenuation last) per point or per
+  /// cell, as `scalars` are associated. Set, the records hold colours (StoreVertexColour),
+  /// and `scalars` must be the attenuations (a non-finite one marks a point or cell that
+  /// cannot be drawn). Null: the records hold scalars.
+  const float* colours = nullptr;
   /// Viewport size in pixels. When both are > 0, cells whose projection covers no pixel
   /// centre (sub-pixel cells, cells off screen) become CoversNoPixel slots: same image,
   /// much less work for small images. 0: no culling.
@@ -171,21 +212,22 @@ void DecomposeTetrahedra(const DecomposeInput& input, const SortKey* order, std:
  */
 ProjectionClass DecomposeIntoSlot(const DecomposeInput& input,
   const ProjectedPoint* const corners[4], const float scalars[4], std::size_t k,
-  TetVertex* vertices, std::uint32_t* indices);
+  TetVertex* vertices, std::uint32_t* indices, const float* const* colours = nullptr);
 
 /**
  * The fan of one tetrahedron (see Fan and DecomposeTetrahedron); count 0 when it cannot be
  * drawn. Thread safety: pure function of its arguments.
  */
-Projection DecomposeTetrahedronToFan(
-  const ProjectedPoint* const corners[4], const float scalars[4], Fan& fan);
+Projection DecomposeTetrahedronToFan(const ProjectedPoint* const corners[4], const float scalars[4],
+  Fan& fan, const float* const* colours = nullptr);
 
 /**
  * As DecomposeIntoSlot, into a fan: `fan` receives the tetrahedron's fan, or count 0 when it
  * is not drawable or covers no pixel centre. Returns its class.
  */
 ProjectionClass DecomposeIntoFan(const DecomposeInput& input,
-  const ProjectedPoint* const corners[4], const float scalars[4], Fan& fan);
+  const ProjectedPoint* const corners[4], const float scalars[4], Fan& fan,
+  const float* const* colours = nullptr);
 
 /**
  * As DecomposeTetrahedraByRank, into fans: rank r of the window [firstRank, firstRank +

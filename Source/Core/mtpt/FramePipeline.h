@@ -74,6 +74,11 @@ struct FrameInput
   PointsView points;
   CellsView cells;
   ScalarsView scalars;
+  /// Dependent components (DecomposeInput::colours): RGBA per point or cell, as `scalars`
+  /// are associated, and `scalars` the attenuations. Then cells whose attenuation is 0 at
+  /// every corner are culled (with `opacity.table` set or not: it is not read). Null: the
+  /// scalars are looked up in the transfer functions.
+  const float* colours = nullptr;
   Matrix4 modelView = IdentityMatrix();  ///< view * model
   Matrix4 projection = IdentityMatrix(); ///< eye to clip coordinates
   bool perspective = false;
@@ -280,6 +285,7 @@ private:
     std::size_t cellSize = 0;
     std::size_t cellCount = 0;
     const float* scalars = nullptr;
+    const float* colours = nullptr;
     ScalarsView::Association association = ScalarsView::Association::Points;
     std::uint64_t dataVersion = 0;
     bool operator==(const Inputs& o) const;
@@ -290,6 +296,7 @@ private:
   std::uint64_t OpacityVersion = 0;
   TransferFunctionTable OpacityTable;
   bool CullByOpacity = false;
+  bool CullByAttenuation = false; ///< the visible cells are those of FrameInput::colours
   // Versions of the stage results, bumped when a stage recomputes something different.
   std::uint64_t PointsVersion = 0, VisibleVersion = 0, OrderVersion = 0;
   std::uint64_t OrderPointsVersion = 0, OrderVisibleVersion = 0;

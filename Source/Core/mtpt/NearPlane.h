@@ -46,22 +46,26 @@ struct NearPlane
 /// it can be projected): such a point can be cut against the plane.
 bool HasFiniteEyeCoordinates(const ProjectedPoint& p);
 
-/// One piece of a cut tetrahedron: its 4 corners, projected, and their scalars.
+/// One piece of a cut tetrahedron: its 4 corners, projected, their scalars and, for
+/// dependent components, their colours (zero otherwise).
 struct NearPiece
 {
   ProjectedPoint corners[4];
   float scalars[4];
+  float colours[4][4];
 };
 
 /**
  * Appends to `pieces` the part of the tetrahedron `corners` (with `scalars`, one per
- * corner) on the visible side of `plane`: nothing if no corner is on it, the tetrahedron
- * unchanged if all are, else 1 or 3 pieces whose new corners lie on the plane and are
- * projected with `projection`. Returns the number of pieces appended. Every corner must
- * satisfy HasFiniteEyeCoordinates. Thread safety: pure function of its arguments.
+ * corner, and `colours`, an RGBA per corner or null) on the visible side of `plane`:
+ * nothing if no corner is on it, the tetrahedron unchanged if all are, else 1 or 3 pieces
+ * whose new corners lie on the plane and are projected with `projection`, their scalars
+ * and colours interpolated linearly. Returns the number of pieces appended. Every corner
+ * must satisfy HasFiniteEyeCoordinates. Thread safety: pure function of its arguments.
  */
 int CutTetrahedron(const ProjectedPoint* const corners[4], const float scalars[4],
-  const NearPlane& plane, const Matrix4& projection, std::vector<NearPiece>& pieces);
+  const NearPlane& plane, const Matrix4& projection, std::vector<NearPiece>& pieces,
+  const float* const* colours = nullptr);
 
 } // namespace mtpt
 
