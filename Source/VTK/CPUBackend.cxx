@@ -146,6 +146,7 @@ CPUBackend::ImageKey CPUBackend::ImageKey::Of(const BackendFrame& frame)
   key.size[0] = frame.size[0];
   key.size[1] = frame.size[1];
   key.shading = frame.shading;
+  key.vertexColours = frame.vertexColours;
   key.unitDistance = frame.unitDistance;
   key.interpolation = frame.interpolation;
   return key;
@@ -156,9 +157,10 @@ bool CPUBackend::ImageKey::operator==(const ImageKey& o) const
   const PerspectiveInterpolation &a = this->interpolation, &b = o.interpolation;
   return pipeline == o.pipeline && order == o.order && tables == o.tables && batch == o.batch &&
     size[0] == o.size[0] && size[1] == o.size[1] && shading == o.shading &&
-    unitDistance == o.unitDistance && a.perspective == b.perspective &&
-    a.inverseWScale == b.inverseWScale && a.inverseWOffset == b.inverseWOffset &&
-    a.scaleX == b.scaleX && a.shiftX == b.shiftX && a.scaleY == b.scaleY && a.shiftY == b.shiftY;
+    vertexColours == o.vertexColours && unitDistance == o.unitDistance &&
+    a.perspective == b.perspective && a.inverseWScale == b.inverseWScale &&
+    a.inverseWOffset == b.inverseWOffset && a.scaleX == b.scaleX && a.shiftX == b.shiftX &&
+    a.scaleY == b.scaleY && a.shiftY == b.shiftY;
 }
 
 void CPUBackend::Composite(const BackendFrame& frame, BackendTimes& times)
@@ -170,7 +172,8 @@ void CPUBackend::Composite(const BackendFrame& frame, BackendTimes& times)
   settings.transferFunction = frame.tables->Table();
   settings.unitDistance = frame.unitDistance;
   settings.opaqueDepth = this->Depth.empty() ? nullptr : this->Depth.data();
-  if (frame.shading == Shading::PreIntegrated)
+  settings.vertexColours = frame.vertexColours;
+  if (frame.shading == Shading::PreIntegrated && !frame.vertexColours)
   {
     settings.UsePreIntegration(frame.tables->PreIntegration(), frame.interpolation);
   }
@@ -199,7 +202,8 @@ void CPUBackend::Composite(const BackendFrame& frame, BackendTimes& times)
   }
 }
 
-bool CPUBackend::WriteBack(const BackendFrame& frame, const PixelRegion& region, BackendTimes& times)
+bool CPUBackend::WriteBack(
+  const BackendFrame& frame, const PixelRegion& region, BackendTimes& times)
 {
   // Only the region the volume touched changes. It is composited over the colour that was
   // there on the CPU and written with blending off: blending it in OpenGL would round the

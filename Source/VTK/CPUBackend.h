@@ -47,8 +47,7 @@ public:
   CPUBackend();
   ~CPUBackend() override;
 
-  bool SamplesPixelCentresOnly(
-    vtkOpenGLRenderWindow* window, bool floatFramebuffer) const override;
+  bool SamplesPixelCentresOnly(vtkOpenGLRenderWindow* window, bool floatFramebuffer) const override;
   bool Draw(const BackendFrame& frame, BackendTimes& times) override;
   void ReleaseGraphicsResources(vtkWindow* window) override;
 
@@ -71,6 +70,7 @@ private:
     std::size_t batch = 0;
     int size[2] = { 0, 0 };
     Shading shading = Shading::VTKCompatible;
+    bool vertexColours = false;
     double unitDistance = 0;
     PerspectiveInterpolation interpolation;
 

@@ -2,6 +2,7 @@
 #include "MeshAdapter.h"
 
 #include "VTKCompatibility.h"
+#include "VolumeInput.h"
 
 #include "vtkCellArray.h"
 #include "vtkCellType.h"
@@ -240,7 +241,8 @@ const float* MeshAdapter::Scalars(
   vtkDataArray* array, int component, double range[2], vtkIdType& nonFinite)
 {
   const int components = array->GetNumberOfComponents();
-  if (components == 1)
+  const bool all = component == AllComponents;
+  if (components == 1 && !all)
   {
     component = 0;
   }
@@ -248,6 +250,11 @@ const float* MeshAdapter::Scalars(
   {
     component = components - 1;
   }
+  // Dependent components: every component, and four unsigned chars are a colour in 0-255
+  // (VTK's PT uses them as they are, the others as values in [0, 1]).
+  const int channels = all ? components : 1;
+  const double unit =
+    all && components == 4 && array->GetDataType() == VTK_UNSIGNED_CHAR ? 1.0 / 255.0 : 1.0;
   // Values changed in place with only the grid marked Modified() count as a change too.
   if (array != this->ScalarArray || array->GetMTime() != this->ScalarTime ||
     component != this->ScalarComponent || this->InputTime != this->ScalarInputTime)
@@ -257,7 +264,7 @@ const float* MeshAdapter::Scalars(
     this->ScalarInputTime = this->InputTime;
     this->ScalarComponent = component;
     const vtkIdType tuples = array->GetNumberOfTuples();
-    this->ScalarValues.resize(static_cast<std::size_t>(tuples));
+    this->ScalarValues.resize(static_cast<std::size_t>(tuples) * channels);
     double low = std::numeric_limits<double>::infinity();
     double high = -low;
     vtkIdType bad = 0;
@@ -265,6 +272,21 @@ const float* MeshAdapter::Scalars(
     vtkIdType t = 0;
     for (const auto tuple : values)
     {
+      if (all)
+      {
+        bool finite = true;
+        for (int k = 0; k < components; ++k)
+        {
+          const auto f = static_cast<float>(tuple[k] * unit);
+          this->ScalarValues[static_cast<std::size_t>(t) * channels + k] = f;
+          finite = finite && std::isfinite(f);
+          low = finite && f < low ? f : low;
+          high = finite && f > high ? f : high;
+        }
+        bad += finite ? 0 : 1;
+        ++t;
+        continue;
+      }
       double v = 0;
       if (component >= 0)
       {

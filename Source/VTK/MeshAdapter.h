@@ -56,10 +56,12 @@ public:
 
   /**
    * One float scalar per tuple of `array`: its `component`, or its magnitude when
-   * component < 0 (single-component arrays: the value; a component beyond the last reads
-   * the last: SelectScalars warns about it). Cached; returns the values and
-   * sets the finite range and the number of non-finite values. Recomputed when the array,
-   * its MTime, the component or the MTime of the input of the last Update() changes.
+   * component is -1 (single-component arrays: the value; a component beyond the last reads
+   * the last: SelectScalars warns about it). With component AllComponents (dependent
+   * components), every component of each tuple, four unsigned chars divided by 255.
+   * Cached; returns the values and sets the finite range and the number of tuples with a
+   * non-finite value. Recomputed when the array, its MTime, the component or the MTime of
+   * the input of the last Update() changes.
    */
   const float* Scalars(vtkDataArray* array, int component, double range[2], vtkIdType& nonFinite);
 

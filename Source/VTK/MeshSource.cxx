@@ -28,7 +28,7 @@ struct MeshSource::Grid
   MeshAdapter Adapter;
   vtkUnstructuredGridBase* Tetrahedra = nullptr; ///< the grid, or its split, drawn
   ScalarSelection Selected;
-  const float* Values = nullptr; ///< one float per point or cell of Tetrahedra
+  const float* Values = nullptr; ///< ChannelsOf(Selected) floats per point or cell of Tetrahedra
   double Range[2] = { 0, 0 };
   bool Seen = false; ///< still in the input at the last Update
 };
@@ -132,7 +132,7 @@ bool MeshSource::PrepareGrid(Grid& grid, vtkUnstructuredGridBase* input, const s
   {
     report(grid.Tetrahedra,
       single ? grid.Selected.error : name + ": " + grid.Selected.error + "; it is not drawn",
-      single);
+      single && !grid.Selected.errorIsWarning);
     return false;
   }
   if (!grid.Selected.warning.empty())
@@ -182,6 +182,7 @@ bool MeshSource::Update(vtkDataObject* input, vtkAbstractVolumeMapper* mapper,
     entry.second->Seen = false;
   }
   bool cellData = false;
+  int channels = 1;
   for (const auto& item : grids)
   {
     std::unique_ptr<Grid>& grid = this->Cache[item.first];
@@ -198,6 +199,7 @@ bool MeshSource::Update(vtkDataObject* input, vtkAbstractVolumeMapper* mapper,
     if (this->Used.empty())
     {
       cellData = grid->Selected.cellData;
+      channels = ChannelsOf(grid->Selected);
     }
     else if (grid->Selected.cellData != cellData)
     {
@@ -205,6 +207,15 @@ bool MeshSource::Update(vtkDataObject* input, vtkAbstractVolumeMapper* mapper,
         item.second + "'s scalars are " + (grid->Selected.cellData ? "cell" : "point") +
           " data where the blocks before it have " + (cellData ? "cell" : "point") +
           " data; it is not drawn",
+        false);
+      continue;
+    }
+    else if (ChannelsOf(grid->Selected) != channels)
+    {
+      report(grid->Tetrahedra,
+        item.second + "'s scalars have " + std::to_string(ChannelsOf(grid->Selected)) +
+          " dependent components where the blocks before it have " + std::to_string(channels) +
+          "; it is not drawn",
         false);
       continue;
     }
@@ -250,6 +261,7 @@ bool MeshSource::Update(vtkDataObject* input, vtkAbstractVolumeMapper* mapper,
   }
   this->LastKeys = keys;
   ++this->DataVersion;
+  this->ScalarChannels = channels;
   const auto association =
     cellData ? ScalarsView::Association::Cells : ScalarsView::Association::Points;
   this->ScalarRange[0] = std::numeric_limits<double>::infinity();
@@ -292,7 +304,8 @@ void MeshSource::GatherScalars()
   for (const Grid* grid : this->Used)
   {
     const std::size_t count =
-      grid->Selected.cellData ? grid->Adapter.Cells().cellCount : grid->Adapter.Points().count;
+      (grid->Selected.cellData ? grid->Adapter.Cells().cellCount : grid->Adapter.Points().count) *
+      static_cast<std::size_t>(this->ScalarChannels);
     this->Gathered.insert(this->Gathered.end(), grid->Values, grid->Values + count);
   }
 }

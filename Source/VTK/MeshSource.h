@@ -10,7 +10,8 @@
  * (MeshAdapter), and gives its scalars by the mapper's selection (SelectScalars). The
  * leaves of a composite input become the parts of one mesh (mtpt::MeshPart): the core sorts
  * the cells of all blocks in one visibility order, with no merged copy of their points or
- * cells. Only their scalars are gathered into one array (one float per point or cell).
+ * cells. Only their scalars are gathered into one array (one float per point or cell, or
+ * every component of each with dependent components).
  *
  * Skipped, with one warning each: leaves that are not unstructured grids, leaves without
  * cells, leaves without the selected scalars, and leaves whose scalars are point data where
@@ -69,7 +70,10 @@ public:
 
   PointsView Points() const { return this->PointData; }
   CellsView Cells() const { return this->CellData; }
+  /// The scalars, Channels() floats per point or cell.
   ScalarsView Scalars() const { return this->ScalarData; }
+  /// Values per point or cell in Scalars(): 1, or 2 or 4 with dependent components.
+  int Channels() const { return this->ScalarChannels; }
   /// The finite range of the scalars over every grid drawn.
   const double* Range() const { return this->ScalarRange; }
   /// Changes whenever the content the views show changes.
@@ -106,6 +110,7 @@ private:
   PointsView PointData;
   CellsView CellData;
   ScalarsView ScalarData;
+  int ScalarChannels = 1;
   double ScalarRange[2] = { 0, 1 };
 
   /// What the views were made from: a change of any of these is a new data version.

@@ -97,10 +97,10 @@ void OpenGLBackend::UploadTables(const BackendFrame& frame)
 
 void OpenGLBackend::SetUniforms(const BackendFrame& frame, vtkShaderProgram* program)
 {
-  const bool preIntegrated = frame.shading == Shading::PreIntegrated;
+  const bool preIntegrated = frame.shading == Shading::PreIntegrated && !frame.vertexColours;
   const TransferFunctionTable table = frame.tables->Table();
   program->SetUniformi("transferFunction", this->TransferFunction->GetTextureUnit());
-  program->SetUniformi("shadingMode", preIntegrated ? 1 : 0);
+  program->SetUniformi("shadingMode", frame.vertexColours ? 2 : (preIntegrated ? 1 : 0));
   program->SetUniformi("tableSize", table.size);
   if (preIntegrated)
   {
@@ -268,6 +268,9 @@ void OpenGLBackend::DrawUploaded(vtkShaderProgram* program)
       program, this->VertexBuffer, "vertexNDC", 0, stride, VTK_FLOAT, 3, false);
     this->Triangles.VAO->AddAttributeArray(
       program, this->VertexBuffer, "scalarFrontBack", 12, stride, VTK_FLOAT, 2, false);
+    // The same bytes as four normalized 16-bit channels (mtpt::StoreVertexColour).
+    this->Triangles.VAO->AddAttributeArray(
+      program, this->VertexBuffer, "vertexColour", 12, stride, VTK_UNSIGNED_SHORT, 4, true);
     this->Triangles.VAO->AddAttributeArray(
       program, this->VertexBuffer, "thickness", 20, stride, VTK_FLOAT, 1, false);
     this->Triangles.AttributeUpdateTime.Modified();

@@ -46,6 +46,9 @@ struct BackendFrame
   FramePipeline* pipeline = nullptr;
   const TransferFunctionTables* tables = nullptr;
   Shading shading = Shading::VTKCompatible;
+  /// Dependent components: the pipeline's records hold colours (FrameInput::colours), shaded
+  /// VTK-compatibly whatever `shading` says; the tables are not read.
+  bool vertexColours = false;
   PerspectiveInterpolation interpolation; ///< of this frame's projection
   double unitDistance = 1.0;              ///< ScalarOpacityUnitDistance, positive
   std::size_t batchSize = 1;              ///< tetrahedra decomposed per batch (>= 1)

@@ -110,8 +110,34 @@ ScalarSelection SelectScalars(
     selected.array = nullptr;
     return selected;
   }
+  if (property && !property->GetIndependentComponents())
+  {
+    const int components = selected.array->GetNumberOfComponents();
+    if (components == 2 || components == 4)
+    {
+      selected.component = AllComponents;
+      return selected;
+    }
+    std::ostringstream warning;
+    const char* arrayName = selected.array->GetName();
+    warning << "dependent components (IndependentComponents off) map 2 components (colour "
+               "scalar, opacity scalar) or 4 (RGBA); the scalar array '"
+            << (arrayName ? arrayName : "") << "' has " << components
+            << ": nothing is drawn (turn IndependentComponents on to map one component)";
+    selected.error = warning.str();
+    selected.errorIsWarning = true;
+    selected.array = nullptr;
+    return selected;
+  }
   ChooseComponent(property, selected);
   return selected;
+}
+
+int ChannelsOf(const ScalarSelection& selection)
+{
+  return selection.component == AllComponents && selection.array
+    ? selection.array->GetNumberOfComponents()
+    : 1;
 }
 
 void ViewMatrices(vtkRenderer* renderer, vtkVolume* volume, Matrix4& modelView, Matrix4& projection)

@@ -24,15 +24,25 @@ VTK_ABI_NAMESPACE_END
 namespace mtpt
 {
 
+/// ScalarSelection::component of dependent components: every component is used.
+constexpr int AllComponents = -2;
+
 /// The scalars a volume colours by, chosen by VTK's rules (see SelectScalars).
 struct ScalarSelection
 {
   vtkDataArray* array = nullptr; ///< null: nothing usable (Error says why)
   bool cellData = false;         ///< one value per cell rather than per point
-  int component = -1;            ///< the component used; -1: the magnitude
-  std::string error;             ///< why no array was selected; empty when one was
-  std::string warning;           ///< a request that could not be honoured as made
+  /// The component used; -1: the magnitude; AllComponents: dependent components (2 or 4).
+  int component = -1;
+  std::string error; ///< why no array was selected; empty when one was
+  /// `error` is a warning, as VTK's PT gives it (dependent components of an unsupported
+  /// count): nothing is drawn, but nothing is wrong with the scene either.
+  bool errorIsWarning = false;
+  std::string warning; ///< a request that could not be honoured as made
 };
+
+/// Values per tuple of a selection: 1, or the array's components with dependent components.
+int ChannelsOf(const ScalarSelection& selection);
 
 /**
  * The scalars of `input` that `mapper` (null: VTK's defaults) selects with its scalar mode
@@ -43,6 +53,11 @@ struct ScalarSelection
  * by the nearest one with a warning. No array, or one shorter than the points or cells it
  * should cover, is an error naming the selection (a misspelt array name is the usual
  * cause).
+ *
+ * Dependent components (the property's IndependentComponents off), as VTK's PT maps them:
+ * two components are a colour scalar and an opacity scalar, four are the colour and opacity
+ * themselves (component = AllComponents); any other count is VTK's warning
+ * (errorIsWarning) and nothing is drawn.
  */
 ScalarSelection SelectScalars(
   vtkUnstructuredGridBase* input, vtkAbstractVolumeMapper* mapper, vtkVolumeProperty* property);

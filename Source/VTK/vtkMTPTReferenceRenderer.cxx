@@ -299,6 +299,11 @@ bool vtkMTPTReferenceRenderer::Render(
   settings.width = size[0];
   settings.height = size[1];
   settings.unitDistance = mtpt::UnitDistance(property);
+  // Dependent components: the mapping of VTK's PT, integrated exactly (ScalarMapping).
+  const int channels = mtpt::ChannelsOf(selected);
+  settings.mapping = channels == 1
+    ? mtpt::ScalarMapping::TransferFunctions
+    : (channels == 2 ? mtpt::ScalarMapping::ColourAndOpacityScalars : mtpt::ScalarMapping::Colours);
   renderer->GetBackground(settings.background);
   const mtpt::ScalarsView view{ values,
     selected.cellData ? mtpt::ScalarsView::Association::Cells

@@ -13,6 +13,12 @@
  * the exactness of the integral (about 1e-12 per pixel) and the pixel conventions (rays
  * through pixel centres moved by a few millionths of a pixel).
  *
+ * Dependent components (the property's IndependentComponents off) are mapped as the mapper
+ * and VTK's PT map them: two components are a colour scalar and an opacity scalar, each
+ * through its transfer function and each linear inside a cell; four are the colour and the
+ * attenuation themselves (unsigned chars divided by 255), linear inside a cell and clamped
+ * to [0, 1]. Both are integrated exactly along each segment (mtpt::ScalarMapping).
+ *
  * Inputs are read as vtkMultiThreadedProjectedTetrahedraMapper reads them: the grid (the
  * volume mapper's input unless one is given; the unstructured blocks of a composite input
  * appended into one grid) is split into tetrahedra as the mapper splits
@@ -43,7 +49,7 @@
 
 #include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
 #include "vtkObject.h"
-#include "vtkSmartPointer.h" // for the appended blocks
+#include "vtkSmartPointer.h"        // for the appended blocks
 #include "vtkRenderingMTPTModule.h" // for export macro
 
 VTK_ABI_NAMESPACE_BEGIN

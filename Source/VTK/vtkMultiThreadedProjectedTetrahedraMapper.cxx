@@ -2,6 +2,7 @@
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
 
 #include "CPUBackend.h"
+#include "DependentColours.h"
 #include "MeshSource.h"
 #include "OpenGLBackend.h"
 #include "TransferFunctionTables.h"
@@ -81,6 +82,8 @@ public:
   mtpt::MeshSource Source;
   mtpt::FramePipeline Pipeline;
   mtpt::TransferFunctionTables Tables;
+  mtpt::DependentColours Colours; ///< of dependent components
+  bool Dependent = false;         ///< the last input has dependent components
   mtpt::OpenGLBackend OpenGL;
   mtpt::CPUBackend CPU;
 
@@ -237,8 +240,7 @@ double vtkMultiThreadedProjectedTetrahedraMapper::GetBinSeconds()
 }
 double vtkMultiThreadedProjectedTetrahedraMapper::GetRasterSeconds()
 {
-  return this->Internal->LastBackend == CPU_BACKEND ? this->Internal->CPU.Stats().rasterSeconds
-                                                    : 0;
+  return this->Internal->LastBackend == CPU_BACKEND ? this->Internal->CPU.Stats().rasterSeconds : 0;
 }
 vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfFragments()
 {
@@ -443,6 +445,18 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::PrepareInput(
   frame.cells = in.Source.Cells();
   frame.scalars = in.Source.Scalars();
   frame.dataVersion = in.Source.Version();
+  in.Dependent = in.Source.Channels() > 1;
+  if (in.Dependent)
+  {
+    // Dependent components: colours per point or cell, classified at the vertices.
+    const std::size_t tuples = frame.scalars.association == mtpt::ScalarsView::Association::Cells
+      ? frame.cells.cellCount
+      : frame.points.count;
+    in.Colours.Update(frame.scalars, in.Source.Channels(), tuples, property, in.Source.Version());
+    frame.scalars = in.Colours.Attenuations();
+    frame.colours = in.Colours.Colours();
+    frame.dataVersion = in.Colours.Version();
+  }
   return true;
 }
 
@@ -584,6 +598,18 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetUpFrame(vtkRenderer* renderer
   draw.tables = &in.Tables;
   draw.shading = this->ShadingMode == PRE_INTEGRATED_SHADING ? mtpt::Shading::PreIntegrated
                                                              : mtpt::Shading::VTKCompatible;
+  draw.vertexColours = in.Dependent;
+  if (in.Dependent && draw.shading == mtpt::Shading::PreIntegrated)
+  {
+    draw.shading = mtpt::Shading::VTKCompatible;
+    if (in.Report(this, "pre-integrated dependent components"))
+    {
+      vtkWarningMacro(<< "pre-integrated shading integrates one scalar through the transfer "
+                         "functions; with dependent components (IndependentComponents off) "
+                         "the data give the colours, which are drawn with VTK-compatible "
+                         "shading");
+    }
+  }
   // Orthographic projections give the linear default.
   draw.interpolation = mtpt::PerspectiveInterpolation::FromProjection(frame.projection);
   draw.threads = this->NumberOfThreads;

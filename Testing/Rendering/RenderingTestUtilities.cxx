@@ -25,6 +25,8 @@
 
 #include "vtkIdList.h"
 #include "vtkMTPTReferenceRenderer.h"
+#include "vtkMultiThreadedProjectedTetrahedraMapper.h"
+#include "vtkProjectedTetrahedraMapper.h"
 
 #include <gtest/gtest.h>
 #include <vtksys/SystemTools.hxx>
@@ -416,6 +418,77 @@ void MessageObserver::Execute(vtkObject*, unsigned long event, void* data)
   else if (event == vtkCommand::WarningEvent)
   {
     this->warnings.push_back(text);
+  }
+}
+
+vtkSmartPointer<vtkMultiThreadedProjectedTetrahedraMapper> MakeMapper(int backend)
+{
+  auto mapper = vtkSmartPointer<vtkMultiThreadedProjectedTetrahedraMapper>::New();
+  mapper->SetBackend(backend);
+  return mapper;
+}
+
+const char* ShortBackendName(int backend)
+{
+  return backend == vtkMultiThreadedProjectedTetrahedraMapper::CPU_BACKEND ? "cpu" : "gl";
+}
+
+void ExpectCloseToVTK(
+  const Scene& scene, const std::string& name, const Limits& limits, TheirWindow window)
+{
+  for (std::size_t v = 0; v < std::size(Views); ++v)
+  {
+    const Scene ours = scene.From(Views[v]);
+    Scene theirs = ours;
+    if (window == TheirWindow::SingleSampled)
+    {
+      theirs.window.multiSamples = 0;
+    }
+    vtkNew<vtkProjectedTetrahedraMapper> vtkpt;
+    auto reference = Render(theirs, vtkpt);
+    const std::string view = name + "-view" + std::to_string(v);
+    Save(reference, view + "-vtkpt");
+    for (int backend : { vtkMultiThreadedProjectedTetrahedraMapper::OPENGL_BACKEND,
+           vtkMultiThreadedProjectedTetrahedraMapper::CPU_BACKEND })
+    {
+      const std::string label = view + "-" + ShortBackendName(backend);
+      auto mapper = MakeMapper(backend);
+      auto image = Render(ours, mapper);
+      EXPECT_EQ(mapper->GetLastBackend(), backend);
+      Save(image, label);
+      ExpectClose(image, reference, limits, label + " vs VTK PT", 0.1);
+    }
+  }
+}
+
+void ExpectCloseToReference(
+  const Scene& scene, const std::string& name, const Limits& limits, int shading)
+{
+  for (std::size_t v = 0; v < std::size(Views); ++v)
+  {
+    const std::string view = name + "-view" + std::to_string(v);
+    vtkSmartPointer<vtkImageData> reference;
+    for (int backend : { vtkMultiThreadedProjectedTetrahedraMapper::OPENGL_BACKEND,
+           vtkMultiThreadedProjectedTetrahedraMapper::CPU_BACKEND })
+    {
+      auto mapper = MakeMapper(backend);
+      mapper->SetShadingMode(shading);
+      const Stage stage = RenderStage(scene.From(Views[v]), mapper);
+      if (!reference)
+      {
+        reference = ReferenceImage(stage);
+        ASSERT_TRUE(reference);
+        Save(reference, view + "-reference");
+      }
+      const std::string label = view + "-" + ShortBackendName(backend) +
+        (shading == vtkMultiThreadedProjectedTetrahedraMapper::PRE_INTEGRATED_SHADING
+            ? "-preintegrated"
+            : "");
+      auto image = Grab(stage.window, false);
+      mapper->ReleaseGraphicsResources(stage.window);
+      Save(image, label);
+      ExpectClose(image, reference, limits, label + " vs reference", 0.1);
+    }
   }
 }
 

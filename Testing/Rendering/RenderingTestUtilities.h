@@ -14,6 +14,7 @@
 
 VTK_ABI_NAMESPACE_BEGIN
 class vtkDataObject;
+class vtkMultiThreadedProjectedTetrahedraMapper;
 class vtkUnstructuredGridBase;
 class vtkActor;
 class vtkImageData;
@@ -174,6 +175,39 @@ ImageDifference CompareWithBaseline(vtkImageData* image, const std::string& name
 
 /// Writes the image next to the test binary (for inspection after a failure).
 void Save(vtkImageData* image, const std::string& name);
+
+/// A mapper drawing through `backend` (vtkMultiThreadedProjectedTetrahedraMapper's constants).
+vtkSmartPointer<vtkMultiThreadedProjectedTetrahedraMapper> MakeMapper(int backend);
+
+/// "cpu" or "gl", for image names.
+const char* ShortBackendName(int backend);
+
+/// Where VTK's PT draws the image this mapper's is compared with.
+enum class TheirWindow
+{
+  /// Without multisampling: in a multisampled window VTK's PT speckles along cell edges (it
+  /// shades fragments of triangles that cover a sample but not the pixel centre with
+  /// extrapolated thicknesses; TestMapperWindows.cxx measures it), which no bound on the
+  /// worst pixel would survive.
+  SingleSampled,
+  /// The window this mapper draws in (VTK's default), for scenes with opaque geometry,
+  /// whose antialiased edges differ from a single-sampled window's by up to 0.6.
+  Same
+};
+
+/**
+ * Renders `scene` from every direction of Views with VTK's PT and with this mapper through
+ * each backend (in VTK's default window), saves the images, and checks the differences.
+ */
+void ExpectCloseToVTK(const Scene& scene, const std::string& name, const Limits& limits,
+  TheirWindow window = TheirWindow::SingleSampled);
+
+/**
+ * Renders `scene` from every direction of Views with this mapper through each backend, in
+ * `shading`, and checks the images against the exact ray integral of the same view.
+ */
+void ExpectCloseToReference(
+  const Scene& scene, const std::string& name, const Limits& limits, int shading);
 
 /// Collects error and warning events of one object.
 class MessageObserver : public vtkCommand

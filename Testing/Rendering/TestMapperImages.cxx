@@ -51,94 +51,6 @@ using namespace mtpt::rendering_test;
 
 using Mapper = vtkMultiThreadedProjectedTetrahedraMapper;
 
-vtkSmartPointer<Mapper> MakeMapper(int backend)
-{
-  auto mapper = vtkSmartPointer<Mapper>::New();
-  mapper->SetBackend(backend);
-  return mapper;
-}
-
-const char* BackendName(int backend)
-{
-  return backend == Mapper::CPU_BACKEND ? "cpu" : "gl";
-}
-
-/// Where VTK's PT draws the image this mapper's is compared with.
-enum class TheirWindow
-{
-  /// Without multisampling: in a multisampled window VTK's PT speckles along cell edges (it
-  /// shades fragments of triangles that cover a sample but not the pixel centre with
-  /// extrapolated thicknesses; TestMapperWindows.cxx measures it), which no bound on the
-  /// worst pixel would survive.
-  SingleSampled,
-  /// The window this mapper draws in (VTK's default), for scenes with opaque geometry,
-  /// whose antialiased edges differ from a single-sampled window's by up to 0.6.
-  Same
-};
-
-/**
- * Renders `scene` from every direction of Views with VTK's PT and with this mapper through
- * each backend (in VTK's default window), saves the images, and checks the differences.
- */
-void ExpectCloseToVTK(const Scene& scene, const std::string& name, const Limits& limits,
-  TheirWindow window = TheirWindow::SingleSampled)
-{
-  for (std::size_t v = 0; v < std::size(Views); ++v)
-  {
-    const Scene ours = scene.From(Views[v]);
-    Scene theirs = ours;
-    if (window == TheirWindow::SingleSampled)
-    {
-      theirs.window.multiSamples = 0;
-    }
-    vtkNew<vtkProjectedTetrahedraMapper> vtkpt;
-    auto reference = Render(theirs, vtkpt);
-    const std::string view = name + "-view" + std::to_string(v);
-    Save(reference, view + "-vtkpt");
-    for (int backend : { Mapper::OPENGL_BACKEND, Mapper::CPU_BACKEND })
-    {
-      const std::string label = view + "-" + BackendName(backend);
-      auto mapper = MakeMapper(backend);
-      auto image = Render(ours, mapper);
-      EXPECT_EQ(mapper->GetLastBackend(), backend);
-      Save(image, label);
-      ExpectClose(image, reference, limits, label + " vs VTK PT", 0.1);
-    }
-  }
-}
-
-/**
- * Renders `scene` from every direction of Views with this mapper through each backend, in
- * `shading`, and checks the images against the exact ray integral of the same view.
- */
-void ExpectCloseToReference(
-  const Scene& scene, const std::string& name, const Limits& limits, int shading)
-{
-  for (std::size_t v = 0; v < std::size(Views); ++v)
-  {
-    const std::string view = name + "-view" + std::to_string(v);
-    vtkSmartPointer<vtkImageData> reference;
-    for (int backend : { Mapper::OPENGL_BACKEND, Mapper::CPU_BACKEND })
-    {
-      auto mapper = MakeMapper(backend);
-      mapper->SetShadingMode(shading);
-      const Stage stage = RenderStage(scene.From(Views[v]), mapper);
-      if (!reference)
-      {
-        reference = ReferenceImage(stage);
-        ASSERT_TRUE(reference);
-        Save(reference, view + "-reference");
-      }
-      const std::string label = view + "-" + BackendName(backend) +
-        (shading == Mapper::PRE_INTEGRATED_SHADING ? "-preintegrated" : "");
-      auto image = Grab(stage.window, false);
-      mapper->ReleaseGraphicsResources(stage.window);
-      Save(image, label);
-      ExpectClose(image, reference, limits, label + " vs reference", 0.1);
-    }
-  }
-}
-
 class MapperImages : public ::testing::Test
 {
 protected:
@@ -295,8 +207,8 @@ TEST_F(MapperImages, IdenticalForEveryThreadCountAndOrderMethod)
         mapper->SetNumberOfThreads(threads);
         mapper->SetOrderMethod(radix ? Mapper::RADIX_SORT : Mapper::PARTITION_SORT);
         const ImageDifference d = Compare(Render(s, mapper), expected);
-        EXPECT_EQ(d.worst, 0.0) << BackendName(backend) << ", " << threads << " threads, radix "
-                                << radix;
+        EXPECT_EQ(d.worst, 0.0) << ShortBackendName(backend) << ", " << threads
+                                << " threads, radix " << radix;
       }
     }
   }

@@ -11,7 +11,7 @@ in vec2 exactRay;
 uniform int perspectiveExact;
 
 uniform float inverseUnitDistance; // 1 / ScalarOpacityUnitDistance
-uniform int shadingMode;           // 0: VTK-compatible, 1: pre-integrated
+uniform int shadingMode;           // 0: VTK-compatible, 1: pre-integrated, 2: vertex colours
 uniform int tableSize;
 uniform sampler2D transferFunction;
 // Prefix integrals (T, E_r, E_g, E_b) at the table entries, as a float sum high + low so
@@ -123,9 +123,9 @@ vec4 PreIntegrated(float ua, float ub, float len)
 void main()
 {
   vec4 fragment;
-  if (shadingMode == 0)
+  if (shadingMode != 1)
   {
-    // The exponential is taken per fragment: interpolating it per vertex would not match
+    // VTK-compatible, from the table or the vertex colours. The exponential is taken per fragment: interpolating it per vertex would not match
     // (the opacity of a segment is not linear in its length).
     fragment =
       vec4(classified.rgb, 1.0 - exp(-classified.a * preIntegration.z * inverseUnitDistance));

@@ -6,6 +6,9 @@
 in vec3 vertexNDC;
 in vec2 scalarFrontBack;
 in float thickness;
+// Dependent components (shadingMode 2): the same bytes as scalarFrontBack, read as the
+// vertex's colour and attenuation (16-bit unsigned normalized, mtpt::StoreVertexColour).
+in vec4 vertexColour;
 
 // Colour (rgb) and scalar opacity (a) of the transfer functions, sampled over the scalar
 // range: texture coordinate = scalar * scalarScale + scalarShift; table entry coordinate
@@ -16,7 +19,7 @@ uniform float scalarShift;
 uniform float entryScale;
 uniform float entryShift;
 uniform int tableSize;
-uniform int shadingMode; // 0: VTK-compatible, 1: pre-integrated
+uniform int shadingMode; // 0: VTK-compatible, 1: pre-integrated, 2: vertex colours
 // Perspective-exact pre-integration (mtpt::PerspectiveInterpolation): 1 / eye depth =
 // inverseDepthScale * z_ndc + inverseDepthOffset; eye ray per unit depth =
 // ((ndc.xy + rayShift) * rayScale, -1).
@@ -35,7 +38,13 @@ out vec2 exactRay;
 
 void main()
 {
-  if (shadingMode == 0)
+  if (shadingMode == 2)
+  {
+    // Dependent components: the CPU stages classified the vertex (colour, attenuation).
+    classified = vertexColour;
+    preIntegration = vec3(0.0, 0.0, thickness);
+  }
+  else if (shadingMode == 0)
   {
     // Vertex classification as VTK's PT, with float colours: at the thick vertex the
     // colour and attenuation are the mean of the front and back values.
