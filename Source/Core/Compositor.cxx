@@ -2,13 +2,10 @@
 #include "mtpt/Compositor.h"
 
 #include "detail/Parallel.h"
+#include "detail/Streaming.h"
 #include "detail/TileRaster.h"
 
 #include <omp.h>
-
-#if defined(__x86_64__) || defined(_M_X64)
-#include <immintrin.h>
-#endif
 
 #include <algorithm>
 #include <cmath>
@@ -21,7 +18,6 @@ namespace mtpt
 namespace
 {
 
-constexpr int TileSize = Compositor::TileSize;
 constexpr std::size_t TilePixels = static_cast<std::size_t>(TileSize) * TileSize;
 
 /**
@@ -82,29 +78,6 @@ bool Usable(const CompositeSettings& s)
 
 } // namespace
 
-PerspectiveInterpolation PerspectiveInterpolation::FromProjection(const Matrix4& p)
-{
-  PerspectiveInterpolation v;
-  // A perspective frustum: clip w = p14 ez with p14 < 0 (the eye depth D = -ez times
-  // -p14), clip z = p10 ez + p11, clip x and y free of translation terms.
-  if (p[8] != 0.0 || p[9] != 0.0 || p[12] != 0.0 || p[13] != 0.0 || !(p[14] < 0.0) ||
-    p[15] != 0.0 || !(p[0] != 0.0) || !(p[5] != 0.0) || p[1] != 0.0 || p[4] != 0.0 || p[3] != 0.0 ||
-    p[7] != 0.0 || !(std::fabs(p[11]) > 0.0))
-  {
-    return v;
-  }
-  v.perspective = true;
-  // z_ndc = p10 / p14 - p11 / (p14 D), so 1 / D = (p10 - p14 z_ndc) / p11.
-  v.inverseWScale = -p[14] / p[11];
-  v.inverseWOffset = p[10] / p[11];
-  // x_ndc = p0 ex / (-p14 D) + p2 / p14, so ex / D = (x_ndc - p2 / p14) (-p14 / p0).
-  v.scaleX = -p[14] / p[0];
-  v.shiftX = -p[2] / p[14];
-  v.scaleY = -p[14] / p[5];
-  v.shiftY = -p[6] / p[14];
-  return v;
-}
-
 void Compositor::Begin(const CompositeSettings& settings)
 {
   this->Settings = settings;
@@ -147,28 +120,6 @@ void Compositor::Composite(const Fan* fans, std::size_t count, int threads)
   this->Statistics.rasterSeconds += detail::SecondsSince(start);
 }
 
-namespace
-{
-
-/// Copies a fan to its bin with non-temporal stores where available: the bins are read next
-/// tile by tile, not by this thread, and are too large to be worth caching.
-inline void StreamFan(const Fan& source, Fan* target)
-{
-#if defined(__x86_64__) || defined(_M_X64)
-  long long words[sizeof(Fan) / 8];
-  std::memcpy(words, &source, sizeof(Fan));
-  auto* targetWords = reinterpret_cast<long long*>(target);
-  for (std::size_t i = 0; i < sizeof(Fan) / 8; ++i)
-  {
-    _mm_stream_si64(targetWords + i, words[i]);
-  }
-#else
-  *target = source;
-#endif
-}
-
-} // namespace
-
 void Compositor::Bin(const Fan* fans, std::size_t count, int threads)
 {
   // A counting sort of (fan, tile) pairs by tile: block b of the fans (contiguous in
@@ -177,6 +128,15 @@ void Compositor::Bin(const Fan* fans, std::size_t count, int threads)
   // its fans there. A tile's fans are then contiguous and in visibility order, whatever the
   // thread count, and rasterization reads them sequentially.
   const int blocks = ThreadsForWork(count, detail::FansPerThread, threads);
+  this->CountPairs(fans, count, blocks);
+  const std::size_t total = this->PlaceEntries(blocks);
+  this->CopyEntries(fans, count, blocks);
+  this->Statistics.binEntries += total;
+  this->Statistics.tiles += this->Tiles.size();
+}
+
+void Compositor::CountPairs(const Fan* fans, std::size_t count, int blocks)
+{
   const std::size_t tiles = static_cast<std::size_t>(this->TilesX) * this->TilesY;
   this->Counts.assign(static_cast<std::size_t>(blocks) * tiles, 0);
   if (this->Ranges.size() < count)
@@ -221,7 +181,19 @@ void Compositor::Bin(const Fan* fans, std::size_t count, int threads)
       touched[b] = region;
     }
   }
+  for (int b = 0; b < blocks; ++b)
+  {
+    this->Statistics.fans += binned[b];
+    const PixelRegion& r = touched[b];
+    this->Touched = { std::min(this->Touched.x0, r.x0), std::min(this->Touched.y0, r.y0),
+      std::max(this->Touched.x1, r.x1), std::max(this->Touched.y1, r.y1) };
+  }
+}
+
+std::size_t Compositor::PlaceEntries(int blocks)
+{
   // Places: tile by tile, block by block; each count becomes its block's cursor.
+  const std::size_t tiles = static_cast<std::size_t>(this->TilesX) * this->TilesY;
   this->TileStart.assign(tiles + 1, 0);
   this->Tiles.clear();
   std::size_t total = 0;
@@ -244,6 +216,12 @@ void Compositor::Bin(const Fan* fans, std::size_t count, int threads)
   {
     this->Entries.resize(total);
   }
+  return total;
+}
+
+void Compositor::CopyEntries(const Fan* fans, std::size_t count, int blocks)
+{
+  const std::size_t tiles = static_cast<std::size_t>(this->TilesX) * this->TilesY;
 #pragma omp parallel num_threads(blocks)
   {
     for (int b = omp_get_thread_num(); b < blocks; b += omp_get_num_threads())
@@ -256,24 +234,14 @@ void Compositor::Bin(const Fan* fans, std::size_t count, int threads)
         {
           for (int tx = range.x0; tx <= range.x1; ++tx)
           {
-            StreamFan(fans[i], this->Entries.data() + cursor[ty * this->TilesX + tx]++);
+            detail::StoreFan(
+              fans[i], this->Entries.data() + cursor[ty * this->TilesX + tx]++, true);
           }
         }
       }
     }
-#if defined(__x86_64__) || defined(_M_X64)
-    _mm_sfence(); // the copies are visible before the region ends
-#endif
+    detail::FinishStores(); // the copies are visible before the region ends
   }
-  for (int b = 0; b < blocks; ++b)
-  {
-    this->Statistics.fans += binned[b];
-    const PixelRegion& r = touched[b];
-    this->Touched = { std::min(this->Touched.x0, r.x0), std::min(this->Touched.y0, r.y0),
-      std::max(this->Touched.x1, r.x1), std::max(this->Touched.y1, r.y1) };
-  }
-  this->Statistics.binEntries += total;
-  this->Statistics.tiles += this->Tiles.size();
 }
 
 void Compositor::Rasterize(int threads)

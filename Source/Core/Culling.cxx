@@ -126,4 +126,76 @@ std::size_t OpacityCulling::SelectVisibleCells(
     });
 }
 
+bool CullingStage::Update(const Key& key, const CellsView& cells, std::size_t pointCount,
+  const ScalarsView& scalars, const TransferFunctionTable& table, int threads)
+{
+  if (this->Record.Holds(key))
+  {
+    return false;
+  }
+  const bool wasCulling = this->Record.Valid() && this->Record.Inputs().mode != Mode::None;
+  if (key.mode == Mode::None)
+  {
+    // Every cell is a candidate: a new result only if cells were culled before.
+    this->Record.Store(key, wasCulling || !this->Record.Valid());
+    return false;
+  }
+  const std::size_t n = cells.cellCount;
+  if (!this->RangesRecord.Holds(key.mesh))
+  {
+    if (this->Ranges.size() < 2 * n)
+    {
+      this->Ranges.resize(2 * n);
+    }
+    ComputeCellScalarRanges(cells, pointCount, scalars, this->Ranges.data(), threads);
+    this->RangesRecord.Store(key.mesh);
+  }
+  if (key.mode == Mode::Attenuations)
+  {
+    this->Opacity.SetAttenuations();
+  }
+  else
+  {
+    this->Opacity.SetTable(table);
+  }
+  this->NewList.resize(n);
+  this->NewList.resize(
+    this->Opacity.SelectVisibleCells(this->Ranges.data(), n, this->NewList.data(), threads));
+  // The same cells as before (a colour change): the same result.
+  const bool same = this->Record.Valid() && wasCulling && this->Record.Inputs().mesh == key.mesh &&
+    this->NewList == this->List;
+  if (!same)
+  {
+    this->List.swap(this->NewList);
+  }
+  this->Record.Store(key, !same);
+  return true;
+}
+
+std::size_t CullingStage::VisibleCount() const
+{
+  return this->Record.Inputs().mode == Mode::None ? this->Record.Inputs().mesh.cellCount
+                                                  : this->List.size();
+}
+
+void CullingStage::Forget()
+{
+  this->Record.Forget();
+  this->RangesRecord.Forget();
+}
+
+void CullingStage::Release()
+{
+  std::vector<float>().swap(this->Ranges);
+  std::vector<std::uint32_t>().swap(this->List);
+  std::vector<std::uint32_t>().swap(this->NewList);
+  this->Forget();
+}
+
+std::size_t CullingStage::MemoryBytes() const
+{
+  return this->Ranges.capacity() * sizeof(float) +
+    (this->List.capacity() + this->NewList.capacity()) * sizeof(std::uint32_t);
+}
+
 } // namespace mtpt

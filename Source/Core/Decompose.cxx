@@ -4,10 +4,7 @@
 #include "detail/MeshAccess.h"
 #include "detail/Parallel.h"
 #include "detail/PixelCoverage.h"
-
-#if defined(__x86_64__) || defined(_M_X64)
-#include <immintrin.h>
-#endif
+#include "detail/Streaming.h"
 
 #include <algorithm>
 #include <cmath>
@@ -16,25 +13,37 @@
 namespace mtpt
 {
 
-Projection ClassifyProjection(const double x[4], const double y[4])
+namespace
 {
-  Projection result;
-  // area2[i]: twice the signed area of the projected face opposite vertex i, oriented so
-  // that the four sum to zero (area2[i] = -orient(face without i) with alternating order).
-  // Each is a screen-space barycentric numerator: the signs alone give the class.
-  auto orient = [&](int a, int b, int c)
-  { return (x[b] - x[a]) * (y[c] - y[a]) - (y[b] - y[a]) * (x[c] - x[a]); };
+
+/// The four signed areas of a projection and the signs that classify it (ClassifyProjection).
+struct ProjectionAreas
+{
+  double magnitude[4]; ///< |area[i]|
+  int sign[4];         ///< -1, 0 (within the zero band) or +1
+  int positives = 0, negatives = 0;
+};
+
+/**
+ * area[i]: twice the signed area of the projected face opposite vertex i, oriented so that
+ * the four sum to zero (area[i] = -orient(face without i) with alternating order). Each is
+ * a screen-space barycentric numerator: the signs alone give the class. False when the
+ * projection has no area to speak of (a segment or a point) or is not finite.
+ */
+bool SignedAreas(const double x[4], const double y[4], ProjectionAreas& a)
+{
+  auto orient = [&](int p, int q, int r)
+  { return (x[q] - x[p]) * (y[r] - y[p]) - (y[q] - y[p]) * (x[r] - x[p]); };
   const double area2[4] = { orient(1, 2, 3), orient(0, 3, 2), orient(0, 1, 3), orient(0, 2, 1) };
-  double magnitude[4];
   double sumAbs = 0;
   for (int i = 0; i < 4; ++i)
   {
-    magnitude[i] = std::fabs(area2[i]);
-    sumAbs += magnitude[i];
+    a.magnitude[i] = std::fabs(area2[i]);
+    sumAbs += a.magnitude[i];
   }
   // sumAbs is twice the doubled hull area. Zero, non-finite, or negligible against the
-  // extent (the projection is a segment or a point): nothing to draw.
-  // (Plain comparisons: std::fmax is a library call unless NaN semantics are relaxed.)
+  // extent: nothing to draw. (Plain comparisons: std::fmax is a library call unless NaN
+  // semantics are relaxed.)
   double extent = 0;
   for (int i = 1; i < 4; ++i)
   {
@@ -44,79 +53,94 @@ Projection ClassifyProjection(const double x[4], const double y[4])
   }
   if (!(sumAbs > 1e-12 * extent * extent) || !std::isfinite(sumAbs))
   {
-    return result;
+    return false;
   }
-
   // Signs with a zero band relative to the hull area, never a test of a denominator with
   // == 0 (VTK's PT does that, and near-zero denominators then give huge alpha and beta;
   // Documentation/algorithm.md). A zero is a point on the line through an edge of the others.
   const double zeroBand = ClassificationTolerance * sumAbs;
-  int sign[4];
-  int positives = 0, negatives = 0;
   for (int i = 0; i < 4; ++i)
   {
-    sign[i] = magnitude[i] <= zeroBand ? 0 : (area2[i] > 0 ? 1 : -1);
-    positives += sign[i] > 0;
-    negatives += sign[i] < 0;
+    a.sign[i] = a.magnitude[i] <= zeroBand ? 0 : (area2[i] > 0 ? 1 : -1);
+    a.positives += a.sign[i] > 0;
+    a.negatives += a.sign[i] < 0;
   }
-  const int zeros = 4 - positives - negatives;
+  return true;
+}
 
-  if (positives == 2 && negatives == 2)
+/// Class 2: the two vertices of one sign form the diagonal that crosses the diagonal of the
+/// other two. The crossing divides each diagonal in the ratio of the distances of its ends
+/// from the other diagonal's line, i.e. of the areas opposite them.
+Projection Quadrilateral(const ProjectionAreas& a)
+{
+  Projection result;
+  int pos[2], neg[2], np = 0, nn = 0;
+  for (int i = 0; i < 4; ++i)
   {
-    // The two vertices of one sign form the diagonal that crosses the diagonal of the
-    // other two. The crossing divides each diagonal in the ratio of the distances of its
-    // ends from the other diagonal's line, i.e. of the areas opposite them.
-    int pos[2], neg[2], np = 0, nn = 0;
-    for (int i = 0; i < 4; ++i)
-    {
-      (sign[i] > 0 ? pos[np++] : neg[nn++]) = i;
-    }
-    result.kind = ProjectionClass::Quadrilateral;
-    result.vertex[0] = pos[0];
-    result.vertex[1] = pos[1];
-    result.vertex[2] = neg[0];
-    result.vertex[3] = neg[1];
-    result.alpha = magnitude[pos[1]] / (magnitude[pos[0]] + magnitude[pos[1]]);
-    result.beta = magnitude[neg[1]] / (magnitude[neg[0]] + magnitude[neg[1]]);
-    return result;
+    (a.sign[i] > 0 ? pos[np++] : neg[nn++]) = i;
   }
+  result.kind = ProjectionClass::Quadrilateral;
+  result.vertex[0] = pos[0];
+  result.vertex[1] = pos[1];
+  result.vertex[2] = neg[0];
+  result.vertex[3] = neg[1];
+  result.alpha = a.magnitude[pos[1]] / (a.magnitude[pos[0]] + a.magnitude[pos[1]]);
+  result.beta = a.magnitude[neg[1]] / (a.magnitude[neg[0]] + a.magnitude[neg[1]]);
+  return result;
+}
 
-  int thick = -1;
-  if ((positives == 3 && negatives == 1) || (positives == 1 && negatives == 3))
-  {
-    result.kind = ProjectionClass::Triangle;
-    const int unique = positives == 1 ? 1 : -1;
-    for (int i = 0; i < 4; ++i)
-    {
-      thick = sign[i] == unique ? i : thick;
-    }
-  }
-  else if (zeros == 1 && positives >= 1 && negatives >= 1)
+/// Classes 1, 3 and 4: the thick (inner) vertex and its class, or NotDrawable.
+ProjectionClass InnerVertex(const ProjectionAreas& a, int& thick)
+{
+  const int zeros = 4 - a.positives - a.negatives;
+  thick = -1;
+  if ((a.positives == 3 && a.negatives == 1) || (a.positives == 1 && a.negatives == 3) ||
+    (zeros == 1 && a.positives >= 1 && a.negatives >= 1))
   {
     // The inner vertex is the one whose sign no other non-zero area shares.
-    result.kind = ProjectionClass::VertexOnEdge;
-    const int unique = positives == 1 ? 1 : -1;
+    const int unique = a.positives == 1 ? 1 : -1;
     for (int i = 0; i < 4; ++i)
     {
-      thick = sign[i] == unique ? i : thick;
+      thick = a.sign[i] == unique ? i : thick;
     }
+    return zeros == 0 ? ProjectionClass::Triangle : ProjectionClass::VertexOnEdge;
   }
-  else if (zeros == 2 && positives == 1 && negatives == 1)
+  if (zeros == 2 && a.positives == 1 && a.negatives == 1)
   {
     // The two faces with zero area both contain the coincident pair, which is therefore
     // the pair of vertices with non-zero opposite areas. Either may be the thick vertex:
     // take the larger index.
-    result.kind = ProjectionClass::CoincidentVertices;
     for (int i = 0; i < 4; ++i)
     {
-      thick = sign[i] != 0 ? i : thick;
+      thick = a.sign[i] != 0 ? i : thick;
     }
+    return ProjectionClass::CoincidentVertices;
   }
-  else
-  {
-    return result; // not reachable for finite areas that sum to zero; stay safe
-  }
+  return ProjectionClass::NotDrawable; // not reachable for finite areas that sum to zero
+}
 
+} // namespace
+
+Projection ClassifyProjection(const double x[4], const double y[4])
+{
+  ProjectionAreas a;
+  if (!SignedAreas(x, y, a))
+  {
+    return Projection{};
+  }
+  if (a.positives == 2 && a.negatives == 2)
+  {
+    return Quadrilateral(a);
+  }
+  Projection result;
+  int thick = -1;
+  result.kind = InnerVertex(a, thick);
+  if (result.kind == ProjectionClass::NotDrawable)
+  {
+    return result;
+  }
+  // The outer triangle, and the inner point's barycentric weights in it: the areas of the
+  // sub-triangles opposite each outer vertex.
   int outer = 0;
   double weightSum = 0;
   for (int i = 0; i < 4; ++i)
@@ -124,8 +148,7 @@ Projection ClassifyProjection(const double x[4], const double y[4])
     if (i != thick)
     {
       result.vertex[outer] = i;
-      // Barycentric weight of outer vertex i: area of the sub-triangle opposite it.
-      result.weights[outer] = sign[i] != 0 ? magnitude[i] : 0.0;
+      result.weights[outer] = a.sign[i] != 0 ? a.magnitude[i] : 0.0;
       weightSum += result.weights[outer];
       ++outer;
     }
@@ -151,11 +174,11 @@ inline double PerspectiveCorrect(double s, double inverseWa, double inverseWb)
   return s * inverseWb / ((1.0 - s) * inverseWa + s * inverseWb); // both positive
 }
 
-inline void WriteDegenerateSlot(
-  TetVertex vertices[5], std::uint32_t indices[12], std::uint32_t base)
+inline void WriteDegenerateSlot(TetVertex vertices[VerticesPerTetrahedron],
+  std::uint32_t indices[IndicesPerTetrahedron], std::uint32_t base)
 {
-  std::memset(vertices, 0, 5 * sizeof(TetVertex));
-  for (int i = 0; i < 12; ++i)
+  std::memset(vertices, 0, VerticesPerTetrahedron * sizeof(TetVertex));
+  for (std::size_t i = 0; i < IndicesPerTetrahedron; ++i)
   {
     indices[i] = base;
   }
@@ -309,7 +332,8 @@ inline bool Corners(
 
 /// The decomposition of one tetrahedron into a slot whose indices start at `base`.
 inline Projection Decompose(const ProjectedPoint* const c[4], const float scalars[4],
-  const float* const* colours, TetVertex out[5], std::uint32_t indices[12], std::uint32_t base)
+  const float* const* colours, TetVertex out[VerticesPerTetrahedron],
+  std::uint32_t indices[IndicesPerTetrahedron], std::uint32_t base)
 {
   double x[4], y[4];
   FanGeometry g;
@@ -339,7 +363,7 @@ inline Projection Decompose(const ProjectedPoint* const c[4], const float scalar
   // Triangle i is (boundary[i], boundary[i+1], thick); a triangle projection pads its
   // fourth triangle as degenerate (all three indices on the thick vertex).
   const auto thick = static_cast<std::uint32_t>(g.thickSlot);
-  for (int i = 0; i < 4; ++i)
+  for (int i = 0; i < static_cast<int>(TrianglesPerTetrahedron); ++i)
   {
     const bool real = i < g.count;
     indices[3 * i + 0] = base + (real ? static_cast<std::uint32_t>(g.boundary[i]) : thick);
@@ -381,62 +405,12 @@ inline Projection DecomposeToFan(
   return g.projection;
 }
 
-/**
- * Copies a finished slot (assembled on the stack) to its place in the buffers with
- * non-temporal 8-byte stores where available. Plain stores to lines not in cache first read
- * them for ownership; with ~40 scalar stores a slot the store buffer fills and the core
- * stalls (measured: 4x slower decomposition when slots are written in scattered order). The
- * buffers are read next by the upload, not by this thread, so bypassing the cache is free.
- * Requires 8-byte aligned buffers (any new/malloc allocation); otherwise memcpy is used.
- */
-inline void StoreSlot(const TetVertex source[5], const std::uint32_t sourceIndices[12],
-  TetVertex* vertices, std::uint32_t* indices, bool streaming)
-{
-#if defined(__x86_64__) || defined(_M_X64)
-  if (streaming)
-  {
-    static_assert(sizeof(TetVertex) * 5 == 15 * 8, "slot vertices are 15 words");
-    long long words[15 + 6];
-    std::memcpy(words, source, 15 * 8);
-    std::memcpy(words + 15, sourceIndices, 6 * 8);
-    auto* vertexWords = reinterpret_cast<long long*>(vertices);
-    auto* indexWords = reinterpret_cast<long long*>(indices);
-    for (int i = 0; i < 15; ++i)
-    {
-      _mm_stream_si64(vertexWords + i, words[i]);
-    }
-    for (int i = 0; i < 6; ++i)
-    {
-      _mm_stream_si64(indexWords + i, words[15 + i]);
-    }
-    return;
-  }
-#endif
-  (void)streaming;
-  std::memcpy(vertices, source, 5 * sizeof(TetVertex));
-  std::memcpy(indices, sourceIndices, 12 * sizeof(std::uint32_t));
-}
-
-/// Makes a thread's non-temporal stores visible before it leaves a parallel region.
-inline void FinishStores()
-{
-#if defined(__x86_64__) || defined(_M_X64)
-  _mm_sfence();
-#endif
-}
-
-/// Whether both buffers allow 8-byte non-temporal stores.
-inline bool CanStream(const TetVertex* vertices, const std::uint32_t* indices)
-{
-  return ((reinterpret_cast<std::uintptr_t>(vertices) | reinterpret_cast<std::uintptr_t>(indices)) &
-           7u) == 0;
-}
-
 /// The tetrahedron `corners` into slot-local records with global index base `base`,
 /// culled when it covers no pixel centre of the viewport.
 inline ProjectionClass DecomposeCorners(const DecomposeInput& input,
   const ProjectedPoint* const corners[4], const float scalars[4], const float* const* colours,
-  std::uint32_t base, TetVertex slotVertices[5], std::uint32_t slotIndices[12])
+  std::uint32_t base, TetVertex slotVertices[VerticesPerTetrahedron],
+  std::uint32_t slotIndices[IndicesPerTetrahedron])
 {
   const bool cull = input.viewportWidth > 0 && input.viewportHeight > 0 && AllUsable(corners) &&
     !detail::CoversPixelCentre(corners, input.viewportWidth, input.viewportHeight);
@@ -458,19 +432,22 @@ struct SlotWriter
   ProjectionClass Cell(const DecomposeInput& input, const ProjectedPoint* const corners[4],
     const float scalars[4], const float* const* colours, std::int64_t k) const
   {
-    TetVertex slotVertices[5];
-    std::uint32_t slotIndices[12];
+    TetVertex slotVertices[VerticesPerTetrahedron];
+    std::uint32_t slotIndices[IndicesPerTetrahedron];
     const ProjectionClass kind = DecomposeCorners(input, corners, scalars, colours,
-      static_cast<std::uint32_t>(5 * k), slotVertices, slotIndices);
-    StoreSlot(slotVertices, slotIndices, vertices + 5 * k, indices + 12 * k, streaming);
+      static_cast<std::uint32_t>(VerticesPerTetrahedron * k), slotVertices, slotIndices);
+    detail::StoreSlot(slotVertices, slotIndices, vertices + VerticesPerTetrahedron * k,
+      indices + IndicesPerTetrahedron * k, streaming);
     return kind;
   }
   void NotDrawable(std::int64_t k) const
   {
-    TetVertex slotVertices[5];
-    std::uint32_t slotIndices[12];
-    WriteDegenerateSlot(slotVertices, slotIndices, static_cast<std::uint32_t>(5 * k));
-    StoreSlot(slotVertices, slotIndices, vertices + 5 * k, indices + 12 * k, streaming);
+    TetVertex slotVertices[VerticesPerTetrahedron];
+    std::uint32_t slotIndices[IndicesPerTetrahedron];
+    WriteDegenerateSlot(
+      slotVertices, slotIndices, static_cast<std::uint32_t>(VerticesPerTetrahedron * k));
+    detail::StoreSlot(slotVertices, slotIndices, vertices + VerticesPerTetrahedron * k,
+      indices + IndicesPerTetrahedron * k, streaming);
   }
 };
 
@@ -489,26 +466,6 @@ inline ProjectionClass DecomposeFanCorners(const DecomposeInput& input,
   return DecomposeToFan(corners, scalars, colours, fan).kind;
 }
 
-/// Copies a fan to its place with non-temporal stores where available (see StoreSlot).
-inline void StoreFan(const Fan& source, Fan* target, bool streaming)
-{
-#if defined(__x86_64__) || defined(_M_X64)
-  if (streaming)
-  {
-    long long words[sizeof(Fan) / 8];
-    std::memcpy(words, &source, sizeof(Fan));
-    auto* targetWords = reinterpret_cast<long long*>(target);
-    for (std::size_t i = 0; i < sizeof(Fan) / 8; ++i)
-    {
-      _mm_stream_si64(targetWords + i, words[i]);
-    }
-    return;
-  }
-#endif
-  (void)streaming;
-  *target = source;
-}
-
 /// Writes fans (the CPU compositor's input): fan k at fans[k].
 struct FanWriter
 {
@@ -520,10 +477,10 @@ struct FanWriter
   {
     Fan fan;
     const ProjectionClass kind = DecomposeFanCorners(input, corners, scalars, colours, fan);
-    StoreFan(fan, fans + k, streaming);
+    detail::StoreFan(fan, fans + k, streaming);
     return kind;
   }
-  void NotDrawable(std::int64_t k) const { StoreFan(Fan{}, fans + k, streaming); }
+  void NotDrawable(std::int64_t k) const { detail::StoreFan(Fan{}, fans + k, streaming); }
 };
 
 /// Slot (or fan) k, holding `cell`.
@@ -579,7 +536,7 @@ void ParallelSlots(std::int64_t n, int threads, Body&& body)
     {
       body(i);
     }
-    FinishStores();
+    detail::FinishStores();
   }
 }
 
@@ -589,7 +546,7 @@ void DecomposeAll(const Access& cells, const DecomposeInput& input, const SortKe
   int threads)
 {
   const float* cellScalars = CellScalars(input);
-  const SlotWriter writer{ vertices, indices, CanStream(vertices, indices) };
+  const SlotWriter writer{ vertices, indices, detail::CanStream(vertices, indices) };
   ParallelSlots(static_cast<std::int64_t>(count), threads,
     [&](std::int64_t k)
     { DecomposeCell(cells, input, cellScalars, CellOfKey(order[k]), k, writer, classes); });
@@ -623,7 +580,8 @@ void DecomposeAllByRank(const Access& cells, const DecomposeInput& input, const 
 } // namespace
 
 Projection DecomposeTetrahedron(const ProjectedPoint* const corners[4], const float scalars[4],
-  TetVertex vertices[5], std::uint32_t indices[12], const float* const* colours)
+  TetVertex vertices[VerticesPerTetrahedron], std::uint32_t indices[IndicesPerTetrahedron],
+  const float* const* colours)
 {
   return Decompose(corners, scalars, colours, vertices, indices, 0);
 }
@@ -632,8 +590,9 @@ ProjectionClass DecomposeIntoSlot(const DecomposeInput& input,
   const ProjectedPoint* const corners[4], const float scalars[4], std::size_t k,
   TetVertex* vertices, std::uint32_t* indices, const float* const* colours)
 {
-  return DecomposeCorners(input, corners, scalars, colours, static_cast<std::uint32_t>(5 * k),
-    vertices + 5 * k, indices + 12 * k);
+  return DecomposeCorners(input, corners, scalars, colours,
+    static_cast<std::uint32_t>(VerticesPerTetrahedron * k), vertices + VerticesPerTetrahedron * k,
+    indices + IndicesPerTetrahedron * k);
 }
 
 void DecomposeTetrahedra(const DecomposeInput& input, const SortKey* order, std::size_t count,
@@ -645,36 +604,12 @@ void DecomposeTetrahedra(const DecomposeInput& input, const SortKey* order, std:
     { DecomposeAll(cells, input, order, count, vertices, indices, classes, nthreads); });
 }
 
-void InvertOrder(
-  const SortKey* order, std::size_t count, std::size_t cellCount, std::uint32_t* rank, int threads)
-{
-  const int nthreads = detail::ResolveThreads(threads);
-  const auto cells = static_cast<std::int64_t>(cellCount);
-  const auto n = static_cast<std::int64_t>(count);
-#pragma omp parallel num_threads(nthreads)
-  {
-    if (n < cells) // only a partial order leaves ranks to mark
-    {
-#pragma omp for schedule(static)
-      for (std::int64_t c = 0; c < cells; ++c)
-      {
-        rank[c] = NotInOrder;
-      }
-    }
-#pragma omp for schedule(static)
-    for (std::int64_t k = 0; k < n; ++k)
-    {
-      rank[CellOfKey(order[k])] = static_cast<std::uint32_t>(k);
-    }
-  }
-}
-
 void DecomposeTetrahedraByRank(const DecomposeInput& input, const std::uint32_t* rank,
   std::size_t firstRank, std::size_t count, TetVertex* vertices, std::uint32_t* indices,
   ProjectionClass* classes, int threads)
 {
   const int nthreads = detail::ResolveThreads(threads);
-  const SlotWriter writer{ vertices, indices, CanStream(vertices, indices) };
+  const SlotWriter writer{ vertices, indices, detail::CanStream(vertices, indices) };
   detail::DispatchCells(input.cells, input.pointCount,
     [&](const auto& cells)
     { DecomposeAllByRank(cells, input, rank, firstRank, count, writer, classes, nthreads); });
@@ -701,6 +636,124 @@ ProjectionClass DecomposeIntoFan(const DecomposeInput& input,
   const float* const* colours)
 {
   return DecomposeFanCorners(input, corners, scalars, colours, fan);
+}
+
+template <typename Cells, typename Piece>
+bool DecompositionStage::Run(const Key& key, const DecomposeInput& input, const std::uint32_t* rank,
+  const std::vector<NearPiece>& pieces, int threads, Cells&& cells, Piece&& piece)
+{
+  if (this->Record.Holds(key))
+  {
+    return false;
+  }
+  const std::size_t first = key.first, count = key.count;
+  if (this->Classes.size() < count)
+  {
+    this->Classes.resize(count);
+  }
+  cells(input, first, count, this->Classes.data(), threads);
+  // Pieces of cells cut by the near plane: ranks after the cells'.
+  const auto pieceCount = static_cast<std::int64_t>(pieces.size());
+#pragma omp parallel for num_threads(detail::ResolveThreads(threads))                              \
+  schedule(static) if (pieceCount > 1024)
+  for (std::int64_t j = 0; j < pieceCount; ++j)
+  {
+    const std::uint32_t r = rank[input.cells.cellCount + j];
+    const std::uint64_t k = static_cast<std::uint64_t>(r) - first;
+    if (r != NotInOrder && k < count)
+    {
+      const NearPiece& p = pieces[j];
+      const ProjectedPoint* corners[4] = { &p.corners[0], &p.corners[1], &p.corners[2],
+        &p.corners[3] };
+      const float* colours[4] = { p.colours[0], p.colours[1], p.colours[2], p.colours[3] };
+      this->Classes[k] = piece(input, corners, p.scalars, input.colours ? colours : nullptr, k);
+    }
+  }
+  std::size_t pixelCulled = 0, notDrawable = 0;
+  const auto m = static_cast<std::int64_t>(count);
+#pragma omp parallel for num_threads(detail::ResolveThreads(threads)) schedule(static) \
+  reduction(+ : pixelCulled, notDrawable)
+  for (std::int64_t k = 0; k < m; ++k)
+  {
+    pixelCulled += this->Classes[k] == ProjectionClass::CoversNoPixel;
+    notDrawable += this->Classes[k] == ProjectionClass::NotDrawable;
+  }
+  this->CoversNoPixel = pixelCulled;
+  this->Undrawable = notDrawable;
+  this->Record.Store(key);
+  return true;
+}
+
+bool SlotStage::Update(const Key& key, const DecomposeInput& input, const std::uint32_t* rank,
+  const std::vector<NearPiece>& pieces, int threads)
+{
+  return this->Run(
+    key, input, rank, pieces, threads,
+    [&](const DecomposeInput& in, std::size_t first, std::size_t n, ProjectionClass* classes,
+      int team)
+    {
+      if (this->VertexBuffer.size() < VerticesPerTetrahedron * n)
+      {
+        this->VertexBuffer.resize(VerticesPerTetrahedron * n);
+      }
+      if (this->IndexBuffer.size() < IndicesPerTetrahedron * n)
+      {
+        this->IndexBuffer.resize(IndicesPerTetrahedron * n);
+      }
+      DecomposeTetrahedraByRank(
+        in, rank, first, n, this->VertexBuffer.data(), this->IndexBuffer.data(), classes, team);
+    },
+    [&](const DecomposeInput& in, const ProjectedPoint* const corners[4], const float* scalars,
+      const float* const* colours, std::uint64_t k)
+    {
+      return DecomposeIntoSlot(
+        in, corners, scalars, k, this->VertexBuffer.data(), this->IndexBuffer.data(), colours);
+    });
+}
+
+void SlotStage::Release()
+{
+  std::vector<TetVertex>().swap(this->VertexBuffer);
+  std::vector<std::uint32_t>().swap(this->IndexBuffer);
+  std::vector<ProjectionClass>().swap(this->Classes);
+  this->Forget();
+}
+
+std::size_t SlotStage::MemoryBytes() const
+{
+  return this->VertexBuffer.capacity() * sizeof(TetVertex) +
+    this->IndexBuffer.capacity() * sizeof(std::uint32_t) + this->Classes.capacity();
+}
+
+bool FanStage::Update(const Key& key, const DecomposeInput& input, const std::uint32_t* rank,
+  const std::vector<NearPiece>& pieces, int threads)
+{
+  return this->Run(
+    key, input, rank, pieces, threads,
+    [&](const DecomposeInput& in, std::size_t first, std::size_t n, ProjectionClass* classes,
+      int team)
+    {
+      if (this->FanBuffer.size() < n)
+      {
+        this->FanBuffer.resize(n);
+      }
+      DecomposeFansByRank(in, rank, first, n, this->FanBuffer.data(), classes, team);
+    },
+    [&](const DecomposeInput& in, const ProjectedPoint* const corners[4], const float* scalars,
+      const float* const* colours, std::uint64_t k)
+    { return DecomposeIntoFan(in, corners, scalars, this->FanBuffer[k], colours); });
+}
+
+void FanStage::Release()
+{
+  std::vector<Fan>().swap(this->FanBuffer);
+  std::vector<ProjectionClass>().swap(this->Classes);
+  this->Forget();
+}
+
+std::size_t FanStage::MemoryBytes() const
+{
+  return this->FanBuffer.capacity() * sizeof(Fan) + this->Classes.capacity();
 }
 
 } // namespace mtpt

@@ -55,17 +55,14 @@ inline Verdict CellKey(const Access& cells, const ProjectedPoint* points, std::u
   float depth = std::numeric_limits<float>::infinity();
   if (cells.TetrahedronPoints(cell, ids))
   {
-    double x = 0, y = 0, z = 0;
+    const ProjectedPoint* corners[4] = { points + ids[0], points + ids[1], points + ids[2],
+      points + ids[3] };
     unsigned outside = ~0u;
     int usable = 0;
-    for (int i = 0; i < 4; ++i)
+    for (const ProjectedPoint* p : corners)
     {
-      const ProjectedPoint& p = points[ids[i]];
-      x += p.eyeX;
-      y += p.eyeY;
-      z += p.eyeZ;
-      outside &= OutCode(p);
-      usable += p.usable;
+      outside &= OutCode(*p);
+      usable += p->usable;
     }
     if (culling && usable == 4)
     {
@@ -73,20 +70,13 @@ inline Verdict CellKey(const Access& cells, const ProjectedPoint* points, std::u
       {
         return Verdict::OutsideFrustum;
       }
-      const ProjectedPoint* corners[4] = { points + ids[0], points + ids[1], points + ids[2],
-        points + ids[3] };
       if (culling->viewportWidth > 0 && culling->viewportHeight > 0 &&
         !detail::CoversPixelCentre(corners, culling->viewportWidth, culling->viewportHeight))
       {
         return Verdict::CoversNoPixel;
       }
     }
-    x *= 0.25;
-    y *= 0.25;
-    z *= 0.25;
-    // Perspective: squared distance from the eye (at the eye-space origin). Orthographic:
-    // distance along the view axis; the camera looks down -z.
-    depth = static_cast<float>(perspective ? x * x + y * y + z * z : -z);
+    depth = CentroidDepth(corners, perspective);
   }
   key = MakeSortKey(depth, cell);
   return Verdict::Kept;
@@ -127,7 +117,8 @@ KeyCounts ComputeVisibleDepthKeys(const ProjectedPoint* points, std::size_t poin
           for (std::size_t i = begin; i < end; ++i)
           {
             const auto cell = list ? list[i] : static_cast<std::uint32_t>(i);
-            const Verdict verdict = CellKey(access, points, cell, perspective, &culling, out[written]);
+            const Verdict verdict =
+              CellKey(access, points, cell, perspective, &culling, out[written]);
             written += verdict == Verdict::Kept ? 1 : 0;
             noPixel += verdict == Verdict::CoversNoPixel ? 1 : 0;
           }
@@ -139,6 +130,27 @@ KeyCounts ComputeVisibleDepthKeys(const ProjectedPoint* points, std::size_t poin
   counts.pixelCulled = pixelCulled;
   counts.frustumCulled = n - counts.kept - pixelCulled;
   return counts;
+}
+
+bool DepthKeyStage::Update(const Key& key, const ProjectedPoint* points, std::size_t pointCount,
+  const CellsView& cells, const std::uint32_t* list, std::size_t listCount, int threads)
+{
+  if (this->Record.Holds(key))
+  {
+    return false;
+  }
+  this->Kept.resize(list ? listCount : cells.cellCount);
+  this->Count = ComputeVisibleDepthKeys(points, pointCount, cells, list, listCount, key.perspective,
+    key.culling, this->Kept.data(), threads);
+  this->Kept.resize(this->Count.kept);
+  this->Record.Store(key);
+  return true;
+}
+
+void DepthKeyStage::Release()
+{
+  std::vector<SortKey>().swap(this->Kept);
+  this->Record.Forget();
 }
 
 } // namespace mtpt

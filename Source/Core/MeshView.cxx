@@ -1,9 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "mtpt/MeshView.h"
 
-#include "detail/Parallel.h"
-#include "mtpt/Threads.h"
-
 namespace mtpt
 {
 
@@ -27,13 +24,5 @@ Matrix4 Multiply(const Matrix4& a, const Matrix4& b)
   }
   return c;
 }
-
-namespace detail
-{
-int ResolveThreads(int requested)
-{
-  return ResolveThreadCount(requested);
-}
-} // namespace detail
 
 } // namespace mtpt

@@ -31,7 +31,7 @@ namespace HWY_NAMESPACE
 {
 namespace hn = hwy::HWY_NAMESPACE;
 
-constexpr int T = Compositor::TileSize;
+constexpr int T = TileSize;
 static_assert(T % 8 == 0, "tile rows hold whole vectors of the widest lane count used");
 /// Sub-pixel precision of the fixed-point rasterizer (as GPUs and Mesa snap vertices).
 constexpr double SubpixelScale = 256.0;

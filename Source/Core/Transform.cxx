@@ -87,4 +87,26 @@ void ProjectPoints(const PointsView& points, const ScalarsView& scalars, const M
   }
 }
 
+bool TransformStage::Update(
+  const Key& key, const PointsView& points, const ScalarsView& scalars, int threads)
+{
+  if (this->Record.Holds(key))
+  {
+    return false;
+  }
+  if (this->Projected.size() < points.count)
+  {
+    this->Projected.resize(points.count); // grow-only: frames that shrink keep the memory
+  }
+  ProjectPoints(points, scalars, key.modelView, key.projection, this->Projected.data(), threads);
+  this->Record.Store(key);
+  return true;
+}
+
+void TransformStage::Release()
+{
+  std::vector<ProjectedPoint>().swap(this->Projected);
+  this->Record.Forget();
+}
+
 } // namespace mtpt

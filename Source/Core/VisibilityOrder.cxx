@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <random>
 #include <utility>
@@ -305,6 +306,153 @@ bool SortNearlySorted(SortKey* keys, std::size_t count, std::size_t moveBudget, 
     }
   }
   return true;
+}
+
+void InvertOrder(
+  const SortKey* order, std::size_t count, std::size_t cellCount, std::uint32_t* rank, int threads)
+{
+  const int nthreads = detail::ResolveThreads(threads);
+  const auto cells = static_cast<std::int64_t>(cellCount);
+  const auto n = static_cast<std::int64_t>(count);
+#pragma omp parallel num_threads(nthreads)
+  {
+    if (n < cells) // only a partial order leaves ranks to mark
+    {
+#pragma omp for schedule(static)
+      for (std::int64_t c = 0; c < cells; ++c)
+      {
+        rank[c] = NotInOrder;
+      }
+    }
+#pragma omp for schedule(static)
+    for (std::int64_t k = 0; k < n; ++k)
+    {
+      rank[CellOfKey(order[k])] = static_cast<std::uint32_t>(k);
+    }
+  }
+}
+
+OrderStage::OrderStage()
+  : Sorter(MakeVisibilityOrder(OrderMethod::RadixSort))
+{
+}
+
+bool OrderStage::Update(const Key& key, const Cells& cells, bool fromPrevious,
+  const DepthKeyStage& keys, const NearPlaneStage& nearPlane, int threads)
+{
+  if (this->Record.Holds(key))
+  {
+    return false;
+  }
+  if (key.method != this->Sorter->Method() || key.maxSubArraySize != this->SorterMaxSubArraySize)
+  {
+    this->Sorter = MakeVisibilityOrder(key.method, key.maxSubArraySize);
+    this->SorterMaxSubArraySize = key.maxSubArraySize;
+  }
+  // The keys the near plane keeps, in ascending cell id order (the radix sort's fast case).
+  const std::size_t previousCount = this->Sorted.size();
+  const std::vector<SortKey>& all = keys.Keys();
+  if (!nearPlane.CutsAny())
+  {
+    this->Sorted.assign(all.begin(), all.end());
+  }
+  else
+  {
+    this->Sorted.clear();
+    for (std::size_t k = 0; k < all.size(); ++k)
+    {
+      if (nearPlane.Keeps(k))
+      {
+        this->Sorted.push_back(all[k]);
+      }
+    }
+  }
+  // The same cells as the previous order after a small rotation: nearly sorted already.
+  const Cells& held = this->Held;
+  const double dot = cells.direction[0] * held.direction[0] +
+    cells.direction[1] * held.direction[1] + cells.direction[2] * held.direction[2];
+  const double angle = std::acos(std::min(1.0, std::max(-1.0, dot)));
+  const bool sameCells = fromPrevious && this->Record.Valid() && held.whole && cells.whole &&
+    held.mesh == cells.mesh && held.points != cells.points && held.visible == cells.visible &&
+    held.perspective == cells.perspective && previousCount == this->Sorted.size() &&
+    angle < NearlySortedMaxAngle && key.mutation == OrderMutation::None;
+  this->SortedFromPrevious = sameCells && this->SortFromPrevious(threads);
+  if (!this->SortedFromPrevious)
+  {
+    this->Sorter->Sort(this->Sorted.data(), this->Sorted.size(), threads);
+  }
+  const std::vector<SortKey>& pieces = nearPlane.PieceKeys();
+  if (!pieces.empty())
+  {
+    this->Scratch.resize(this->Sorted.size() + pieces.size());
+    std::merge(this->Sorted.begin(), this->Sorted.end(), pieces.begin(), pieces.end(),
+      this->Scratch.begin());
+    this->Sorted.swap(this->Scratch);
+  }
+  this->Mutate(key.mutation);
+  this->Held = cells;
+  this->Record.Store(key);
+  return true;
+}
+
+bool OrderStage::SortFromPrevious(int threads)
+{
+  const std::size_t count = this->Sorted.size();
+  if (this->Scratch.size() < count)
+  {
+    this->Scratch.resize(count);
+  }
+  const auto m = static_cast<std::int64_t>(count);
+#pragma omp parallel for num_threads(detail::ResolveThreads(threads)) schedule(static)
+  for (std::int64_t i = 0; i < m; ++i)
+  {
+    const SortKey key = this->Sorted[i];
+    this->Scratch[this->Ranks[CellOfKey(key)]] = key;
+  }
+  // Budget: about the cost of a full sort; beyond it the keys moved too far.
+  if (!SortNearlySorted(this->Scratch.data(), count, 4 * count, threads))
+  {
+    return false;
+  }
+  std::copy(this->Scratch.begin(), this->Scratch.begin() + m, this->Sorted.begin());
+  return true;
+}
+
+void OrderStage::Mutate(OrderMutation mutation)
+{
+  if (mutation == OrderMutation::Reversed)
+  {
+    std::reverse(this->Sorted.begin(), this->Sorted.end());
+  }
+  else if (mutation == OrderMutation::Storage)
+  {
+    std::sort(this->Sorted.begin(), this->Sorted.end(),
+      [](SortKey a, SortKey b) { return CellOfKey(a) < CellOfKey(b); });
+  }
+}
+
+void OrderStage::Invert(std::size_t ranked, int threads)
+{
+  if (this->Ranks.size() < ranked)
+  {
+    this->Ranks.resize(ranked);
+  }
+  InvertOrder(this->Sorted.data(), this->Sorted.size(), ranked, this->Ranks.data(), threads);
+}
+
+void OrderStage::Release()
+{
+  std::vector<SortKey>().swap(this->Sorted);
+  std::vector<SortKey>().swap(this->Scratch);
+  std::vector<std::uint32_t>().swap(this->Ranks);
+  this->Sorter = MakeVisibilityOrder(this->Sorter->Method(), this->SorterMaxSubArraySize);
+  this->Record.Forget();
+}
+
+std::size_t OrderStage::MemoryBytes() const
+{
+  return (this->Sorted.capacity() + this->Scratch.capacity()) * sizeof(SortKey) +
+    this->Ranks.capacity() * sizeof(std::uint32_t) + this->Sorter->MemoryBytes();
 }
 
 } // namespace mtpt

@@ -237,6 +237,76 @@ std::string MeshAdapter::Problems(vtkCellArray* cells, vtkDataArray* coordinates
   return message.str();
 }
 
+namespace
+{
+
+/// The finite range of the values written and the count of tuples with a non-finite one.
+struct ValueRange
+{
+  double low = std::numeric_limits<double>::infinity(), high = -low;
+  vtkIdType bad = 0;
+  void Add(double v, float f)
+  {
+    if (std::isfinite(f))
+    {
+      low = v < low ? v : low;
+      high = v > high ? v : high;
+    }
+  }
+};
+
+/// One float per tuple: component `component`, or the magnitude when it is negative.
+void OneScalarPerTuple(vtkDataArray* array, int component, float* out, ValueRange& range)
+{
+  const int components = array->GetNumberOfComponents();
+  std::size_t t = 0;
+  for (const auto tuple : vtk::DataArrayTupleRange(array))
+  {
+    double v = 0;
+    if (component >= 0)
+    {
+      v = tuple[component];
+    }
+    else
+    {
+      for (int k = 0; k < components; ++k)
+      {
+        v += static_cast<double>(tuple[k]) * tuple[k];
+      }
+      v = std::sqrt(v);
+    }
+    const auto f = static_cast<float>(v);
+    out[t++] = f;
+    range.Add(v, f);
+    range.bad += std::isfinite(f) ? 0 : 1;
+  }
+}
+
+/// Dependent components: every component of each tuple, times `unit`.
+void EveryComponent(vtkDataArray* array, double unit, float* out, ValueRange& range)
+{
+  const int components = array->GetNumberOfComponents();
+  std::size_t t = 0;
+  for (const auto tuple : vtk::DataArrayTupleRange(array))
+  {
+    bool finite = true;
+    for (int k = 0; k < components; ++k)
+    {
+      const auto f = static_cast<float>(tuple[k] * unit);
+      out[t * components + k] = f;
+      finite = finite && std::isfinite(f);
+      if (finite)
+      {
+        range.Add(f, f);
+      }
+    }
+    range.bad += finite ? 0 : 1;
+    ++t;
+  }
+}
+
+} // namespace
+
 const float* MeshAdapter::Scalars(
   vtkDataArray* array, int component, double range[2], vtkIdType& nonFinite)
 {
@@ -250,11 +320,6 @@ const float* MeshAdapter::Scalars(
   {
     component = components - 1;
   }
-  // Dependent components: every component, and four unsigned chars are a colour in 0-255
-  // (VTK's PT uses them as they are, the others as values in [0, 1]).
-  const int channels = all ? components : 1;
-  const double unit =
-    all && components == 4 && array->GetDataType() == VTK_UNSIGNED_CHAR ? 1.0 / 255.0 : 1.0;
   // Values changed in place with only the grid marked Modified() count as a change too.
   if (array != this->ScalarArray || array->GetMTime() != this->ScalarTime ||
     component != this->ScalarComponent || this->InputTime != this->ScalarInputTime)
@@ -263,62 +328,29 @@ const float* MeshAdapter::Scalars(
     this->ScalarTime = array->GetMTime();
     this->ScalarInputTime = this->InputTime;
     this->ScalarComponent = component;
-    const vtkIdType tuples = array->GetNumberOfTuples();
-    this->ScalarValues.resize(static_cast<std::size_t>(tuples) * channels);
-    double low = std::numeric_limits<double>::infinity();
-    double high = -low;
-    vtkIdType bad = 0;
-    const auto values = vtk::DataArrayTupleRange(array);
-    vtkIdType t = 0;
-    for (const auto tuple : values)
+    const auto tuples = static_cast<std::size_t>(array->GetNumberOfTuples());
+    ValueRange values;
+    if (all)
     {
-      if (all)
-      {
-        bool finite = true;
-        for (int k = 0; k < components; ++k)
-        {
-          const auto f = static_cast<float>(tuple[k] * unit);
-          this->ScalarValues[static_cast<std::size_t>(t) * channels + k] = f;
-          finite = finite && std::isfinite(f);
-          low = finite && f < low ? f : low;
-          high = finite && f > high ? f : high;
-        }
-        bad += finite ? 0 : 1;
-        ++t;
-        continue;
-      }
-      double v = 0;
-      if (component >= 0)
-      {
-        v = tuple[component];
-      }
-      else
-      {
-        for (int k = 0; k < components; ++k)
-        {
-          v += static_cast<double>(tuple[k]) * tuple[k];
-        }
-        v = std::sqrt(v);
-      }
-      const auto f = static_cast<float>(v);
-      this->ScalarValues[static_cast<std::size_t>(t++)] = f;
-      if (std::isfinite(f))
-      {
-        low = v < low ? v : low;
-        high = v > high ? v : high;
-      }
-      else
-      {
-        ++bad;
-      }
+      // Four unsigned chars are a colour in 0-255 (VTK's PT uses them as they are, the
+      // other types as values in [0, 1]).
+      const double unit =
+        components == 4 && array->GetDataType() == VTK_UNSIGNED_CHAR ? 1.0 / 255.0 : 1.0;
+      this->ScalarValues.resize(tuples * components);
+      EveryComponent(array, unit, this->ScalarValues.data(), values);
     }
-    if (!(low <= high))
+    else
     {
-      low = high = 0;
+      this->ScalarValues.resize(tuples);
+      OneScalarPerTuple(array, component, this->ScalarValues.data(), values);
     }
-    this->ScalarRange[0] = low;
-    this->ScalarRange[1] = high;
-    this->ScalarNonFinite = bad;
+    if (!(values.low <= values.high))
+    {
+      values.low = values.high = 0;
+    }
+    this->ScalarRange[0] = values.low;
+    this->ScalarRange[1] = values.high;
+    this->ScalarNonFinite = values.bad;
   }
   range[0] = this->ScalarRange[0];
   range[1] = this->ScalarRange[1];

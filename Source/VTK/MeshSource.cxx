@@ -177,6 +177,29 @@ bool MeshSource::Update(vtkDataObject* input, vtkAbstractVolumeMapper* mapper,
       true);
     return false;
   }
+  this->UseGrids(grids, single, mapper, property, report);
+  this->RetireUnseen();
+  if (this->Used.empty())
+  {
+    this->Forget();
+    if (!single && !grids.empty())
+    {
+      report(input, "no block of the composite input can be drawn", false);
+    }
+    else if (!single)
+    {
+      report(input, "the composite input has no unstructured grid: nothing to draw", false);
+    }
+    return false;
+  }
+  this->MakeViews(single);
+  return true;
+}
+
+void MeshSource::UseGrids(
+  const std::vector<std::pair<vtkUnstructuredGridBase*, std::string>>& grids, bool single,
+  vtkAbstractVolumeMapper* mapper, vtkVolumeProperty* property, const Reporter& report)
+{
   for (auto& entry : this->Cache)
   {
     entry.second->Seen = false;
@@ -195,7 +218,7 @@ bool MeshSource::Update(vtkDataObject* input, vtkAbstractVolumeMapper* mapper,
     {
       continue;
     }
-    // One association for all: the first grid drawn decides.
+    // One association and one count of values for all: the first grid drawn decides.
     if (this->Used.empty())
     {
       cellData = grid->Selected.cellData;
@@ -221,6 +244,10 @@ bool MeshSource::Update(vtkDataObject* input, vtkAbstractVolumeMapper* mapper,
     }
     this->Used.push_back(grid.get());
   }
+}
+
+void MeshSource::RetireUnseen()
+{
   // Grids no longer in the input are forgotten (their counts kept).
   for (auto entry = this->Cache.begin(); entry != this->Cache.end();)
   {
@@ -235,20 +262,10 @@ bool MeshSource::Update(vtkDataObject* input, vtkAbstractVolumeMapper* mapper,
       ++entry;
     }
   }
-  if (this->Used.empty())
-  {
-    this->Forget();
-    if (!single && !grids.empty())
-    {
-      report(input, "no block of the composite input can be drawn", false);
-    }
-    else if (!single)
-    {
-      report(input, "the composite input has no unstructured grid: nothing to draw", false);
-    }
-    return false;
-  }
+}
 
+void MeshSource::MakeViews(bool single)
+{
   std::vector<Key> keys;
   for (const Grid* grid : this->Used)
   {
@@ -257,13 +274,14 @@ bool MeshSource::Update(vtkDataObject* input, vtkAbstractVolumeMapper* mapper,
   }
   if (keys == this->LastKeys && this->DataVersion > 0)
   {
-    return true; // the views, the gathered scalars and the range are those of last time
+    return; // the views, the gathered scalars and the range are those of last time
   }
   this->LastKeys = keys;
   ++this->DataVersion;
-  this->ScalarChannels = channels;
+  const Grid& first = *this->Used.front();
+  this->ScalarChannels = ChannelsOf(first.Selected);
   const auto association =
-    cellData ? ScalarsView::Association::Cells : ScalarsView::Association::Points;
+    first.Selected.cellData ? ScalarsView::Association::Cells : ScalarsView::Association::Points;
   this->ScalarRange[0] = std::numeric_limits<double>::infinity();
   this->ScalarRange[1] = -std::numeric_limits<double>::infinity();
   for (const Grid* grid : this->Used)
@@ -273,11 +291,10 @@ bool MeshSource::Update(vtkDataObject* input, vtkAbstractVolumeMapper* mapper,
   }
   if (single)
   {
-    const Grid& grid = *this->Used.front();
-    this->PointData = grid.Adapter.Points();
-    this->CellData = grid.Adapter.Cells();
-    this->ScalarData = { grid.Values, association };
-    return true;
+    this->PointData = first.Adapter.Points();
+    this->CellData = first.Adapter.Cells();
+    this->ScalarData = { first.Values, association };
+    return;
   }
   this->Parts.clear();
   for (const Grid* grid : this->Used)
@@ -287,7 +304,6 @@ bool MeshSource::Update(vtkDataObject* input, vtkAbstractVolumeMapper* mapper,
   MeshParts(this->Parts.data(), this->Parts.size(), this->PointData, this->CellData);
   this->GatherScalars();
   this->ScalarData = { this->Gathered.data(), association };
-  return true;
 }
 
 void MeshSource::Forget()

@@ -99,6 +99,14 @@ private:
   /// Prepares one grid; false (reported) when it cannot be drawn.
   bool PrepareGrid(Grid& grid, vtkUnstructuredGridBase* input, const std::string& name, bool single,
     vtkAbstractVolumeMapper* mapper, vtkVolumeProperty* property, const Reporter& report);
+  /// Prepares the grids of the input and lists in Used those that can be drawn together.
+  void UseGrids(const std::vector<std::pair<vtkUnstructuredGridBase*, std::string>>& grids,
+    bool single, vtkAbstractVolumeMapper* mapper, vtkVolumeProperty* property,
+    const Reporter& report);
+  /// Forgets the grids no longer in the input.
+  void RetireUnseen();
+  /// The views of the Used grids, and a new data version, unless they are those of last time.
+  void MakeViews(bool single);
   void GatherScalars();
   /// Drops the views: the next Update makes them again (a new data version).
   void Forget();

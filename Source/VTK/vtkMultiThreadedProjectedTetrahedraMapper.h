@@ -9,12 +9,14 @@
  * tetrahedral algorithm for unstructured volume rendering", J. Visualization 24 (2021).
  * Per frame, on NumberOfThreads OpenMP threads: points are projected once, the cells are
  * sorted back to front by a parallel visibility order (radix sort or the paper's partition
- * sort), and every tetrahedron is decomposed into exactly 4 triangles written at a fixed
- * stride into one vertex and one index buffer (race-free, identical for any thread count).
- * Two backends draw the buffers: OpenGL uploads them once and draws them with one call,
- * blended back to front; the CPU compositor blends the same triangles with the same
- * per-fragment math on the CPU and puts the image into the framebuffer over what is drawn,
- * respecting the depth of opaque geometry. The CPU compositor is chosen automatically where
+ * sort), and every tetrahedron is decomposed, batch after batch (BatchSize), into exactly 4
+ * triangles written at a fixed stride (race-free, identical for any thread count). Two
+ * backends draw them: OpenGL decomposes each batch into one vertex and one index buffer,
+ * uploads them and draws them blended back to front; the CPU compositor decomposes each
+ * batch into one record per tetrahedron (a fan of its triangles), bins the records into
+ * screen tiles and blends the triangles there with the per-fragment math of the OpenGL
+ * shaders, then puts the image into the framebuffer over what is drawn, respecting the depth
+ * of opaque geometry. The CPU compositor is chosen automatically where
  * OpenGL is itself a software rasterizer (Mesa llvmpipe, softpipe, SWR: machines without a
  * GPU), where it is the faster of the two. Both work in every window VTK makes, on-screen or
  * off-screen, multisampled (VTK's default) or not: the window's colour and opaque depth are
@@ -35,7 +37,9 @@
  * Scalar selection (scalar mode, array by name or id, point or cell data, vector
  * component or magnitude as the colour transfer function's vector mode selects) and the
  * meaning of vtkVolumeProperty (colour and scalar-opacity transfer functions,
- * ScalarOpacityUnitDistance) are those of vtkProjectedTetrahedraMapper. Where the results
+ * ScalarOpacityUnitDistance, IndependentComponents: with dependent components four are the
+ * colour and opacity themselves and two a colour scalar and an opacity scalar) are those of
+ * vtkProjectedTetrahedraMapper. Where the results
  * differ, this mapper is the more accurate one:
  * - the thickness at the thick vertex is the exact eye-space ray segment length (no square
  *   root table);

@@ -6,6 +6,7 @@
 
 #include "mtpt/Decompose.h"
 #include "mtpt/FramePipeline.h"
+#include "mtpt/VisibilityOrder.h"
 #include "mtpt/NearPlane.h"
 
 #include <gtest/gtest.h>

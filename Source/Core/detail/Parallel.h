@@ -20,7 +20,10 @@ namespace detail
 {
 
 /// The OpenMP thread count for a requested count: <= 0 means the default (mtpt/Threads.h).
-int ResolveThreads(int requested);
+inline int ResolveThreads(int requested)
+{
+  return ResolveThreadCount(requested);
+}
 
 /// Work per thread below which waking another thread does not pay (ThreadsForWork): about
 /// a tenth of a millisecond of each stage's work.

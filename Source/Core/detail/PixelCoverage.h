@@ -5,7 +5,7 @@
 #ifndef mtpt_detail_PixelCoverage_h
 #define mtpt_detail_PixelCoverage_h
 
-#include "mtpt/Transform.h"
+#include "mtpt/Records.h"
 
 #include <algorithm>
 #include <cmath>

@@ -6,7 +6,9 @@
 #ifndef mtpt_detail_TileRaster_h
 #define mtpt_detail_TileRaster_h
 
-#include "mtpt/Compositor.h"
+#include "mtpt/Records.h"
+#include "mtpt/Shading.h"
+#include "mtpt/TransferFunctionTable.h"
 
 #include <cstddef>
 #include <cstdint>

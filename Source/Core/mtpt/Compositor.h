@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 /**
  * @file Compositor.h
- * @brief The CPU compositor: blends the sorted tetrahedra (as fans, Decompose.h) into a
- * float RGBA image with the per-fragment math of the OpenGL path, for machines where
- * OpenGL is itself a software rasterizer. Its cost follows the fragments: a tetrahedron is
+ * @brief Stage 6 of a frame on the CPU: the compositor blends the sorted tetrahedra (as fans,
+ * Decompose.h) into a float RGBA image with the per-fragment math of the OpenGL path, for machines
+ * where OpenGL is itself a software rasterizer. Its cost follows the fragments: a tetrahedron is
  * set up once per screen tile it touches, and in VTK-compatible shading every pixel covered
  * costs one SIMD lane (pre-integrated shading integrates each fragment on its own).
  *
@@ -49,8 +49,9 @@
 #ifndef mtpt_Compositor_h
 #define mtpt_Compositor_h
 
-#include "mtpt/Decompose.h"
 #include "mtpt/MeshView.h"
+#include "mtpt/Records.h"
+#include "mtpt/Shading.h"
 #include "mtpt/TransferFunctionTable.h"
 
 #include <cstddef>
@@ -59,35 +60,6 @@
 
 namespace mtpt
 {
-
-/// How fragments are classified (see the file comment).
-enum class Shading
-{
-  VTKCompatible,
-  PreIntegrated
-};
-
-/**
- * What perspective-exact interpolation needs of the projection (pre-integrated shading).
- * In a perspective view each triangle of the decomposition has one planar front face and
- * one planar back face (its silhouette vertices have front = back), so 1 / w (w = clip w,
- * the eye depth) of each is affine in screen space, and so is the eye-space ray direction
- * d = ((x_ndc + shiftX) * scaleX, (y_ndc + shiftY) * scaleY, -1) per unit of depth. Per
- * fragment the segment length is (w_back - w_front) |d| and the front and back scalars are
- * interpolated perspective-correctly over their faces: exact up to rounding, where
- * interpolating the vertex lengths linearly in screen space (VTK's PT) is off by up to a
- * few per cent near the eye. Orthographic views need none of it (all linear).
- */
-struct PerspectiveInterpolation
-{
-  bool perspective = false;
-  double inverseWScale = 0.0, inverseWOffset = 1.0; ///< 1 / w = scale * z_ndc + offset
-  double scaleX = 0.0, shiftX = 0.0, scaleY = 0.0, shiftY = 0.0;
-
-  /// From an OpenGL-style projection (row-major). A matrix whose last two rows depend on
-  /// eye x or y (none that VTK builds) gives the orthographic (linear) default.
-  static PerspectiveInterpolation FromProjection(const Matrix4& projection);
-};
 
 struct CompositeSettings
 {
@@ -147,8 +119,8 @@ struct PixelRegion
 class Compositor
 {
 public:
-  /// Pixels per side of a tile.
-  static constexpr int TileSize = 64;
+  /// Pixels per side of a tile (Records.h).
+  static constexpr int TileSize = mtpt::TileSize;
 
   /**
    * Starts a new image of settings.width x height, transparent. `settings` (and what it
@@ -193,6 +165,11 @@ public:
 
 private:
   void Bin(const Fan* fans, std::size_t count, int threads);
+  /// Binning's three steps: count each block's (fan, tile) pairs and the touched region;
+  /// turn the counts into places (returns the pairs); copy the fans to their places.
+  void CountPairs(const Fan* fans, std::size_t count, int blocks);
+  std::size_t PlaceEntries(int blocks);
+  void CopyEntries(const Fan* fans, std::size_t count, int blocks);
   template <typename T>
   void ResolveInto(const PixelRegion& region, const T* below, T* rgba, int threads);
   void Rasterize(int threads);

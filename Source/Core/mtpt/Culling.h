@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 /**
  * @file Culling.h
- * @brief Cells a frame can skip before it sorts: those the opacity transfer function makes
- * fully transparent, so that per-frame work follows what the scene shows, not the mesh size
- * (Documentation/algorithm.md, "Culling and reuse").
+ * @brief Stage 2 of a frame: the cells a frame can skip before it sorts, those the opacity transfer
+ * function makes fully transparent, so that per-frame work follows what the scene shows, not the
+ * mesh size (Documentation/algorithm.md, "Culling and reuse").
  *
  * Exactness: both backends shade a fragment from transfer-function values looked up at
  * scalars interpolated inside its cell, so they lie in the cell's scalar range [min, max].
@@ -16,6 +16,7 @@
 #define mtpt_Culling_h
 
 #include "mtpt/MeshView.h"
+#include "mtpt/Stage.h"
 #include "mtpt/TransferFunctionTable.h"
 
 #include <cstddef>
@@ -68,6 +69,71 @@ private:
   int Size = 0;
   bool Attenuations = false; ///< SetAttenuations: visible when the range's top is above 0
   float Low = 0, Scale = 0;
+};
+
+/**
+ * Stage 2 as a stage of FramePipeline (Stage.h): the cells left after opacity culling.
+ * The cells' scalar ranges are kept until the data change; the visible list until the data,
+ * the culling mode or the opacity table change. A new table that leaves the same cells
+ * visible (a colour change) keeps the version, so the later stages keep their results.
+ */
+class CullingStage
+{
+public:
+  enum class Mode
+  {
+    None,        ///< every cell is a candidate
+    Table,       ///< by the opacity table (OpacityCulling::SetTable)
+    Attenuations ///< the scalars are attenuations (OpacityCulling::SetAttenuations)
+  };
+  /// The opacity table as the key sees it (Mode::Table only; zero otherwise).
+  struct TableKey
+  {
+    const float* table = nullptr;
+    int size = 0;
+    double low = 0, high = 0;
+    std::uint64_t version = 0; ///< FrameInput::opacityVersion
+    bool operator==(const TableKey& o) const
+    {
+      return table == o.table && size == o.size && low == o.low && high == o.high &&
+        version == o.version;
+    }
+  };
+  struct Key
+  {
+    MeshKey mesh;
+    Mode mode = Mode::None;
+    TableKey table;
+    bool operator==(const Key& o) const
+    {
+      return mesh == o.mesh && mode == o.mode && table == o.table;
+    }
+  };
+
+  /// Brings the visible list up to date with `key`; true when it computed anything.
+  bool Update(const Key& key, const CellsView& cells, std::size_t pointCount,
+    const ScalarsView& scalars, const TransferFunctionTable& table, int threads);
+
+  /// The visible cells in ascending order, or null when nothing is culled (Mode::None).
+  const std::uint32_t* Visible() const
+  {
+    return this->Record.Inputs().mode == Mode::None ? nullptr : this->List.data();
+  }
+  /// How many cells Visible() lists (every cell of the mesh without culling).
+  std::size_t VisibleCount() const;
+  /// Cells culled as transparent.
+  std::size_t Culled() const { return this->Record.Inputs().mesh.cellCount - this->VisibleCount(); }
+  std::uint64_t Version() const { return this->Record.Version(); }
+  void Forget();
+  void Release();
+  std::size_t MemoryBytes() const;
+
+private:
+  StageRecord<MeshKey> RangesRecord;
+  StageRecord<Key> Record;
+  std::vector<float> Ranges; ///< 2 per cell: the cell's scalar range
+  std::vector<std::uint32_t> List, NewList;
+  OpacityCulling Opacity;
 };
 
 } // namespace mtpt

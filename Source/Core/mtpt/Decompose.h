@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 /**
  * @file Decompose.h
- * @brief Stage 4 of a frame: classify each tetrahedron's projection and decompose it into
+ * @brief Stage 5 of a frame: classify each tetrahedron's projection and decompose it into
  * exactly 4 triangles, written at a fixed stride (the paper's Algorithm 2;
  * Documentation/algorithm.md, "Classification and the thick vertex" and "Decomposition at a
  * fixed stride").
@@ -29,80 +29,18 @@
 #ifndef mtpt_Decompose_h
 #define mtpt_Decompose_h
 
-#include "mtpt/DepthKeys.h"
 #include "mtpt/MeshView.h"
-#include "mtpt/Transform.h"
+#include "mtpt/NearPlane.h"
+#include "mtpt/Records.h"
+#include "mtpt/Stage.h"
 
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <vector>
 
 namespace mtpt
 {
-
-/// One vertex of the decomposition (24 bytes).
-struct TetVertex
-{
-  float x, y, z;     ///< NDC; z is the front of the segment
-  float scalarFront; ///< scalar where the ray enters the tetrahedron
-  float scalarBack;  ///< scalar where the ray leaves it
-  float thickness;   ///< eye-space length of the ray segment inside the tetrahedron
-};
-
-/**
- * Dependent components (Documentation/algorithm.md, "Dependent components"): where the data
- * give colour and opacity themselves rather than a scalar to look up, the decomposition
- * classifies at the vertices (DecomposeInput::colours) and the bytes of a record's
- * scalarFront and scalarBack hold the vertex's colour instead: red, green, blue and the
- * attenuation (per ScalarOpacityUnitDistance), each clamped to [0, 1] and stored as a
- * 16-bit unsigned normalized integer, in that memory order. OpenGL reads them as a
- * normalized GL_UNSIGNED_SHORT vec4; VTK's PT keeps 8 bits per channel.
- */
-inline void StoreVertexColour(TetVertex& vertex, const float rgba[4])
-{
-  std::uint16_t packed[4];
-  for (int c = 0; c < 4; ++c)
-  {
-    const float v = rgba[c] > 0.0f ? (rgba[c] < 1.0f ? rgba[c] : 1.0f) : 0.0f; // NaN: 0
-    packed[c] = static_cast<std::uint16_t>(v * 65535.0f + 0.5f);
-  }
-  static_assert(sizeof(packed) == 2 * sizeof(float), "two record fields hold the colour");
-  std::memcpy(&vertex.scalarFront, packed, sizeof(packed));
-}
-
-/// The colour StoreVertexColour put in `vertex`.
-inline void LoadVertexColour(const TetVertex& vertex, float rgba[4])
-{
-  std::uint16_t packed[4];
-  std::memcpy(packed, &vertex.scalarFront, sizeof(packed));
-  for (int c = 0; c < 4; ++c)
-  {
-    rgba[c] = static_cast<float>(packed[c]) * (1.0f / 65535.0f);
-  }
-}
-
-constexpr std::size_t VerticesPerTetrahedron = 5;
-constexpr std::size_t IndicesPerTetrahedron = 12;
-
-/**
- * One tetrahedron's projection as the CPU compositor draws it: a fan of triangles around the
- * thick vertex (the centre), over the silhouette's corners (the boundary) in cyclic order.
- * Triangle i is (boundary[i], boundary[i + 1], centre), and when `closed`,
- * (boundary[count - 1], boundary[0], centre) closes the fan. The records and their values
- * are those of the slot DecomposeTetrahedron writes for the same tetrahedron (both are
- * written from one computation): 128 bytes (two cache lines) against a slot's 168, and no
- * index buffer. count 0: nothing to draw (not drawable, or culled). count 2 with `closed`
- * 0 is a single triangle (the compositor's slot entry point makes those).
- */
-struct Fan
-{
-  TetVertex centre;      ///< the thick vertex
-  TetVertex boundary[4]; ///< the silhouette's corners (front = back, length 0 for a cell's)
-  std::uint8_t count;    ///< boundary corners: 0, 2, 3 or 4
-  std::uint8_t closed;   ///< whether the last triangle closes the fan
-  std::uint8_t padding[6];
-};
-static_assert(sizeof(Fan) == 128, "a fan is two cache lines");
 
 /**
  * Shirley-Tuchman classes of a projected tetrahedron. Classes 3 and 4 are the limits of
@@ -166,7 +104,8 @@ Projection ClassifyProjection(const double x[4], const double y[4]);
  * Thread safety: pure function of its arguments.
  */
 Projection DecomposeTetrahedron(const ProjectedPoint* const corners[4], const float scalars[4],
-  TetVertex vertices[5], std::uint32_t indices[12], const float* const* colours = nullptr);
+  TetVertex vertices[VerticesPerTetrahedron], std::uint32_t indices[IndicesPerTetrahedron],
+  const float* const* colours = nullptr);
 
 /// Inputs of the decomposition stage that stay fixed during a frame.
 struct DecomposeInput
@@ -237,17 +176,6 @@ ProjectionClass DecomposeIntoFan(const DecomposeInput& input,
 void DecomposeFansByRank(const DecomposeInput& input, const std::uint32_t* rank,
   std::size_t firstRank, std::size_t count, Fan* fans, ProjectionClass* classes, int threads);
 
-/// Rank of a cell that is not in the order (InvertOrder).
-constexpr std::uint32_t NotInOrder = 0xffffffffu;
-
-/**
- * The inverse of a visibility order: rank[c] = k where order[k] holds cell c, and
- * NotInOrder for the cells of [0, cellCount) that the order leaves out.
- * Thread safety: reentrant; `threads` OpenMP threads. Determinism: a pure function.
- */
-void InvertOrder(
-  const SortKey* order, std::size_t count, std::size_t cellCount, std::uint32_t* rank, int threads);
-
 /**
  * The same buffers as DecomposeTetrahedra for the order that `rank` inverts, computed by
  * visiting the cells in storage order and writing each into slot rank[cell]. Reads are then
@@ -265,6 +193,80 @@ void InvertOrder(
 void DecomposeTetrahedraByRank(const DecomposeInput& input, const std::uint32_t* rank,
   std::size_t firstRank, std::size_t count, TetVertex* vertices, std::uint32_t* indices,
   ProjectionClass* classes, int threads);
+
+/**
+ * Stage 5 as a stage of FramePipeline (Stage.h): one window of the order decomposed into
+ * buffers, the cells by rank and the near-plane pieces in their slots, kept until the
+ * order, the window or the viewport (pixel culling) change. Two of them run, one per kind of
+ * buffer (SlotStage for OpenGL, FanStage for the CPU compositor); with several batches each
+ * batch is decomposed again every frame, as the buffers hold only the last one.
+ */
+class DecompositionStage
+{
+public:
+  struct Key
+  {
+    std::uint64_t order = 0; ///< OrderStage::Version()
+    std::size_t first = 0, count = 0;
+    int viewportWidth = 0, viewportHeight = 0;
+    bool operator==(const Key& o) const
+    {
+      return order == o.order && first == o.first && count == o.count &&
+        viewportWidth == o.viewportWidth && viewportHeight == o.viewportHeight;
+    }
+  };
+  /// Changes whenever the buffers' content changes (never 0 once a window was decomposed).
+  std::uint64_t Version() const { return this->Record.Version(); }
+  /// Tetrahedra of the held window.
+  std::size_t Count() const { return this->Record.Inputs().count; }
+  /// Slots or fans of the held window that cover no pixel centre, or cannot be drawn.
+  std::size_t PixelCulled() const { return this->CoversNoPixel; }
+  std::size_t NotDrawable() const { return this->Undrawable; }
+  void Forget() { this->Record.Forget(); }
+
+protected:
+  /// The window of `key` through `cells(input, first, count, classes, threads)` (the cells by
+  /// rank) and `piece(input, corners, scalars, colours, k)` (each near-plane piece in the
+  /// window, k its slot), unless it is held; true when it decomposed.
+  template <typename Cells, typename Piece>
+  bool Run(const Key& key, const DecomposeInput& input, const std::uint32_t* rank,
+    const std::vector<NearPiece>& pieces, int threads, Cells&& cells, Piece&& piece);
+
+  StageRecord<Key> Record;
+  std::vector<ProjectionClass> Classes; ///< per slot of the window
+  std::size_t CoversNoPixel = 0, Undrawable = 0;
+};
+
+/// The OpenGL backend's buffers: slots of VerticesPerTetrahedron records and
+/// IndicesPerTetrahedron indices.
+class SlotStage : public DecompositionStage
+{
+public:
+  bool Update(const Key& key, const DecomposeInput& input, const std::uint32_t* rank,
+    const std::vector<NearPiece>& pieces, int threads);
+  const std::vector<TetVertex>& Vertices() const { return this->VertexBuffer; }
+  const std::vector<std::uint32_t>& Indices() const { return this->IndexBuffer; }
+  void Release();
+  std::size_t MemoryBytes() const;
+
+private:
+  std::vector<TetVertex> VertexBuffer;
+  std::vector<std::uint32_t> IndexBuffer;
+};
+
+/// The CPU compositor's input: one fan per tetrahedron.
+class FanStage : public DecompositionStage
+{
+public:
+  bool Update(const Key& key, const DecomposeInput& input, const std::uint32_t* rank,
+    const std::vector<NearPiece>& pieces, int threads);
+  const std::vector<Fan>& Fans() const { return this->FanBuffer; }
+  void Release();
+  std::size_t MemoryBytes() const;
+
+private:
+  std::vector<Fan> FanBuffer;
+};
 
 } // namespace mtpt
 

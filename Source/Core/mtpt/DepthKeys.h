@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 /**
  * @file DepthKeys.h
- * @brief Stage 2 of a frame: one sortable depth key per tetrahedron.
+ * @brief Stage 3 of a frame: one sortable depth key per tetrahedron.
  *
  * Depth (Documentation/algorithm.md, "Depth keys"): orthographic views use the eye-space
  * depth -z of the centroid (the paper's dot(view direction, centroid)); perspective views
@@ -17,34 +17,15 @@
 #define mtpt_DepthKeys_h
 
 #include "mtpt/MeshView.h"
-#include "mtpt/Transform.h"
+#include "mtpt/Records.h"
+#include "mtpt/Stage.h"
 
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 namespace mtpt
 {
-
-using SortKey = std::uint64_t;
-
-/**
- * The 32-bit code of a depth whose ascending order is descending depth. NaN and the
- * infinities map to the code of +infinity (drawn first; such cells are not drawable
- * anyway) and -0 maps to the code of +0, so equal depths always give equal codes.
- */
-std::uint32_t EncodeDepth(float depth);
-
-/// The sort key of `cell` at `depth`: EncodeDepth(depth) in the high 32 bits, cell id low.
-inline SortKey MakeSortKey(float depth, std::uint32_t cell)
-{
-  return (static_cast<SortKey>(EncodeDepth(depth)) << 32) | cell;
-}
-
-/// The cell id held in a sort key.
-inline std::uint32_t CellOfKey(SortKey key)
-{
-  return static_cast<std::uint32_t>(key & 0xffffffffu);
-}
 
 /**
  * Writes keys[c] = MakeSortKey(depth of cell c, c) for every cell, from the eye
@@ -88,6 +69,47 @@ struct KeyCounts
 KeyCounts ComputeVisibleDepthKeys(const ProjectedPoint* points, std::size_t pointCount,
   const CellsView& cells, const std::uint32_t* list, std::size_t listCount, bool perspective,
   const KeyCulling& culling, SortKey* keys, int threads);
+
+/**
+ * Stage 3 as a stage of FramePipeline (Stage.h): the keys of the cells left by culling and
+ * by ComputeVisibleDepthKeys, in ascending cell id order, kept until the projected points,
+ * the visible cells or the culling settings change.
+ */
+class DepthKeyStage
+{
+public:
+  struct Key
+  {
+    std::uint64_t points = 0;  ///< TransformStage::Version()
+    std::uint64_t visible = 0; ///< CullingStage::Version()
+    bool perspective = false;
+    KeyCulling culling;
+    bool operator==(const Key& o) const
+    {
+      return points == o.points && visible == o.visible && perspective == o.perspective &&
+        culling.frustum == o.culling.frustum && culling.viewportWidth == o.culling.viewportWidth &&
+        culling.viewportHeight == o.culling.viewportHeight;
+    }
+  };
+
+  /// Computes the keys of `list` (null: every cell) unless they were computed with `key`;
+  /// true when it computed.
+  bool Update(const Key& key, const ProjectedPoint* points, std::size_t pointCount,
+    const CellsView& cells, const std::uint32_t* list, std::size_t listCount, int threads);
+
+  const std::vector<SortKey>& Keys() const { return this->Kept; }
+  /// How many cells the keys left out, and why.
+  const KeyCounts& Counts() const { return this->Count; }
+  std::uint64_t Version() const { return this->Record.Version(); }
+  void Forget() { this->Record.Forget(); }
+  void Release();
+  std::size_t MemoryBytes() const { return this->Kept.capacity() * sizeof(SortKey); }
+
+private:
+  StageRecord<Key> Record;
+  std::vector<SortKey> Kept;
+  KeyCounts Count;
+};
 
 } // namespace mtpt
 

@@ -1,9 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 /**
  * @file FramePipeline.h
- * @brief The CPU stages of one frame in sequence (transform, culling, keys, order,
- * decompose), owning their buffers, timing each stage, counting what it culls, and reusing
- * the results of stages whose inputs did not change.
+ * @brief The CPU stages of one frame in sequence: 1 transform (Transform.h), 2 opacity
+ * culling (Culling.h), 3 depth keys (DepthKeys.h) and 3b the near plane's cut
+ * (NearPlane.h), 4 visibility order (VisibilityOrder.h), 5 decomposition (Decompose.h).
+ * Each stage is an object that owns its result, the key it was computed from and a version
+ * (Stage.h; Documentation/architecture.md, "The stages of a frame"); this class only runs
+ * them in order, passing each the versions of the results it reads, times them and gathers
+ * what they culled and reused. Stage 6, drawing, belongs to the backends.
  *
  * Work follows what the scene needs (Documentation/algorithm.md, "Culling and reuse"):
  * - cells crossing the near plane are cut by it and their visible part drawn as extra
@@ -30,7 +34,9 @@
 
 #include "mtpt/Culling.h"
 #include "mtpt/Decompose.h"
+#include "mtpt/DepthKeys.h"
 #include "mtpt/NearPlane.h"
+#include "mtpt/Transform.h"
 #include "mtpt/VisibilityOrder.h"
 
 #include <cstdint>
@@ -96,17 +102,6 @@ struct FrameInput
   std::uint64_t dataVersion = 0, opacityVersion = 0;
 };
 
-/**
- * Deliberately wrong visibility orders, for testing that tests can see the order (a test
- * suite that passes with a reversed or unsorted order does not check it). Never for use.
- */
-enum class OrderMutation
-{
-  None,     ///< the visibility order (default)
-  Reversed, ///< front to back instead of back to front
-  Storage,  ///< the cells in storage order: not sorted at all
-};
-
 /// Stages of a frame, as reported to a StageCallback.
 enum class Stage
 {
@@ -131,10 +126,14 @@ using StageCallback = std::function<bool(Stage)>;
 class FramePipeline
 {
 public:
-  FramePipeline();
+  FramePipeline() = default;
 
-  void SetOrderMethod(OrderMethod method, std::size_t maxSubArraySize = DefaultMaxSubArraySize);
-  OrderMethod GetOrderMethod() const { return Order->Method(); }
+  void SetOrderMethod(OrderMethod method, std::size_t maxSubArraySize = DefaultMaxSubArraySize)
+  {
+    this->Method = method;
+    this->MaxSubArraySize = maxSubArraySize;
+  }
+  OrderMethod GetOrderMethod() const { return this->Method; }
 
   /**
    * Reuse results across frames (default off). With reuse on, the caller promises that the
@@ -146,25 +145,25 @@ public:
   bool GetReuse() const { return this->Reuse; }
 
   /// Testing only: see OrderMutation. Takes effect at the next sort.
-  void SetOrderMutationForTesting(OrderMutation mutation);
+  void SetOrderMutationForTesting(OrderMutation mutation) { this->Mutation = mutation; }
 
   /// Called after each stage of Prepare (see StageCallback); empty: none.
   void SetStageCallback(StageCallback callback) { this->Callback = std::move(callback); }
 
   /**
-   * Stages 1-3 and the order's inverse: transform, culling, keys, order. Returns false
-   * (and sorts nothing) if the mesh is too large for 32-bit indices or the stage callback
-   * stopped the frame (Stopped() tells which). Then decompose with DecomposeBatch, or use
-   * Run for the whole order at once.
+   * Stages 1 to 4 and the order's inverse: transform, culling, keys (with the near plane),
+   * order. Returns false (and sorts nothing) if the mesh is too large for 32-bit indices or
+   * the stage callback stopped the frame (Stopped() tells which). Then decompose with
+   * DecomposeBatch, or use Run for the whole order at once.
    */
   bool Prepare(const FrameInput& input, int threads);
   /// Whether the last Prepare was stopped by the stage callback.
   bool Stopped() const { return this->WasStopped; }
 
   /**
-   * Decomposes the order's window [first, first + count) (clamped to SortedCount()) into
-   * Vertices() and Indices(), slot 0 being rank `first`. Call after Prepare, for the same
-   * input, in any order of windows.
+   * Stage 5: decomposes the order's window [first, first + count) (clamped to
+   * SortedCount()) into Vertices() and Indices(), slot 0 being rank `first`. Call after
+   * Prepare, for the same input, in any order of windows.
    */
   void DecomposeBatch(std::size_t first, std::size_t count, int threads);
 
@@ -184,26 +183,26 @@ public:
   std::size_t SortedCount() const { return SortedSize; }
   /// Slots in the buffers: the last batch decomposed.
   std::size_t TetrahedronCount() const { return BatchCount; }
-  const std::vector<ProjectedPoint>& Points() const { return ProjectedPoints; }
+  const std::vector<ProjectedPoint>& Points() const { return this->Transform.Points(); }
   /// The order: SortedCount() keys, back to front.
-  const std::vector<SortKey>& Keys() const { return SortedKeys; }
-  const std::vector<TetVertex>& Vertices() const { return VertexBuffer; }
-  const std::vector<std::uint32_t>& Indices() const { return IndexBuffer; }
+  const std::vector<SortKey>& Keys() const { return this->Order.Keys(); }
+  const std::vector<TetVertex>& Vertices() const { return this->Slots.Vertices(); }
+  const std::vector<std::uint32_t>& Indices() const { return this->Slots.Indices(); }
 
   /// Fans of the last DecomposeFans.
-  const std::vector<Fan>& Fans() const { return FanBuffer; }
+  const std::vector<Fan>& Fans() const { return this->FanBuffers.Fans(); }
   std::size_t FanCount() const { return FanBatchCount; }
   /// Changes whenever the fans' content changes (as BufferVersion for the slots).
-  std::uint64_t FanVersion() const { return this->FansVersion; }
+  std::uint64_t FanVersion() const { return this->FanBuffers.Version(); }
 
   /**
    * Changes whenever the buffers' content changes: a new decomposition, another batch, or
    * Release. A consumer that copied the buffers (an OpenGL upload) is current exactly when
    * it holds this version; never 0 once a batch has been decomposed.
    */
-  std::uint64_t BufferVersion() const { return this->BuffersVersion; }
+  std::uint64_t BufferVersion() const { return this->Slots.Version(); }
   /// Changes whenever the visibility order (or the set of cells in it) changes.
-  std::uint64_t OrderVersionNumber() const { return this->OrderVersion; }
+  std::uint64_t OrderVersionNumber() const { return this->Order.Version(); }
   /// The view's projected points and the inputs of the decomposition of the last Prepare.
   const DecomposeInput& Decomposition() const { return this->DecomposeState; }
 
@@ -213,100 +212,45 @@ public:
   void Release();
 
   /// Largest tetrahedron count whose fixed-stride buffers fit 32-bit indices.
-  static std::size_t MaxTetrahedra();
+  static std::size_t MaxTetrahedra() { return MaxFrameTetrahedra; }
 
-  /// A nearly-sorted re-sort is tried only after a rotation of the view direction below
-  /// this many radians (larger ones move too many cells to beat the full sort).
-  static constexpr double NearlySortedMaxAngle = 0.01;
+  /// See OrderStage::NearlySortedMaxAngle.
+  static constexpr double NearlySortedMaxAngle = OrderStage::NearlySortedMaxAngle;
 
 private:
-  bool SameTransform(const FrameInput& input) const;
-  void UpdateCulling(const FrameInput& input, int threads, bool dataChanged);
-  bool UpdateOrder(const FrameInput& input, int threads, bool dataChanged, bool viewChanged);
+  FramePipeline(const FramePipeline&) = delete;
+  void operator=(const FramePipeline&) = delete;
 
-  /// What a set of decomposition buffers holds: a window of which order, for which viewport.
-  struct Window
-  {
-    bool valid = false;
-    std::uint64_t orderVersion = 0;
-    std::size_t first = 0, count = 0;
-    int viewport[2] = { 0, 0 };
-    std::size_t pixelCulled = 0, notDrawable = 0;
-    bool Holds(
-      std::uint64_t order, std::size_t first, std::size_t count, const DecomposeInput& in) const;
-  };
-  /// Decomposes the window [first, first + count) with the two functions (cells by rank,
-  /// near-plane pieces) unless `window` holds it already; true when it decomposed. Clamps
-  /// first and count to the order.
-  template <typename Cells, typename Piece>
-  bool DecomposeWindow(Window& window, std::size_t& first, std::size_t& count, int threads,
-    Cells&& decomposeCells, Piece&& decomposePiece);
-  void MutateOrder(std::size_t count);
+  /// Runs `stage`, adds its seconds to `seconds` when it computed, and returns whether it did.
+  template <typename Body>
+  static bool Timed(double& seconds, Body&& stage);
   bool Continue(Stage finished);
-  std::size_t ClipNearPlane(const FrameInput& input, int threads);
+  /// Stages 3 and 4 (keys, near plane, order); false when the callback stopped the frame.
+  bool UpdateOrder(const FrameInput& input, const MeshKey& mesh, int threads);
+  DecompositionStage::Key WindowKey(std::size_t& first, std::size_t& count);
+  void ForgetAll();
 
-  std::unique_ptr<VisibilityOrder> Order;
+  // The stages, in the order they run (Documentation/architecture.md, "The stages").
+  TransformStage Transform;
+  CullingStage Culling;
+  DepthKeyStage DepthKeys;
+  NearPlaneStage NearPlaneCut;
+  OrderStage Order;
+  SlotStage Slots;
+  FanStage FanBuffers;
+
+  OrderMethod Method = OrderMethod::RadixSort;
   std::size_t MaxSubArraySize = DefaultMaxSubArraySize;
-  bool Reuse = false;
-
-  std::vector<ProjectedPoint> ProjectedPoints;
-  std::vector<float> CellRanges;      ///< opacity culling: 2 per cell
-  std::vector<std::uint32_t> Visible; ///< cells the opacity table leaves visible
-  std::vector<std::uint32_t> NewVisible;
-  OpacityCulling Opacity;
-  std::vector<SortKey> SortedKeys;
-  std::vector<SortKey> Scratch; ///< nearly-sorted attempt
-  std::vector<std::uint32_t> Rank;
-  std::vector<TetVertex> VertexBuffer;
-  std::vector<Fan> FanBuffer;
-  std::vector<std::uint32_t> IndexBuffer;
-  std::vector<ProjectionClass> Classes;
-  std::vector<NearPiece> Pieces; ///< piece j has cell id cellCount + j in the order
-  std::vector<SortKey> PieceKeys;
-  std::vector<std::uint8_t> Crossing; ///< per key of the order being built
-  DecomposeInput DecomposeState;      ///< of the frame being prepared
-  std::size_t SortedSize = 0, BatchCount = 0;
   OrderMutation Mutation = OrderMutation::None;
+  bool Reuse = false;
   StageCallback Callback;
+
+  // The frame being prepared.
+  DecomposeInput DecomposeState;
+  std::size_t SortedSize = 0, BatchCount = 0, FanBatchCount = 0;
   bool WasStopped = false;
-  std::uint64_t BuffersVersion = 0, FansVersion = 0;
-  std::size_t FanBatchCount = 0;
-  Window SlotWindow, FanWindow;
   StageTimes LastTimes;
   FrameStats LastStats;
-
-  // What the kept results were computed from (valid only with the matching flag).
-  struct Inputs
-  {
-    const void* points = nullptr;
-    std::size_t pointCount = 0;
-    const void* connectivity = nullptr;
-    const void* offsets = nullptr;
-    std::size_t cellSize = 0;
-    std::size_t cellCount = 0;
-    const float* scalars = nullptr;
-    const float* colours = nullptr;
-    ScalarsView::Association association = ScalarsView::Association::Points;
-    std::uint64_t dataVersion = 0;
-    bool operator==(const Inputs& o) const;
-  };
-  Inputs Data;
-  bool HaveTransform = false, HaveRanges = false, HaveVisible = false, HaveOrder = false;
-  Matrix4 TransformModelView{}, TransformProjection{};
-  std::uint64_t OpacityVersion = 0;
-  TransferFunctionTable OpacityTable;
-  bool CullByOpacity = false;
-  bool CullByAttenuation = false; ///< the visible cells are those of FrameInput::colours
-  // Versions of the stage results, bumped when a stage recomputes something different.
-  std::uint64_t PointsVersion = 0, VisibleVersion = 0, OrderVersion = 0;
-  std::uint64_t OrderPointsVersion = 0, OrderVisibleVersion = 0;
-  bool OrderPerspective = false, OrderCullFrustum = false;
-  int OrderViewport[2] = { 0, 0 };
-  std::size_t OrderPixelCulled = 0;
-  OrderMethod OrderMethodUsed = OrderMethod::RadixSort;
-  OrderMutation OrderMutationUsed = OrderMutation::None;
-  std::size_t OrderFrustumCulled = 0, OrderOpacityCulled = 0, OrderNearClipped = 0;
-  double OrderDirection[3] = { 0, 0, 0 };
 };
 
 } // namespace mtpt

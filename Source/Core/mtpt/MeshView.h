@@ -150,6 +150,40 @@ struct ScalarsView
   Association association = Association::Points;
 };
 
+/**
+ * What a frame's results depend on in its data, for the stages' keys (Stage.h): the arrays
+ * the views show and a version the caller changes whenever their content changes in place
+ * (FrameInput::dataVersion).
+ */
+struct MeshKey
+{
+  const void* points = nullptr;
+  const MeshPart* pointParts = nullptr;
+  std::size_t pointCount = 0;
+  const void* connectivity = nullptr;
+  const void* offsets = nullptr;
+  const MeshPart* cellParts = nullptr;
+  std::size_t cellSize = 0, cellCount = 0;
+  const float* scalars = nullptr;
+  const float* colours = nullptr;
+  ScalarsView::Association association = ScalarsView::Association::Points;
+  std::uint64_t version = 0;
+
+  static MeshKey Of(const PointsView& p, const CellsView& c, const ScalarsView& s,
+    const float* colours, std::uint64_t version)
+  {
+    return { p.data, p.parts, p.count, c.connectivity, c.offsets, c.parts, c.cellSize, c.cellCount,
+      s.values, colours, s.association, version };
+  }
+  bool operator==(const MeshKey& o) const
+  {
+    return points == o.points && pointParts == o.pointParts && pointCount == o.pointCount &&
+      connectivity == o.connectivity && offsets == o.offsets && cellParts == o.cellParts &&
+      cellSize == o.cellSize && cellCount == o.cellCount && scalars == o.scalars &&
+      colours == o.colours && association == o.association && version == o.version;
+  }
+};
+
 } // namespace mtpt
 
 #endif

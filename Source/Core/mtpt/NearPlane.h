@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 /**
  * @file NearPlane.h
- * @brief Cells that cross the near plane are cut by it and their visible part drawn, where
+ * @brief Stage 3b of a frame: cells that cross the near plane are cut by it and their visible part drawn, where
  * VTK's PT drops the whole cell (holes when the camera is near or inside the mesh;
  * Documentation/algorithm.md, "Near-plane clipping").
  *
@@ -19,8 +19,11 @@
 #define mtpt_NearPlane_h
 
 #include "mtpt/MeshView.h"
-#include "mtpt/Transform.h"
+#include "mtpt/Records.h"
+#include "mtpt/Stage.h"
 
+#include <cstddef>
+#include <cstdint>
 #include <vector>
 
 namespace mtpt
@@ -66,6 +69,69 @@ struct NearPiece
 int CutTetrahedron(const ProjectedPoint* const corners[4], const float scalars[4],
   const NearPlane& plane, const Matrix4& projection, std::vector<NearPiece>& pieces,
   const float* const* colours = nullptr);
+
+/**
+ * Stage 3b as a stage of FramePipeline (Stage.h; Documentation/algorithm.md,
+ * "Near-plane clipping"): of the depth keys, those of cells that cross the plane are
+ * replaced by the pieces of their visible part, each with a key of its own (cell id
+ * cellCount + j for piece j, its centroid's depth), and those of cells wholly in front of the
+ * plane are dropped. Kept until the depth keys change (their version stands for the points,
+ * and so the data and the matrices, for the cells kept and the kind of projection).
+ * Most frames have no point in front of the plane and cut nothing.
+ */
+class NearPlaneStage
+{
+public:
+  struct Key
+  {
+    std::uint64_t keys = 0; ///< DepthKeyStage::Version()
+    bool operator==(const Key& o) const { return keys == o.keys; }
+  };
+
+  /// Cuts the cells of `keys` unless that was done for `key`; true when it computed.
+  /// `colours`: FrameInput::colours (null without dependent components).
+  bool Update(const Key& key, const std::vector<SortKey>& keys, const ProjectedPoint* points,
+    std::size_t pointCount, const CellsView& cells, const ScalarsView& scalars,
+    const float* colours, const Matrix4& projection, bool perspective, int threads);
+
+  /// Whether key k of the depth keys stays in the order (false: cut or dropped).
+  bool Keeps(std::size_t k) const { return !this->Cut || this->Verdicts[k] == Keep; }
+  /// Whether any key was cut or dropped.
+  bool CutsAny() const { return this->Cut; }
+  /// The pieces; piece j has cell id cellCount + j.
+  const std::vector<NearPiece>& Pieces() const { return this->Made; }
+  /// The pieces' keys, sorted.
+  const std::vector<SortKey>& PieceKeys() const { return this->Keys; }
+  /// Cells cut by the plane.
+  std::size_t Clipped() const { return this->ClippedCells; }
+  std::uint64_t Version() const { return this->Record.Version(); }
+  void Forget() { this->Record.Forget(); }
+  void Release();
+  std::size_t MemoryBytes() const;
+
+private:
+  enum Verdict : std::uint8_t
+  {
+    Keep = 0, ///< all corners on the visible side, or not cuttable
+    Crosses,  ///< cut: replaced by its pieces
+    InFront   ///< wholly in front of the plane: dropped
+  };
+  /// Each key's verdict (parallel); false when no point is in front of the plane at all.
+  bool Classify(const std::vector<SortKey>& keys, const ProjectedPoint* points,
+    std::size_t pointCount, const CellsView& cells, const ScalarsView& scalars,
+    const NearPlane& plane, int threads);
+  /// Cuts the crossing cells in order (deterministic piece ids) and makes the pieces' keys.
+  void CutCrossing(const std::vector<SortKey>& keys, const ProjectedPoint* points,
+    std::size_t pointCount, const CellsView& cells, const ScalarsView& scalars,
+    const float* colours, const NearPlane& plane, const Matrix4& projection, bool perspective);
+
+  StageRecord<Key> Record;
+  std::vector<std::uint8_t> Verdicts; ///< per depth key
+  std::vector<NearPiece> Made;
+  std::vector<SortKey> Keys;
+  bool Cut = false;
+  std::size_t ClippedCells = 0;
+};
 
 } // namespace mtpt
 

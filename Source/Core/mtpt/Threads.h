@@ -65,7 +65,7 @@ int ThreadsForWork(std::size_t items, std::size_t itemsPerThread, int requested)
  * where OpenGL is itself a CPU rasterizer (Mesa llvmpipe) that spinning takes cores from
  * the rasterizer's threads while they draw the rest of the frame. Implemented with
  * omp_pause_resource_all(omp_pause_soft) (OpenMP 5.0): the workers are released and the
- * next parallel region starts new ones (about 0.1 ms). Does nothing inside a parallel
+ * next parallel region starts new ones, once per frame. Does nothing inside a parallel
  * region or where the runtime cannot release them: LLVM's libomp keeps spinning for its
  * KMP_BLOCKTIME after a soft pause (set KMP_BLOCKTIME=0 there instead). Returns whether it
  * released them.

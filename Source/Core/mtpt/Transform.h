@@ -19,31 +19,16 @@
 #define mtpt_Transform_h
 
 #include "mtpt/MeshView.h"
+#include "mtpt/Records.h"
 
+#include "mtpt/Stage.h"
+
+#include <cstddef>
 #include <cstdint>
+#include <vector>
 
 namespace mtpt
 {
-
-/**
- * A point after projection. x, y, z are NDC (clip coordinates divided by w) and inverseW is
- * 1 / w, the clip-space w (1 for orthographic projections, the distance along the view axis
- * for perspective ones): decomposition interpolates perspective-correctly with it.
- * `usable` is 0 for a point that no cell may be drawn with: at or behind the eye plane
- * (w <= 0), a coordinate or scalar that is not finite, or a magnitude beyond
- * CoordinateLimit. Its other fields are then meaningless.
- */
-struct alignas(64) ProjectedPoint
-{
-  double x, y, z, inverseW; ///< NDC and 1 / clip w
-  double eyeX, eyeY, eyeZ;  ///< eye coordinates (model-view applied)
-  float scalar;             ///< the point's scalar; 0 without point scalars
-  std::int32_t usable;      ///< 1 if usable, 0 if not (checked once here, not per cell)
-};
-
-/// Beyond this magnitude a coordinate is unusable: it keeps every value written to the
-/// float vertex records finite (float overflows near 3.4e38).
-constexpr double CoordinateLimit = 1e30;
 
 /**
  * Projects `points` into `out` (points.count records) with the model-view matrix
@@ -55,6 +40,39 @@ constexpr double CoordinateLimit = 1e30;
  */
 void ProjectPoints(const PointsView& points, const ScalarsView& scalars, const Matrix4& modelView,
   const Matrix4& projection, ProjectedPoint* out, int threads);
+
+/**
+ * Stage 1 as a stage of FramePipeline (Stage.h): the projected points of the mesh, kept
+ * until the data or a matrix changes.
+ */
+class TransformStage
+{
+public:
+  struct Key
+  {
+    MeshKey mesh;
+    Matrix4 modelView{}, projection{};
+    bool operator==(const Key& o) const
+    {
+      return mesh == o.mesh && modelView == o.modelView && projection == o.projection;
+    }
+  };
+
+  /// Projects the points unless they were projected with `key`; true when it projected.
+  bool Update(const Key& key, const PointsView& points, const ScalarsView& scalars, int threads);
+
+  /// One record per point (valid after Update; the vector may be longer than the mesh).
+  const std::vector<ProjectedPoint>& Points() const { return this->Projected; }
+  std::uint64_t Version() const { return this->Record.Version(); }
+  void Forget() { this->Record.Forget(); }
+  /// Frees the records.
+  void Release();
+  std::size_t MemoryBytes() const { return this->Projected.capacity() * sizeof(ProjectedPoint); }
+
+private:
+  StageRecord<Key> Record;
+  std::vector<ProjectedPoint> Projected; ///< grows to the largest mesh and is reused
+};
 
 } // namespace mtpt
 

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 /**
  * @file VisibilityOrder.h
- * @brief Stage 3 of a frame: sort the depth keys into back-to-front visibility order.
+ * @brief Stage 4 of a frame: sort the depth keys into back-to-front visibility order.
  *
  * Every implementation sorts SortKey values (DepthKeys.h) ascending. Because a key holds
  * its cell id, all keys are distinct and the sorted sequence is unique: every
@@ -11,8 +11,12 @@
 #define mtpt_VisibilityOrder_h
 
 #include "mtpt/DepthKeys.h"
+#include "mtpt/NearPlane.h"
+#include "mtpt/Stage.h"
 
+#include <array>
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -72,6 +76,105 @@ std::unique_ptr<VisibilityOrder> MakeVisibilityOrder(
  * Thread safety: reentrant.
  */
 bool SortNearlySorted(SortKey* keys, std::size_t count, std::size_t moveBudget, int threads);
+
+/**
+ * The inverse of a visibility order: rank[c] = k where order[k] holds cell c, and
+ * NotInOrder for the cells of [0, cellCount) that the order leaves out.
+ * Thread safety: reentrant; `threads` OpenMP threads. Determinism: a pure function.
+ */
+void InvertOrder(
+  const SortKey* order, std::size_t count, std::size_t cellCount, std::uint32_t* rank, int threads);
+
+/**
+ * Deliberately wrong visibility orders, for testing that tests can see the order (a test
+ * suite that passes with a reversed or unsorted order does not check it). Never for use.
+ */
+enum class OrderMutation
+{
+  None,     ///< the visibility order (default)
+  Reversed, ///< front to back instead of back to front
+  Storage,  ///< the cells in storage order: not sorted at all
+};
+
+/**
+ * Stage 4 as a stage of FramePipeline (Stage.h): the depth keys the near plane keeps, sorted
+ * back to front, with the pieces of cut cells merged in, and the order's inverse (rank per
+ * cell id) that the decomposition visits the cells by. Kept until the keys, the pieces, the
+ * method or the testing mutation change.
+ *
+ * After a small rotation (below NearlySortedMaxAngle) with the same cells in play (the same
+ * data and visible cells; nothing culled by frustum or pixel coverage and nothing cut by the
+ * near plane, in this frame and the previous one), the new keys are placed in the previous
+ * order and SortNearlySorted finishes; it gives up past a move budget and the full sort runs.
+ */
+class OrderStage
+{
+public:
+  struct Key
+  {
+    std::uint64_t keys = 0;      ///< DepthKeyStage::Version()
+    std::uint64_t nearPlane = 0; ///< NearPlaneStage::Version()
+    OrderMethod method = OrderMethod::RadixSort;
+    std::size_t maxSubArraySize = DefaultMaxSubArraySize;
+    OrderMutation mutation = OrderMutation::None;
+    bool operator==(const Key& o) const
+    {
+      return keys == o.keys && nearPlane == o.nearPlane && method == o.method &&
+        maxSubArraySize == o.maxSubArraySize && mutation == o.mutation;
+    }
+  };
+  /**
+   * Which cells an order holds, for sorting the next one from it: every visible cell of the
+   * same data (`whole`), seen the same way, from a view direction (unit, model space).
+   */
+  struct Cells
+  {
+    MeshKey mesh;
+    std::uint64_t points = 0;  ///< TransformStage::Version(): a new one is a moved view
+    std::uint64_t visible = 0; ///< CullingStage::Version()
+    bool perspective = false;
+    bool whole = false; ///< nothing culled by frustum or pixel coverage, nothing cut
+    std::array<double, 3> direction{};
+  };
+
+  /// A nearly-sorted re-sort is tried only after a rotation of the view direction below
+  /// this many radians (larger ones move too many cells to beat the full sort).
+  static constexpr double NearlySortedMaxAngle = 0.01;
+
+  OrderStage();
+
+  /// Sorts unless the order was made from `key`; true when it sorted. `fromPrevious`:
+  /// whether sorting from the previous order may be tried (reuse is on).
+  bool Update(const Key& key, const Cells& cells, bool fromPrevious, const DepthKeyStage& keys,
+    const NearPlaneStage& nearPlane, int threads);
+  /// The inverse of the order over `ranked` cell ids (the mesh's cells and the pieces).
+  void Invert(std::size_t ranked, int threads);
+
+  /// The order: Count() keys, back to front.
+  const std::vector<SortKey>& Keys() const { return this->Sorted; }
+  std::size_t Count() const { return this->Sorted.size(); }
+  /// Rank of each cell id in the order (NotInOrder for cells left out), after Invert.
+  const std::uint32_t* Rank() const { return this->Ranks.data(); }
+  /// Whether the last Update sorted from the previous order.
+  bool FromPrevious() const { return this->SortedFromPrevious; }
+  std::uint64_t Version() const { return this->Record.Version(); }
+  OrderMethod Method() const { return this->Sorter->Method(); }
+  void Forget() { this->Record.Forget(); }
+  void Release();
+  std::size_t MemoryBytes() const;
+
+private:
+  bool SortFromPrevious(int threads);
+  void Mutate(OrderMutation mutation);
+
+  StageRecord<Key> Record;
+  std::unique_ptr<VisibilityOrder> Sorter;
+  std::size_t SorterMaxSubArraySize = DefaultMaxSubArraySize;
+  Cells Held; ///< the cells of the held order
+  std::vector<SortKey> Sorted, Scratch;
+  std::vector<std::uint32_t> Ranks;
+  bool SortedFromPrevious = false;
+};
 
 } // namespace mtpt
 

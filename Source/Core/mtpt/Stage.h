@@ -1,0 +1,69 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file Stage.h
+ * @brief What every stage of a frame keeps besides its result: the key it was computed from
+ * and a version that changes whenever the result does (Documentation/architecture.md,
+ * "The stages of a frame").
+ *
+ * A stage's Key is a small struct with operator== holding every input its result depends
+ * on, inputs from earlier stages included as their versions. The stage recomputes exactly
+ * when this frame's key differs from the one it holds (or it holds none), so adding an input
+ * to a stage is one field in its key. Versions let a later stage, a backend or a cache
+ * depend on a result without comparing it: equal versions mean an equal result.
+ */
+#ifndef mtpt_Stage_h
+#define mtpt_Stage_h
+
+#include <cstdint>
+
+namespace mtpt
+{
+
+template <typename Key>
+class StageRecord
+{
+public:
+  /// Whether the result was computed from `key` (and not forgotten since).
+  bool Holds(const Key& key) const { return this->Current && this->Computed == key; }
+
+  /**
+   * Stores that the result was computed from `key`. `changed` false keeps the version: the
+   * new result equals the previous one (a stage that can tell, such as culling after a
+   * colour-only change of the transfer function, saves the later stages their work).
+   */
+  void Store(const Key& key, bool changed = true)
+  {
+    this->Computed = key;
+    this->Current = true;
+    if (changed || this->Number == 0)
+    {
+      ++this->Number;
+    }
+  }
+
+  /// The result may no longer be used (freed, or left incomplete): the next frame
+  /// recomputes it, and a later result gets a new version.
+  void Forget()
+  {
+    if (this->Current)
+    {
+      ++this->Number;
+    }
+    this->Current = false;
+  }
+
+  bool Valid() const { return this->Current; }
+  /// The key the result was computed from (meaningful only while Valid()).
+  const Key& Inputs() const { return this->Computed; }
+  /// Changes whenever the result changes; 0 before the first.
+  std::uint64_t Version() const { return this->Number; }
+
+private:
+  Key Computed{};
+  bool Current = false;
+  std::uint64_t Number = 0;
+};
+
+} // namespace mtpt
+
+#endif
