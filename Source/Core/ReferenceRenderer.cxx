@@ -728,6 +728,80 @@ struct Rays
   }
 };
 
+/// A ray's crossing of a translucent triangle: its ray parameter and the triangle.
+struct Hit
+{
+  double u;
+  const ReferenceTriangle* triangle;
+  bool operator<(const Hit& o) const
+  {
+    // A total order (the triangle's position in the list breaks ties): deterministic.
+    return this->u != o.u ? this->u < o.u : this->triangle < o.triangle;
+  }
+};
+
+/// The ray parameter in [0, 1] where origin + u * direction crosses triangle `t`, or a
+/// negative value if it misses (Moeller-Trumbore, in double).
+double CrossTriangle(const ReferenceTriangle& t, const double origin[3], const double direction[3])
+{
+  double e1[3], e2[3], s[3];
+  for (int d = 0; d < 3; ++d)
+  {
+    e1[d] = t.eye[1][d] - t.eye[0][d];
+    e2[d] = t.eye[2][d] - t.eye[0][d];
+    s[d] = origin[d] - t.eye[0][d];
+  }
+  double p[3], q[3];
+  Cross(direction, e2, p);
+  const double det = Dot(e1, p);
+  if (!(std::fabs(det) > 0) || !std::isfinite(det))
+  {
+    return -1; // parallel to the triangle, or degenerate
+  }
+  const double inverse = 1.0 / det;
+  const double a = Dot(s, p) * inverse;
+  Cross(s, e1, q);
+  const double b = Dot(direction, q) * inverse;
+  const double u = Dot(e2, q) * inverse;
+  const bool inside = a >= 0 && b >= 0 && a + b <= 1 && u >= 0 && u <= 1;
+  return inside ? u : -1;
+}
+
+/// The pixels whose rays may cross each triangle (as PixelBoxes for cells).
+std::vector<PixelBox> TriangleBoxes(const ReferenceSettings& settings)
+{
+  const Matrix4& p = settings.projection;
+  const int width = settings.width, height = settings.height;
+  std::vector<PixelBox> boxes;
+  for (const ReferenceTriangle& t : settings.triangles)
+  {
+    double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
+    bool inFront = true;
+    for (const auto& e : t.eye)
+    {
+      double clip[4];
+      for (int r = 0; r < 4; ++r)
+      {
+        clip[r] = p[4 * r] * e[0] + p[4 * r + 1] * e[1] + p[4 * r + 2] * e[2] + p[4 * r + 3];
+      }
+      inFront = inFront && clip[3] > 0;
+      const double wx = (clip[0] / clip[3] + 1.0) * 0.5 * width;
+      const double wy = (clip[1] / clip[3] + 1.0) * 0.5 * height;
+      x0 = std::min(x0, wx), x1 = std::max(x1, wx), y0 = std::min(y0, wy), y1 = std::max(y1, wy);
+    }
+    PixelBox box{ 0, width - 1, 0, height - 1 }; // reaching the eye plane: every pixel
+    if (inFront && x1 - x0 < 1e300 && y1 - y0 < 1e300)
+    {
+      box.xmin = static_cast<int>(std::max(0.0, std::floor(x0 - 0.5) - 1));
+      box.xmax = static_cast<int>(std::min(width - 1.0, std::ceil(x1 - 0.5) + 1));
+      box.ymin = static_cast<int>(std::max(0.0, std::floor(y0 - 0.5) - 1));
+      box.ymax = static_cast<int>(std::min(height - 1.0, std::ceil(y1 - 0.5) + 1));
+    }
+    boxes.push_back(box);
+  }
+  return boxes;
+}
+
 /// Everything the bands of one image share.
 struct Scene
 {
@@ -738,6 +812,7 @@ struct Scene
   const TransferFunctions& tf;
   const std::vector<EyePoint>& eye;
   const std::vector<PixelBox>& boxes;
+  const std::vector<PixelBox>& triangleBoxes;
   Rays ray;
   int nthreads;
 
@@ -851,12 +926,102 @@ void GatherSegments(const Scene& scene, int bandStart, int bandEnd,
   }
 }
 
-/// Per pixel of the band: its segments sorted by depth, integrated front to back, then the
-/// background.
+/// The translucent triangles' crossings of the band's pixels, pixel after pixel
+/// (`offsets` per pixel, +1), each pixel's sorted by depth.
+void GatherHits(const Scene& scene, int bandStart, int bandEnd, std::vector<std::size_t>& offsets,
+  std::vector<Hit>& hits)
+{
+  const int width = scene.settings.width;
+  const std::size_t bandPixels = static_cast<std::size_t>(bandEnd - bandStart) * width;
+  offsets.assign(bandPixels + 1, 0);
+  hits.clear();
+  if (scene.settings.triangles.empty())
+  {
+    return;
+  }
+  std::vector<std::vector<Hit>> perPixel(bandPixels);
+  for (std::size_t t = 0; t < scene.settings.triangles.size(); ++t)
+  {
+    const PixelBox& box = scene.triangleBoxes[t];
+    const int y0 = std::max(box.ymin, bandStart), y1 = std::min(box.ymax, bandEnd - 1);
+    for (int y = y0; y <= y1; ++y)
+    {
+      for (int x = box.xmin; x <= box.xmax; ++x)
+      {
+        double origin[3], direction[3];
+        scene.ray(x, y, origin, direction);
+        const double u = CrossTriangle(scene.settings.triangles[t], origin, direction);
+        if (u >= 0)
+        {
+          perPixel[static_cast<std::size_t>(y - bandStart) * width + x].push_back(
+            { u, &scene.settings.triangles[t] });
+        }
+      }
+    }
+  }
+  for (std::size_t i = 0; i < bandPixels; ++i)
+  {
+    std::sort(perPixel[i].begin(), perPixel[i].end());
+    hits.insert(hits.end(), perPixel[i].begin(), perPixel[i].end());
+    offsets[i + 1] = hits.size();
+  }
+}
+
+/// Composites a translucent surface: colour += T a c, T *= 1 - a.
+inline void CompositeHit(const Hit& hit, RayState& ray)
+{
+  const ReferenceTriangle& t = *hit.triangle;
+  for (int k = 0; k < 3; ++k)
+  {
+    ray.color[k] += ray.transmittance * t.opacity * t.rgb[k];
+  }
+  ray.transmittance *= 1.0 - t.opacity;
+}
+
+/// The segments and surface crossings of one ray, front to back: a crossing inside a
+/// segment splits it there (the data's values interpolated linearly at the split).
+template <int C>
+void IntegrateRay(const TransferFunctions& tf, double scale, const Segment<C>* begin,
+  const Segment<C>* end, const Hit* hit, const Hit* lastHit, RayState& state)
+{
+  for (const Segment<C>* s = begin; s != end && !state.Done(); ++s)
+  {
+    for (; hit != lastHit && hit->u <= s->enter; ++hit)
+    {
+      CompositeHit(*hit, state);
+    }
+    Segment<C> rest = *s;
+    for (; hit != lastHit && hit->u < rest.exit; ++hit)
+    {
+      const double f = (hit->u - rest.enter) / (rest.exit - rest.enter);
+      Segment<C> part = rest;
+      part.exit = hit->u;
+      for (int k = 0; k < C; ++k)
+      {
+        part.back[k] = rest.front[k] + f * (rest.back[k] - rest.front[k]);
+      }
+      Integrate(tf, (part.exit - part.enter) * scale, part, state);
+      rest.enter = part.exit;
+      std::copy(part.back, part.back + C, rest.front);
+      CompositeHit(*hit, state);
+    }
+    Integrate(tf, (rest.exit - rest.enter) * scale, rest, state);
+  }
+  for (; hit != lastHit; ++hit)
+  {
+    CompositeHit(*hit, state);
+  }
+}
+
+/// Per pixel of the band: its segments sorted by depth, integrated front to back with the
+/// translucent surfaces it crosses, then the background.
 template <int C>
 void IntegratePixels(const Scene& scene, int bandStart, int bandEnd,
   const std::vector<std::size_t>& offsets, std::vector<Segment<C>>& segments, double* rgb)
 {
+  std::vector<std::size_t> hitOffsets;
+  std::vector<Hit> hits;
+  GatherHits(scene, bandStart, bandEnd, hitOffsets, hits);
   const int width = scene.settings.width;
   const std::size_t bandPixels = static_cast<std::size_t>(bandEnd - bandStart) * width;
 #pragma omp parallel for num_threads(scene.nthreads) schedule(dynamic, 64)
@@ -871,10 +1036,8 @@ void IntegratePixels(const Scene& scene, int bandStart, int bandEnd,
     scene.ray(x, y, origin, direction);
     const double scale = std::sqrt(Dot(direction, direction));
     RayState state;
-    for (Segment<C>* s = begin; s != end && !state.Done(); ++s)
-    {
-      Integrate(scene.tf, (s->exit - s->enter) * scale, *s, state);
-    }
+    IntegrateRay(scene.tf, scale, begin, end, hits.data() + hitOffsets[i],
+      hits.data() + hitOffsets[i + 1], state);
     double* out = rgb + 3 * (static_cast<std::size_t>(y) * width + x);
     for (int k = 0; k < 3; ++k)
     {
@@ -952,7 +1115,8 @@ bool RenderReference(const PointsView& points, const CellsView& cells, const Sca
   rgb.assign(3 * static_cast<std::size_t>(width) * height, 0.0);
   const std::vector<EyePoint> eye = EyePoints(points, settings, nthreads);
   const std::vector<PixelBox> boxes = PixelBoxes(cells, points.count, eye, width, height, nthreads);
-  const Scene scene{ cells, points.count, scalars, settings, tf, eye, boxes,
+  const std::vector<PixelBox> triangleBoxes = TriangleBoxes(settings);
+  const Scene scene{ cells, points.count, scalars, settings, tf, eye, boxes, triangleBoxes,
     Rays{ inverseProjection, width, height }, nthreads };
   ReferenceStats counted;
   switch (settings.mapping)

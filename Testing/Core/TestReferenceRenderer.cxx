@@ -585,3 +585,49 @@ TEST(ReferenceRenderer, ColourAndOpacityScalarsDriveTheirOwnFunctions)
               Render(mesh, constant)),
     1e-12);
 }
+
+TEST(ReferenceRenderer, TranslucentSurfacesAreCompositedAtTheirDepth)
+{
+  // A constant slab z in [0, h] (colour cv, extinction tau) and a translucent square
+  // (colour cs, opacity a) across every ray, in front of, inside (at mid-depth) and behind
+  // the slab. With e = exp(-tau h / 2) for half the slab:
+  //   front:  a cs + (1 - a) (cv (1 - e^2) + e^2 bg)
+  //   inside: cv (1 - e) + e (a cs + (1 - a) (cv (1 - e) + e bg))
+  //   behind: cv (1 - e^2) + e^2 (a cs + (1 - a) bg)
+  const double h = 0.6, tau = 3.0, a = 0.35;
+  const double cv[3] = { 0.9, 0.5, 0.1 }, cs[3] = { 0.1, 0.3, 0.95 };
+  Mesh mesh;
+  const double lo[3] = { 0, 0, 0 }, hi[3] = { 1, 1, h };
+  const int n[3] = { 2, 2, 3 };
+  AddBox(mesh, lo, hi, n, [](double, double, double) { return 0.5; });
+  ReferenceSettings s = OrthoDownZ(16, 0.05, 0.95, 0.05, 0.95); // every ray inside
+  s.color = { { 0, cv[0], cv[1], cv[2] } };
+  s.opacity = { { 0, tau * 0.5 } };
+  s.unitDistance = 0.5; // extinction tau
+  const double e = std::exp(-tau * h / 2);
+  for (int where = 0; where < 3; ++where)
+  {
+    const double z = (where == 0 ? h + 0.2 : (where == 1 ? h / 2 : -0.2)) - 10.0; // eye z
+    s.triangles.clear();
+    s.triangles.push_back(
+      { { { -1, -1, z }, { 2, -1, z }, { 2, 2, z } }, { cs[0], cs[1], cs[2] }, a });
+    s.triangles.push_back(
+      { { { -1, -1, z }, { 2, 2, z }, { -1, 2, z } }, { cs[0], cs[1], cs[2] }, a });
+    const auto image = Render(mesh, s);
+    double worst = 0;
+    for (std::size_t p = 0; p < image.size() / 3; ++p)
+    {
+      for (int k = 0; k < 3; ++k)
+      {
+        const double bg = Background[k], surface = a * cs[k];
+        const double expected = where == 0
+          ? surface + (1 - a) * (cv[k] * (1 - e * e) + e * e * bg)
+          : (where == 1 ? cv[k] * (1 - e) + e * (surface + (1 - a) * (cv[k] * (1 - e) + e * bg))
+                        : cv[k] * (1 - e * e) + e * e * (surface + (1 - a) * bg));
+        worst = std::max(worst, std::fabs(image[3 * p + k] - expected));
+      }
+    }
+    EXPECT_LT(worst, 1e-12) << "surface "
+                            << (where == 0 ? "in front" : (where == 1 ? "inside" : "behind"));
+  }
+}

@@ -91,6 +91,19 @@ enum class ScalarMapping
 /// Values per tuple of each mapping: 1, 2 or 4.
 int ChannelsOf(ScalarMapping mapping);
 
+/**
+ * A translucent triangle seen with the volume (a surface drawn with depth peeling): its
+ * corners in eye coordinates and its flat colour and opacity. A ray that crosses it is
+ * composited with it at the crossing's depth, between the volume in front and behind:
+ * colour = opacity * rgb + (1 - opacity) * what lies behind.
+ */
+struct ReferenceTriangle
+{
+  double eye[3][3];
+  double rgb[3];
+  double opacity;
+};
+
 /// Pixel-centre offset of the reference's rays, in pixels (see the file comment).
 constexpr double PixelOffsetX = 2.7e-6;
 constexpr double PixelOffsetY = 1.4e-6;
@@ -111,6 +124,8 @@ struct ReferenceSettings
   /// How the scalars' values become colour and opacity; the scalars then hold
   /// ChannelsOf(mapping) floats per point or cell.
   ScalarMapping mapping = ScalarMapping::TransferFunctions;
+  /// Translucent triangles composited with the volume in depth order (none by default).
+  std::vector<ReferenceTriangle> triangles;
   /// Segments gathered at most per pass; the image is done in bands of rows that stay
   /// below it (memory: 32 bytes per segment with one scalar, as much in all with more).
   std::size_t maxSegmentsPerPass = std::size_t(1) << 23;
