@@ -115,6 +115,7 @@ protected:
   {
     vtkNew<Mapper> fresh;
     fresh->SetInputData(under->GetInput());
+    fresh->SetCullInvisibleCells(under->GetCullInvisibleCells());
     Fix(fresh, under->GetBackend(), under->GetImageSampleDistance());
     stage.volume->SetMapper(fresh);
     stage.window->Render();
@@ -321,39 +322,47 @@ TEST_F(MapperImageSampleDistance, DistanceTwoIsWithinItsBoundOfFullResolution)
 
 TEST_F(MapperImageSampleDistance, ChangingTheDistanceBetweenFramesGivesAFreshMappersImage)
 {
+  struct Step
+  {
+    float distance;
+    double turn; ///< degrees of azimuth before the frame
+  };
+  const Step steps[] = { { 1, 0 }, { 2, 0 }, { 2, 0 }, { 1.5, 0 }, { 3, 20 }, { 0.5, 0 },
+    { 1, 0 }, { 2.5, -30 }, { 1, 0 } };
+  // With culling off the visibility order does not depend on the image's size: the CPU
+  // backend's image must still be composited again at a new size.
   for (const int backend : Backends)
   {
-    vtkNew<Mapper> mapper;
-    Stage stage = FinStage(mapper, 180, 150);
-    const std::string label = BackendName(backend);
-    struct Step
+    for (const bool cull : { true, false })
     {
-      float distance;
-      double turn; ///< degrees of azimuth before the frame
-    };
-    for (const Step step : { Step{ 1, 0 }, Step{ 2, 0 }, Step{ 2, 0 }, Step{ 1.5, 0 },
-           Step{ 3, 20 }, Step{ 0.5, 0 }, Step{ 1, 0 }, Step{ 2.5, -30 }, Step{ 1, 0 } })
-    {
-      Fix(mapper, backend, step.distance);
-      stage.renderer->GetActiveCamera()->Azimuth(step.turn);
-      stage.renderer->ResetCameraClippingRange();
+      vtkNew<Mapper> mapper;
+      mapper->SetCullInvisibleCells(cull);
+      Stage stage = FinStage(mapper, 180, 150);
+      const std::string label =
+        std::string(BackendName(backend)) + (cull ? "" : ", no culling");
+      for (const Step step : steps)
+      {
+        Fix(mapper, backend, step.distance);
+        stage.renderer->GetActiveCamera()->Azimuth(step.turn);
+        stage.renderer->ResetCameraClippingRange();
+        stage.window->Render();
+        const auto image = Grab(stage.window, false);
+        const ImageDifference d = Compare(image, FreshImage(stage, mapper));
+        EXPECT_EQ(d.worst, 0.0) << label << ", distance " << step.distance << ": RMSE " << d.rmse;
+        EXPECT_GT(CoveredFraction(image, Background), 0.1) << label;
+      }
+      // An unchanged frame at distance 2 reuses the CPU backend's composited image.
+      Fix(mapper, backend, 2.0f);
       stage.window->Render();
-      const auto image = Grab(stage.window, false);
-      const ImageDifference d = Compare(image, FreshImage(stage, mapper));
-      EXPECT_EQ(d.worst, 0.0) << label << ", distance " << step.distance << ": RMSE " << d.rmse;
-      EXPECT_GT(CoveredFraction(image, Background), 0.1) << label;
+      const auto first = Grab(stage.window, false);
+      stage.window->Render();
+      if (backend == Mapper::CPU_BACKEND)
+      {
+        EXPECT_TRUE(mapper->GetLastFrameReuse() & Mapper::REUSED_IMAGE) << label;
+      }
+      EXPECT_EQ(Compare(Grab(stage.window, false), first).worst, 0.0) << label;
+      mapper->ReleaseGraphicsResources(stage.window);
     }
-    // An unchanged frame at distance 2 reuses the CPU backend's composited image.
-    Fix(mapper, backend, 2.0f);
-    stage.window->Render();
-    const auto first = Grab(stage.window, false);
-    stage.window->Render();
-    if (backend == Mapper::CPU_BACKEND)
-    {
-      EXPECT_TRUE(mapper->GetLastFrameReuse() & Mapper::REUSED_IMAGE);
-    }
-    EXPECT_EQ(Compare(Grab(stage.window, false), first).worst, 0.0) << label;
-    mapper->ReleaseGraphicsResources(stage.window);
   }
 }
 
