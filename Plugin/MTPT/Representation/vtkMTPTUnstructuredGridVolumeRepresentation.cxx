@@ -75,6 +75,46 @@ int vtkMTPTUnstructuredGridVolumeRepresentation::GetShadingMode()
   return this->MTPTMapper->GetShadingMode();
 }
 
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetImageSampleDistance(double distance)
+{
+  this->MTPTMapper->SetImageSampleDistance(static_cast<float>(distance));
+}
+
+double vtkMTPTUnstructuredGridVolumeRepresentation::GetImageSampleDistance()
+{
+  return this->MTPTMapper->GetImageSampleDistance();
+}
+
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetMinimumImageSampleDistance(double distance)
+{
+  this->MTPTMapper->SetMinimumImageSampleDistance(static_cast<float>(distance));
+}
+
+double vtkMTPTUnstructuredGridVolumeRepresentation::GetMinimumImageSampleDistance()
+{
+  return this->MTPTMapper->GetMinimumImageSampleDistance();
+}
+
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetMaximumImageSampleDistance(double distance)
+{
+  this->MTPTMapper->SetMaximumImageSampleDistance(static_cast<float>(distance));
+}
+
+double vtkMTPTUnstructuredGridVolumeRepresentation::GetMaximumImageSampleDistance()
+{
+  return this->MTPTMapper->GetMaximumImageSampleDistance();
+}
+
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetAutoAdjustSampleDistances(int adjust)
+{
+  this->MTPTMapper->SetAutoAdjustSampleDistances(adjust);
+}
+
+int vtkMTPTUnstructuredGridVolumeRepresentation::GetAutoAdjustSampleDistances()
+{
+  return this->MTPTMapper->GetAutoAdjustSampleDistances();
+}
+
 //------------------------------------------------------------------------------
 void vtkMTPTUnstructuredGridVolumeRepresentation::PrintSelf(ostream& os, vtkIndent indent)
 {

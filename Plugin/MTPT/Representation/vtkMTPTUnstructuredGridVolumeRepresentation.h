@@ -46,6 +46,14 @@ public:
   int GetBackend();
   void SetShadingMode(int mode);
   int GetShadingMode();
+  void SetImageSampleDistance(double distance);
+  double GetImageSampleDistance();
+  void SetMinimumImageSampleDistance(double distance);
+  double GetMinimumImageSampleDistance();
+  void SetMaximumImageSampleDistance(double distance);
+  double GetMaximumImageSampleDistance();
+  void SetAutoAdjustSampleDistances(int adjust);
+  int GetAutoAdjustSampleDistances();
   ///@}
 
   /// The mapper this representation draws with.
