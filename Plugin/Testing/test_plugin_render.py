@@ -40,14 +40,25 @@ def out(suffix):
 
 
 def check_image_sample_distance(display, view):
-    """The image sample distance through its properties: a fixed distance of 2 composites a
-    quarter of the pixels, close to the full image; automatic adjustment in a still render
-    (ParaView asks for 0.002 frames a second) draws the full image again. Expects the CPU
-    backend and the settings of the image out("mtpt_cpu")."""
+    """The image sample distance through its properties: with automatic adjustment on (the
+    default) a still render (ParaView asks for 0.002 frames a second) is drawn in full,
+    whatever the distance property says; turned off, the distance property's 2 composites a
+    quarter of the pixels, close to the full image; on again, a still render draws the full
+    image again. Expects the CPU backend and the settings of the image out("mtpt_cpu")."""
     ok = True
     mapper = display.GetClientSideObject().GetActiveRepresentation().GetActiveVolumeMapper()
-    display.MTPTAutoAdjustSampleDistances = 0
     display.MTPTImageSampleDistance = 2.0
+    testing.save(view, out("mtpt_still"))
+    size = tuple(mapper.GetImageViewportSize())
+    ok &= testing.check(mapper.GetAutoAdjustSampleDistances() == 1 and
+                        size == tuple(testing.IMAGE_SIZE),
+                        "automatic adjustment (default) in a still render: %s pixels" % (size,))
+    rmse = testing.compare(out("mtpt_cpu"), out("mtpt_still"))["rmse"]
+    ok &= testing.check(rmse <= MAX_RMSE_ORDER_METHODS,
+                        "a still render with automatic adjustment is the full image (RMSE %.2g)"
+                        % rmse)
+
+    display.MTPTAutoAdjustSampleDistances = 0
     testing.save(view, out("mtpt_distance_2"))
     size = tuple(mapper.GetImageViewportSize())
     expected = (testing.IMAGE_SIZE[0] // 2, testing.IMAGE_SIZE[1] // 2)

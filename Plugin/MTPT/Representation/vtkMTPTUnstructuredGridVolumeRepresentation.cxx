@@ -75,8 +75,12 @@ int vtkMTPTUnstructuredGridVolumeRepresentation::GetShadingMode()
   return this->MTPTMapper->GetShadingMode();
 }
 
+// With automatic adjustment on, every render overwrites the mapper's distance (as in VTK's
+// ray caster); the distance the property holds is kept here and given to the mapper again
+// when the adjustment is turned off, so that the panel's value is the one drawn with.
 void vtkMTPTUnstructuredGridVolumeRepresentation::SetImageSampleDistance(double distance)
 {
+  this->ImageSampleDistance = distance;
   this->MTPTMapper->SetImageSampleDistance(static_cast<float>(distance));
 }
 
@@ -108,6 +112,10 @@ double vtkMTPTUnstructuredGridVolumeRepresentation::GetMaximumImageSampleDistanc
 void vtkMTPTUnstructuredGridVolumeRepresentation::SetAutoAdjustSampleDistances(int adjust)
 {
   this->MTPTMapper->SetAutoAdjustSampleDistances(adjust);
+  if (!adjust)
+  {
+    this->MTPTMapper->SetImageSampleDistance(static_cast<float>(this->ImageSampleDistance));
+  }
 }
 
 int vtkMTPTUnstructuredGridVolumeRepresentation::GetAutoAdjustSampleDistances()

@@ -64,6 +64,9 @@ protected:
   ~vtkMTPTUnstructuredGridVolumeRepresentation() override;
 
   vtkNew<vtkMultiThreadedProjectedTetrahedraMapper> MTPTMapper;
+  /// The Image Sample Distance property's value, given to the mapper again when automatic
+  /// adjustment (which overwrites the mapper's) is turned off.
+  double ImageSampleDistance = 1.0;
 
 private:
   vtkMTPTUnstructuredGridVolumeRepresentation(
