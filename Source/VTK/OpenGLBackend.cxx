@@ -173,7 +173,10 @@ void OpenGLBackend::BindTarget(const BackendFrame& frame)
       window, frame.origin, frame.size, frame.imageSize, this->Target, error);
     if (!this->SampledTargetUsed)
     {
-      this->SampledTargetFailed = true; // in this context: not tried again every frame
+      // In this context: not tried again every frame (SampledImageLimit says 0 from now
+      // on). This frame's cells were culled against the sampled image's pixel centres, so
+      // drawn at the viewport's size it may miss a few of the smallest.
+      this->SampledTargetFailed = true;
       this->WarningMessage = error + "; drawing at the viewport's size";
     }
   }
