@@ -48,6 +48,16 @@ void PrintScene(const Scene& scene, int width, int height, const std::vector<std
               "(* one frame, slower than %.0f s)\n",
     scene.name.c_str(), static_cast<long long>(scene.grid->GetNumberOfCells()), width, height,
     o.common.timing.step, o.common.timing.repeat, o.common.timing.slowLimit);
+  if (o.common.desiredUpdateRate > 0)
+  {
+    std::printf("Windows ask for %g frames a second; MTPT adjusts its image sample distance "
+                "(%d warm-up frames)\n",
+      o.common.desiredUpdateRate, o.common.timing.warmUp);
+  }
+  else if (o.common.mapper.imageSampleDistance != 1.0f)
+  {
+    std::printf("MTPT's image sample distance: %g\n", o.common.mapper.imageSampleDistance);
+  }
   std::printf("| contender | ms (moving) |%s VTK PT / this | RMSE vs VTK PT | MTPT: CPU stages | "
               "composite (bin + raster) | upload + draw | fragments | ns per fragment x core |\n",
     o.unchanged ? " ms (unchanged view) |" : "");
@@ -74,6 +84,21 @@ void PrintScene(const Scene& scene, int width, int height, const std::vector<std
           << nsPerFragment << ',' << m.mtpt.sorted << ',' << m.mtpt.pixelCulled << ',' << threads << '\n';
     }
   }
+  const MapperSettings& mtpt = o.common.mapper;
+  if (mtpt.autoAdjust || mtpt.imageSampleDistance != 1.0f)
+  {
+    for (const std::string& name : names)
+    {
+      const Measurement& m = results[name];
+      if (!m.mtpt.backend.empty())
+      {
+        std::printf("%s: the median frame composited at image sample distance %.2f (%d x %d "
+                    "pixels)%s\n",
+          name.c_str(), m.mtpt.imageSampleDistance, m.mtpt.imageSize[0], m.mtpt.imageSize[1],
+          mtpt.autoAdjust ? ", adjusted to the window's desired update rate" : "");
+      }
+    }
+  }
 }
 
 } // namespace
@@ -84,6 +109,7 @@ int main(int argc, char* argv[])
   CLI::App app{ "Whole frames of MTPT's backends against VTK's unstructured-grid mappers, "
                 "the camera turning before every timed frame." };
   AddCommonOptions(app, o.common);
+  AddImageSamplingOptions(app, o.common);
   app.add_option("--meshes", o.meshes, "scenes (Harness.h: wavelet, grid:N, bluntfin, cubes, "
                                        "blocks, comb, kiefer, ...)");
   app.add_option("--sizes", o.sizes, "window sizes: 512 (square) or 1920x1080, comma-separated");
@@ -91,6 +117,7 @@ int main(int argc, char* argv[])
   app.add_flag("--unchanged", o.unchanged, "also time frames whose view does not change");
   app.add_option("--csv", o.csv, "append every figure to this CSV file");
   CLI11_PARSE(app, argc, argv);
+  ApplyImageSamplingOptions(app, o.common);
 
   std::vector<std::pair<int, int>> sizes;
   for (const std::string& text : SplitList(o.sizes))

@@ -391,6 +391,8 @@ vtkSmartPointer<vtkUnstructuredGridVolumeMapper> MakeMapper(
     mapper->SetOrderMethod(
       settings.order == "partition" ? Mapper::PARTITION_SORT : Mapper::RADIX_SORT);
     mapper->SynchronizedTimingOn(); // stage timers that measure the work, not its submission
+    mapper->SetAutoAdjustSampleDistances(settings.autoAdjust ? 1 : 0);
+    mapper->SetImageSampleDistance(settings.imageSampleDistance);
     return mapper;
   }
   if (name == "vtk-pt")
@@ -434,6 +436,10 @@ Stage::Stage(const Scene& scene, vtkVolumeProperty* property,
   this->Window->SetOffScreenRendering(options.onScreen ? 0 : 1);
   this->Window->SetSize(width, height);
   this->Window->AddRenderer(this->Renderer);
+  if (options.desiredUpdateRate > 0)
+  {
+    this->Window->SetDesiredUpdateRate(options.desiredUpdateRate);
+  }
   this->StartView();
 }
 
@@ -498,6 +504,11 @@ FrameTiming TimeFrames(Stage& stage, const TimingOptions& options,
 {
   FrameTiming timing;
   stage.StartView();
+  for (int i = 1; i < options.warmUp; ++i) // an automatic image sample distance settles
+  {
+    stage.Turn(options.step);
+    stage.Frame();
+  }
   stage.Turn(options.step);
   const double warmUp = stage.Frame(); // input analysis, shaders, buffers
   if (warmUp > 1e3 * options.slowLimit)
@@ -567,6 +578,9 @@ StageFigures FiguresOf(vtkUnstructuredGridVolumeMapper* mapper)
   f.fragments = static_cast<double>(ours->GetNumberOfFragments());
   f.sorted = static_cast<long long>(ours->GetNumberOfTetrahedra());
   f.pixelCulled = static_cast<long long>(ours->GetNumberOfPixelCulledCells());
+  f.imageSampleDistance = ours->GetImageSampleDistance();
+  f.imageSize[0] = ours->GetImageViewportSize()[0];
+  f.imageSize[1] = ours->GetImageViewportSize()[1];
   f.backend = ours->GetLastBackend() == vtkMultiThreadedProjectedTetrahedraMapper::CPU_BACKEND
     ? "CPU"
     : "OpenGL";
@@ -579,7 +593,12 @@ Measurement Measure(const Scene& scene, vtkVolumeProperty* property, const std::
 {
   Measurement m;
   auto mapper = MakeMapper(name, options.mapper);
-  Stage stage(scene, property, mapper, width, height, stageOptions);
+  StageOptions look = stageOptions;
+  if (options.desiredUpdateRate > 0)
+  {
+    look.desiredUpdateRate = options.desiredUpdateRate;
+  }
+  Stage stage(scene, property, mapper, width, height, look);
   std::vector<StageFigures> figures;
   m.moving = TimeFrames(
     stage, options.timing, [&](std::size_t) { figures.push_back(FiguresOf(mapper)); });
@@ -646,6 +665,32 @@ void AddCommonOptions(CLI::App& app, CommonOptions& options)
   app.add_option("--data", options.dataFolder,
     "folder of real meshes beyond the repository's (comb, kiefer, pulley, ...; default "
     "$MTPT_DATA_DIR)");
+}
+
+void AddImageSamplingOptions(CLI::App& app, CommonOptions& options)
+{
+  app.add_option("--image-sample-distance", options.mapper.imageSampleDistance,
+    "MTPT composites one sample per D x D pixels, stretched over the window (default 1)")
+    ->check(CLI::Range(0.1, 100.0));
+  app.add_option("--desired-update-rate", options.desiredUpdateRate,
+    "the window asks for this many frames a second, as an interactor does while the user "
+    "drags, and MTPT adjusts its image sample distance to it (AutoAdjustSampleDistances)")
+    ->check(CLI::PositiveNumber);
+  app.add_option("--warm-up", options.timing.warmUp,
+    "untimed frames before the timed ones (default 1; 10 with --desired-update-rate)")
+    ->check(CLI::PositiveNumber);
+}
+
+void ApplyImageSamplingOptions(CLI::App& app, CommonOptions& options)
+{
+  if (options.desiredUpdateRate > 0)
+  {
+    options.mapper.autoAdjust = true;
+    if (app.count("--warm-up") == 0)
+    {
+      options.timing.warmUp = 10;
+    }
+  }
 }
 
 std::vector<std::string> SplitList(const std::string& list)

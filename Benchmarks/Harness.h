@@ -16,7 +16,10 @@
  *   per-stage figures are those of the frame whose time is that median (the lower of the
  *   two middle frames for even N), so stage times add up to a frame that happened.
  * - VTK's ray caster and Z-sweep use a fixed image sample distance of 1 (auto-adjustment
- *   off), so every mapper draws every pixel.
+ *   off), so every mapper draws every pixel; so does MTPT unless its settings ask for
+ *   another distance, or for automatic adjustment with a desired update rate (then the
+ *   window asks for that rate, as an interactor does while the user drags, and warm-up
+ *   frames let the distance settle before the timed ones).
  */
 #ifndef mtpt_bench_Harness_h
 #define mtpt_bench_Harness_h
@@ -102,6 +105,8 @@ struct MapperSettings
   int threads = 0;             ///< 0: the default
   std::string shading = "vtk"; ///< "vtk" or "pre-integrated"
   std::string order = "radix"; ///< "radix" or "partition"
+  float imageSampleDistance = 1; ///< fixed, unless autoAdjust
+  bool autoAdjust = false;       ///< AutoAdjustSampleDistances (off: every pixel drawn)
 };
 
 /**
@@ -132,6 +137,9 @@ struct StageOptions
   View view;
   double background[3] = { 1, 1, 1 };
   bool onScreen = false; ///< a window on the display (default: off-screen)
+  /// Frames a second the window asks for (vtkRenderWindow::SetDesiredUpdateRate, what an
+  /// interactor sets while the user drags); 0: VTK's default (a still frame).
+  double desiredUpdateRate = 0;
 };
 
 /// A volume in a renderer in a window as VTK makes it by default. Its input is the scene's
@@ -181,6 +189,7 @@ struct TimingOptions
   int repeat = 5;          ///< timed frames
   double step = 1.0;       ///< degrees of azimuth before each frame; 0: unchanged view
   double slowLimit = 20.0; ///< seconds: a slower warm-up frame ends the measurement
+  int warmUp = 1;          ///< untimed frames first (the camera turning before each too)
 };
 
 /**
@@ -194,8 +203,9 @@ FrameTiming TimeFrames(Stage& stage, const TimingOptions& options,
 struct CommonOptions
 {
   TimingOptions timing;
-  MapperSettings mapper;  ///< MTPT's threads, shading and order
+  MapperSettings mapper;  ///< MTPT's threads, shading, order and image sample distance
   std::string dataFolder; ///< real meshes beyond the repository's (optional)
+  double desiredUpdateRate = 0; ///< StageOptions::desiredUpdateRate of every measurement
 };
 
 /// MTPT's timers and counters of one frame, milliseconds and counts (zero for VTK's
@@ -206,6 +216,8 @@ struct StageFigures
   double composite = 0, bin = 0, raster = 0, upload = 0, draw = 0;
   double fragments = 0;
   long long sorted = 0, pixelCulled = 0;
+  double imageSampleDistance = 1; ///< the distance the frame was composited at
+  int imageSize[2] = { 0, 0 };    ///< the composited image's size
   std::string backend; ///< "CPU" or "OpenGL": the backend that drew
 };
 
@@ -244,6 +256,14 @@ ImageError CompareImages(vtkImageData* a, vtkImageData* b);
 
 /// Adds --repeat, --step, --slow-limit, --threads, --shading, --order and --data to `app`.
 void AddCommonOptions(CLI::App& app, CommonOptions& options);
+
+/// Adds --image-sample-distance, --desired-update-rate and --warm-up to `app` (the frame
+/// benchmark's); call ApplyImageSamplingOptions after parsing.
+void AddImageSamplingOptions(CLI::App& app, CommonOptions& options);
+
+/// After parsing: a desired update rate turns MTPT's automatic adjustment on (starting from
+/// the distance given, 1 by default) with 10 warm-up frames unless --warm-up was given.
+void ApplyImageSamplingOptions(CLI::App& app, CommonOptions& options);
 
 
 /// A comma-separated list as its items ("a,b" -> {"a", "b"}).

@@ -5,12 +5,16 @@
 // the previous one's results; frames of an unchanged view are timed apart and labelled.
 // With --compare-vtk, VTK's own vtkProjectedTetrahedraMapper is timed on the same scene
 // and the two images are written side by side; with --reference, both are compared with
-// the exact ray integral.
+// the exact ray integral. With --interactive, the window asks for --update-rate frames a
+// second while the mouse drags the view (VTK's interactor asks for 15), the mapper draws
+// the volume at a coarser image sample distance to keep up, and the full image comes back
+// when the mouse is released.
 #include "Harness.h"
 
 #include "vtkMTPTReferenceRenderer.h"
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
 
+#include "vtkCallbackCommand.h"
 #include "vtkColorTransferFunction.h"
 #include "vtkDoubleArray.h"
 #include "vtkImageAppend.h"
@@ -55,6 +59,7 @@ struct Options
   CommonOptions common;
   bool unchanged = true, interactive = false, compare = false, reference = false;
   bool compareMerged = false;
+  double updateRate = 15; ///< frames a second asked for while dragging (--interactive)
 };
 
 /// The transfer functions of --tf over the scalar range.
@@ -193,6 +198,44 @@ Timed Time(Stage& stage, vtkUnstructuredGridVolumeMapper* mapper, const Options&
   return t;
 }
 
+/// After each interaction (the mouse released): the image sample distance of the last
+/// moving frame and its time, then the still frame's.
+void ReportInteraction(vtkObject*, unsigned long, void* clientData, void*)
+{
+  auto* mapper = static_cast<Mapper*>(clientData);
+  std::printf("moving: image sample distance %.2f (%d x %d pixels), %.0f ms per frame\n",
+    mapper->GetImageSampleDistance(), mapper->GetImageViewportSize()[0],
+    mapper->GetImageViewportSize()[1], 1e3 * mapper->GetTimeToDraw());
+  std::fflush(stdout);
+}
+
+/// The interactor asks for `rate` frames a second while the mouse drags, as VTK's interactor
+/// styles do (vtkInteractorStyle::StartState), and for VTK's still rate when it is released.
+void Interact(Stage& stage, Mapper* mapper, double rate)
+{
+  stage.StartView();
+  vtkNew<vtkRenderWindowInteractor> interactor;
+  interactor->SetRenderWindow(stage.GetWindow());
+  if (rate > 0)
+  {
+    interactor->SetDesiredUpdateRate(rate);
+    interactor->SetStillUpdateRate(0.0001);
+    std::printf("dragging: the volume is drawn coarser to keep %g frames a second, and in full "
+                "when the mouse is released\n",
+      rate);
+  }
+  interactor->Initialize();
+  vtkNew<vtkCallbackCommand> report;
+  report->SetCallback(ReportInteraction);
+  report->SetClientData(mapper);
+  if (rate > 0 && mapper)
+  {
+    interactor->AddObserver(vtkCommand::EndInteractionEvent, report);
+  }
+  stage.GetWindow()->Render();
+  interactor->Start();
+}
+
 } // namespace
 
 int main(int argc, char** argv)
@@ -242,7 +285,21 @@ int main(int argc, char** argv)
   app.add_flag("--reference", o.reference,
     "render the exact ray-integral reference and print each image's error against it");
   app.add_flag("--interactive", o.interactive, "open a window instead of only writing the PNG");
+  app.add_option("--update-rate", o.updateRate,
+       "with --interactive: frames a second asked for while the mouse drags the view (VTK's "
+       "interactor asks for 15); the volume is drawn at a coarser image sample distance to "
+       "keep up (AutoAdjustSampleDistances) and in full when the mouse is released; 0: always "
+       "in full")
+    ->check(CLI::NonNegativeNumber);
+  auto* distance = app.add_option("--image-sample-distance",
+                        o.common.mapper.imageSampleDistance,
+                        "a fixed image sample distance: one sample per D x D pixels, "
+                        "stretched over the window (turns the automatic adjustment off)")
+                     ->check(CLI::Range(0.1, 100.0));
   CLI11_PARSE(app, argc, argv);
+  // Automatic adjustment unless a fixed distance is asked for; frames of a window at VTK's
+  // default (still) update rate are drawn in full either way.
+  o.common.mapper.autoAdjust = distance->count() == 0 && o.updateRate > 0;
   if (!ParseSize(o.size, o.width, o.height))
   {
     std::fprintf(stderr, "mtpt_render: --size takes WxH with positive numbers, not '%s'\n",
@@ -360,12 +417,7 @@ int main(int argc, char** argv)
 
   if (o.interactive)
   {
-    stage.StartView();
-    vtkNew<vtkRenderWindowInteractor> interactor;
-    interactor->SetRenderWindow(stage.GetWindow());
-    interactor->Initialize();
-    stage.GetWindow()->Render();
-    interactor->Start();
+    Interact(stage, Mapper::SafeDownCast(mapper), o.common.mapper.autoAdjust ? o.updateRate : 0);
   }
   return 0;
 }

@@ -7,7 +7,7 @@
   1  helpers: detail/*.h
   2  stages: mtpt/Transform.h, Culling.h, DepthKeys.h, NearPlane.h, VisibilityOrder.h,
      Decompose.h (a stage may include an earlier one)
-  3  assemblies: mtpt/Compositor.h, FramePipeline.h, ReferenceRenderer.h
+  3  assemblies: mtpt/Compositor.h, FramePipeline.h, ReferenceRenderer.h, ImageSampling.h
 A source file belongs to the layer of the header it implements. Exit status 1 with one line
 per upward include; a header that the table does not know is an error too.
 
@@ -22,6 +22,7 @@ LAYERS = {
     "mtpt/Transform.h": 2, "mtpt/Culling.h": 2, "mtpt/DepthKeys.h": 2, "mtpt/NearPlane.h": 2,
     "mtpt/VisibilityOrder.h": 2, "mtpt/Decompose.h": 2,
     "mtpt/Compositor.h": 3, "mtpt/FramePipeline.h": 3, "mtpt/ReferenceRenderer.h": 3,
+    "mtpt/ImageSampling.h": 3,
 }
 # Sources whose header is not named after them.
 SOURCE_HEADERS = {"TileRaster.cxx": "detail/TileRaster.h"}

@@ -28,12 +28,68 @@ MIN_COVERED = 0.10
 # Two blocks of the same cells, merged by ParaView: the cells' order in the merged grid
 # differs, which can only change the order of cells at exactly equal depth.
 MAX_RMSE_MULTIBLOCK = 0.002
+# Image sample distance 2 against 1, over the volume's pixels (the mapper's own image test
+# measures 0.003 on the blunt fin at 400x300: Testing/Rendering/TestMapperImageSampleDistance).
+MAX_RMSE_COVERED_DISTANCE_2 = 0.01
 
 args = testing.arguments(["PLUGIN", "DATA", "OUTPUT_DIR", "NAME"])
 
 
 def out(suffix):
     return os.path.join(args["OUTPUT_DIR"], "%s_%s.png" % (args["NAME"], suffix))
+
+
+def check_image_sample_distance(display, view):
+    """The image sample distance through its properties: with automatic adjustment on (the
+    default) a still render (ParaView asks for 0.002 frames a second) is drawn in full,
+    whatever the distance property says; turned off, the distance property's 2 composites a
+    quarter of the pixels, close to the full image; on again, a still render draws the full
+    image again. Expects the CPU backend and the settings of the image out("mtpt_cpu")."""
+    ok = True
+    mapper = display.GetClientSideObject().GetActiveRepresentation().GetActiveVolumeMapper()
+    display.MTPTImageSampleDistance = 2.0
+    testing.save(view, out("mtpt_still"))
+    size = tuple(mapper.GetImageViewportSize())
+    ok &= testing.check(mapper.GetAutoAdjustSampleDistances() == 1 and
+                        size == tuple(testing.IMAGE_SIZE),
+                        "automatic adjustment (default) in a still render: %s pixels" % (size,))
+    rmse = testing.compare(out("mtpt_cpu"), out("mtpt_still"))["rmse"]
+    ok &= testing.check(rmse <= MAX_RMSE_ORDER_METHODS,
+                        "a still render with automatic adjustment is the full image (RMSE %.2g)"
+                        % rmse)
+
+    display.MTPTAutoAdjustSampleDistances = 0
+    testing.save(view, out("mtpt_distance_2"))
+    size = tuple(mapper.GetImageViewportSize())
+    expected = (testing.IMAGE_SIZE[0] // 2, testing.IMAGE_SIZE[1] // 2)
+    ok &= testing.check(mapper.GetAutoAdjustSampleDistances() == 0 and
+                        mapper.GetImageSampleDistance() == 2.0 and size == expected,
+                        "Image Sample Distance 2, no adjustment: the mapper composites %s pixels "
+                        "(expected %s)" % (size, expected))
+    figures = testing.compare(out("mtpt_cpu"), out("mtpt_distance_2"))
+    print("%s: image sample distance 2 vs 1: RMSE %.5f (covered pixels only: %.5f)" %
+          (args["NAME"], figures["rmse"], figures["rmse_covered"]))
+    ok &= testing.check(figures["covered_b"] >= MIN_COVERED and
+                        0.0 < figures["rmse_covered"] <= MAX_RMSE_COVERED_DISTANCE_2,
+                        "distance 2 is close to the full image, and coarser (covered RMSE %.5f "
+                        "<= %.3f)" % (figures["rmse_covered"], MAX_RMSE_COVERED_DISTANCE_2))
+
+    display.MTPTMaximumImageSampleDistance = 8.0
+    display.MTPTAutoAdjustSampleDistances = 1
+    testing.save(view, out("mtpt_auto_adjusted"))
+    size = tuple(mapper.GetImageViewportSize())
+    ok &= testing.check(mapper.GetAutoAdjustSampleDistances() == 1 and
+                        mapper.GetMaximumImageSampleDistance() == 8.0 and
+                        mapper.GetImageSampleDistance() == 1.0 and
+                        size == tuple(testing.IMAGE_SIZE),
+                        "automatic adjustment in a still render: distance %g, %s pixels" %
+                        (mapper.GetImageSampleDistance(), size))
+    rmse = testing.compare(out("mtpt_cpu"), out("mtpt_auto_adjusted"))["rmse"]
+    ok &= testing.check(rmse <= MAX_RMSE_ORDER_METHODS,
+                        "a still render after distance 2 is the full image again (RMSE %.2g)" %
+                        rmse)
+    display.MTPTMaximumImageSampleDistance = 10.0
+    return ok
 
 
 def main():
@@ -94,6 +150,8 @@ def main():
                         "Pre-integrated shading renders, and differently (RMSE %.4f vs "
                         "VTK-compatible)" % figures["rmse"])
     display.MTPTShadingMode = "VTK-compatible"
+
+    ok &= check_image_sample_distance(display, view)
     simple.Hide(reader, view)
 
     # A multi-block input: the mesh cut into two blocks of whole cells (the cells inside a

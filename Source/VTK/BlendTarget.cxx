@@ -103,6 +103,55 @@ bool BlendTarget::Capture(
   return true;
 }
 
+bool BlendTarget::CaptureSampled(vtkOpenGLRenderWindow* window, const int origin[2],
+  const int size[2], const int sampled[2], BlendTarget& viewport, std::string& error)
+{
+  vtkOpenGLState* state = window->GetState();
+  int windowFramebuffer = 0;
+  state->vtkglGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &windowFramebuffer);
+  state->PushFramebufferBindings();
+  if (!viewport.Allocate(window, size, error) || !this->Allocate(window, sampled, error))
+  {
+    state->PopFramebufferBindings();
+    return false;
+  }
+  {
+    // Blits and clears are scissored, and the renderer's scissor box is its viewport's.
+    vtkOpenGLState::ScopedglEnableDisable scissor(state, GL_SCISSOR_TEST);
+    vtkOpenGLState::ScopedglClearColor clearColour(state);
+    vtkOpenGLState::ScopedglColorMask colourMask(state);
+    state->vtkglDisable(GL_SCISSOR_TEST);
+    state->vtkglBindFramebuffer(GL_READ_FRAMEBUFFER, static_cast<unsigned int>(windowFramebuffer));
+    if (windowFramebuffer == 0)
+    {
+      state->vtkglReadBuffer(GL_BACK);
+    }
+    // The depth at its own size first (the one blit a multisampled source allows), then
+    // scaled: GL_NEAREST reads the pixel under each destination pixel's centre.
+    viewport.Framebuffer->Bind(vtkOpenGLFramebufferObject::GetDrawMode());
+    state->vtkglBlitFramebuffer(origin[0], origin[1], origin[0] + size[0], origin[1] + size[1], 0,
+      0, size[0], size[1], GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+    viewport.Framebuffer->Bind(vtkOpenGLFramebufferObject::GetReadMode());
+    this->Framebuffer->Bind(vtkOpenGLFramebufferObject::GetDrawMode());
+    this->Framebuffer->ActivateDrawBuffer(0);
+    state->vtkglBlitFramebuffer(0, 0, size[0], size[1], 0, 0, sampled[0], sampled[1],
+      GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+    state->vtkglClearColor(0.0f, 0.0f, 0.0f, 0.0f);
+    state->vtkglColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    state->vtkglClear(GL_COLOR_BUFFER_BIT);
+  }
+  this->Framebuffer->Bind(vtkOpenGLFramebufferObject::GetReadMode());
+  this->Framebuffer->ActivateReadBuffer(0);
+  const std::string failed = TakeOpenGLErrors();
+  if (!failed.empty())
+  {
+    error = "copying the window's depth into a sampled framebuffer failed (" + failed + ")";
+    state->PopFramebufferBindings();
+    return false;
+  }
+  return true;
+}
+
 void BlendTarget::Restore(vtkOpenGLRenderWindow* window)
 {
   window->GetState()->PopFramebufferBindings();
@@ -114,6 +163,24 @@ bool BlendTarget::WriteToWindow(vtkOpenGLRenderWindow* window, vtkTextureObject*
   // Nearest filtering: texture coordinates at pixel centres hit texel centres exactly.
   texture->SetMinificationFilter(vtkTextureObject::Nearest);
   texture->SetMagnificationFilter(vtkTextureObject::Nearest);
+  return this->DrawTexture(window, texture, origin, size, false, error);
+}
+
+bool BlendTarget::BlendOverWindow(vtkOpenGLRenderWindow* window, vtkTextureObject* texture,
+  const int origin[2], const int size[2], std::string& error)
+{
+  // Texture coordinate (X + 0.5) / width at pixel X: linear filtering is the bilinear
+  // magnification of mtpt::MagnifyOver.
+  texture->SetMinificationFilter(vtkTextureObject::Linear);
+  texture->SetMagnificationFilter(vtkTextureObject::Linear);
+  texture->SetWrapS(vtkTextureObject::ClampToEdge);
+  texture->SetWrapT(vtkTextureObject::ClampToEdge);
+  return this->DrawTexture(window, texture, origin, size, true, error);
+}
+
+bool BlendTarget::DrawTexture(vtkOpenGLRenderWindow* window, vtkTextureObject* texture,
+  const int origin[2], const int size[2], bool blend, std::string& error)
+{
   if (!this->Quad)
   {
     this->Quad = std::make_unique<vtkOpenGLQuadHelper>(window,
@@ -131,11 +198,21 @@ bool BlendTarget::WriteToWindow(vtkOpenGLRenderWindow* window, vtkTextureObject*
   vtkOpenGLState* state = window->GetState();
   vtkOpenGLState::ScopedglDepthMask depthMask(state);
   vtkOpenGLState::ScopedglEnableDisable depthTest(state, GL_DEPTH_TEST);
-  vtkOpenGLState::ScopedglEnableDisable blend(state, GL_BLEND);
+  vtkOpenGLState::ScopedglEnableDisable blending(state, GL_BLEND);
+  vtkOpenGLState::ScopedglBlendFuncSeparate blendFunction(state);
   vtkOpenGLState::ScopedglViewport viewport(state);
   state->vtkglDepthMask(GL_FALSE);
   state->vtkglDisable(GL_DEPTH_TEST);
-  state->vtkglDisable(GL_BLEND); // the texture already holds what was drawn below it
+  if (blend)
+  {
+    // Premultiplied "over".
+    state->vtkglEnable(GL_BLEND);
+    state->vtkglBlendFuncSeparate(GL_ONE, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
+  }
+  else
+  {
+    state->vtkglDisable(GL_BLEND); // the texture already holds what was drawn below it
+  }
   state->vtkglViewport(origin[0], origin[1], size[0], size[1]);
   texture->Activate();
   this->Quad->Program->SetUniformi("image", texture->GetTextureUnit());

@@ -14,6 +14,11 @@
  * (a blit into a multisampled framebuffer is not allowed everywhere). The OpenGL backend
  * blends in the target itself, so thousands of thin layers lose no precision to 8-bit
  * rounding at every blend, as vtkProjectedTetrahedraMapper's float framebuffer.
+ *
+ * At an image sample distance other than 1 the OpenGL backend blends in a target of the
+ * sampled image's size instead (CaptureSampled: transparent colour, the window's depth under
+ * each pixel's centre), which BlendOverWindow then composites over the window with linear
+ * filtering.
  */
 #ifndef mtpt_BlendTarget_h
 #define mtpt_BlendTarget_h
@@ -51,6 +56,18 @@ public:
   bool Capture(
     vtkOpenGLRenderWindow* window, const int origin[2], const int size[2], std::string& error);
 
+  /**
+   * For a sampled image: makes the target `sampled` pixels, its colour transparent and its
+   * depth the window's depth of the viewport (origin, size) at the centres of its pixels (the
+   * viewport pixel under each centre, by a GL_NEAREST blit), and leaves it bound for drawing
+   * and reading, with the window's framebuffer bindings pushed, as Capture. The window's
+   * depth is first copied at its own size into `viewport` (a multisampled framebuffer can be
+   * blitted only at equal size), whose colour is left as it was. Returns false with `error`
+   * set when a target cannot be made or a copy fails; the bindings are then restored already.
+   */
+  bool CaptureSampled(vtkOpenGLRenderWindow* window, const int origin[2], const int size[2],
+    const int sampled[2], BlendTarget& viewport, std::string& error);
+
   /// Pops the bindings Capture pushed: the window's framebuffer is bound again.
   void Restore(vtkOpenGLRenderWindow* window);
 
@@ -61,6 +78,16 @@ public:
    */
   bool WriteToWindow(vtkOpenGLRenderWindow* window, vtkTextureObject* texture, const int origin[2],
     const int size[2], std::string& error);
+
+  /**
+   * Composites `texture` (premultiplied RGBA, any size) over the rectangle (origin, size) of
+   * the framebuffer bound for drawing, stretched over it with linear filtering (clamped to
+   * the edge): colour = texture + (1 - texture alpha) * framebuffer, the same for alpha; no
+   * depth test or write, every sample. Returns false with `error` set when the shader cannot
+   * be made or OpenGL fails.
+   */
+  bool BlendOverWindow(vtkOpenGLRenderWindow* window, vtkTextureObject* texture,
+    const int origin[2], const int size[2], std::string& error);
 
   /**
    * Reads the rectangle (x, y, width, height) of the target (after Capture, before Restore)
@@ -81,6 +108,9 @@ private:
   void operator=(const BlendTarget&) = delete;
 
   bool Allocate(vtkOpenGLRenderWindow* window, const int size[2], std::string& error);
+  /// A quad of `texture` over (origin, size), replacing (blend off) or blending over.
+  bool DrawTexture(vtkOpenGLRenderWindow* window, vtkTextureObject* texture, const int origin[2],
+    const int size[2], bool blend, std::string& error);
 
   vtkNew<vtkOpenGLFramebufferObject> Framebuffer;
   std::unique_ptr<vtkOpenGLQuadHelper> Quad;

@@ -4,6 +4,7 @@
 #include "TransferFunctionTables.h"
 
 #include "mtpt/FramePipeline.h"
+#include "mtpt/ImageSampling.h"
 #include "mtpt/Timing.h"
 
 #include "vtkActor2D.h"
@@ -17,6 +18,7 @@
 #include "OpenGLHeader.h"
 
 #include <algorithm>
+#include <climits>
 #include <cstdlib>
 #include <cstring>
 
@@ -43,9 +45,14 @@ CPUBackend::CPUBackend()
 
 CPUBackend::~CPUBackend() = default;
 
-bool CPUBackend::SamplesPixelCentresOnly(vtkOpenGLRenderWindow*, bool) const
+bool CPUBackend::SamplesPixelCentresOnly(const BackendFrame&) const
 {
   return true; // the compositor samples each pixel once, at its centre
+}
+
+int CPUBackend::SampledImageLimit(vtkOpenGLRenderWindow*)
+{
+  return INT_MAX; // the image lives in the compositor's tiles; only the viewport is uploaded
 }
 
 bool CPUBackend::Draw(const BackendFrame& frame, BackendTimes& times)
@@ -81,13 +88,16 @@ bool CPUBackend::Draw(const BackendFrame& frame, BackendTimes& times)
     this->Kept = key;
     this->Depth.swap(this->KeptDepth); // read into the other buffer next frame
   }
-  // The colour beneath: of the region the volume touched only.
+  // The colour beneath: of the viewport pixels the touched region reaches only.
   start = Clock::now();
   const PixelRegion region = this->Compositing.TouchedRegion();
-  const bool colourRead = region.Empty() || this->ReadColour(frame, region);
+  const PixelRegion target = frame.Sampled()
+    ? MagnifiedRegion(region, frame.imageSize[0], frame.imageSize[1], frame.size[0], frame.size[1])
+    : region;
+  const bool colourRead = target.Empty() || this->ReadColour(frame, target);
   this->Target.Restore(frame.window);
   times.upload += SecondsSince(start);
-  return colourRead && this->WriteBack(frame, region, times);
+  return colourRead && this->WriteBack(frame, region, target, times);
 }
 
 bool CPUBackend::MayHaveOpaqueGeometry(vtkRenderer* renderer)
@@ -123,9 +133,22 @@ bool CPUBackend::ReadDepth(const BackendFrame& frame)
     this->Depth.clear(); // no occlusion; Read still reports the errors of the capture
     return this->Target.Read(frame.window, 0, 0, 0, 0, nullptr, nullptr, this->ErrorMessage);
   }
-  this->Depth.resize(static_cast<std::size_t>(frame.size[0]) * frame.size[1]);
-  return this->Target.Read(frame.window, 0, 0, frame.size[0], frame.size[1], this->Depth.data(),
-    nullptr, this->ErrorMessage);
+  const bool sampled = frame.Sampled();
+  std::vector<float>& viewport = sampled ? this->ViewportDepth : this->Depth;
+  viewport.resize(static_cast<std::size_t>(frame.size[0]) * frame.size[1]);
+  if (!this->Target.Read(frame.window, 0, 0, frame.size[0], frame.size[1], viewport.data(),
+        nullptr, this->ErrorMessage))
+  {
+    return false;
+  }
+  if (sampled)
+  {
+    // Each sampled pixel is tested against the viewport pixel under its centre.
+    this->Depth.resize(static_cast<std::size_t>(frame.imageSize[0]) * frame.imageSize[1]);
+    SampleDepth(viewport.data(), frame.size[0], frame.size[1], this->Depth.data(),
+      frame.imageSize[0], frame.imageSize[1], frame.threads);
+  }
+  return true;
 }
 
 bool CPUBackend::ReadColour(const BackendFrame& frame, const PixelRegion& region)
@@ -143,8 +166,8 @@ CPUBackend::ImageKey CPUBackend::ImageKey::Of(const BackendFrame& frame)
   key.order = frame.pipeline->OrderVersionNumber();
   key.tables = frame.tables->Version();
   key.batch = frame.batchSize;
-  key.size[0] = frame.size[0];
-  key.size[1] = frame.size[1];
+  key.size[0] = frame.imageSize[0];
+  key.size[1] = frame.imageSize[1];
   key.shading = frame.shading;
   key.vertexColours = frame.vertexColours;
   key.unitDistance = frame.unitDistance;
@@ -167,8 +190,8 @@ void CPUBackend::Composite(const BackendFrame& frame, BackendTimes& times)
 {
   CompositeSettings& settings = this->Settings;
   settings = CompositeSettings{};
-  settings.width = frame.size[0];
-  settings.height = frame.size[1];
+  settings.width = frame.imageSize[0];
+  settings.height = frame.imageSize[1];
   settings.transferFunction = frame.tables->Table();
   settings.unitDistance = frame.unitDistance;
   settings.opaqueDepth = this->Depth.empty() ? nullptr : this->Depth.data();
@@ -202,21 +225,41 @@ void CPUBackend::Composite(const BackendFrame& frame, BackendTimes& times)
   }
 }
 
-bool CPUBackend::WriteBack(
-  const BackendFrame& frame, const PixelRegion& region, BackendTimes& times)
+void CPUBackend::Magnify(
+  const BackendFrame& frame, const PixelRegion& region, const PixelRegion& target)
 {
-  // Only the region the volume touched changes. It is composited over the colour that was
-  // there on the CPU and written with blending off: blending it in OpenGL would round the
-  // volume's colour to 8 bits before the blend (llvmpipe blends 8-bit targets in 8-bit
-  // arithmetic), a second rounding the OpenGL path does not have.
-  if (region.Empty())
+  const std::size_t width = static_cast<std::size_t>(region.x1 - region.x0);
+  this->Sampled.resize(4 * width * static_cast<std::size_t>(region.y1 - region.y0));
+  this->Compositing.Resolve(region, nullptr, this->Sampled.data(), frame.threads);
+  const SampledImage image{ this->Sampled.data(), region, frame.imageSize[0],
+    frame.imageSize[1] };
+  MagnifyOver(image, frame.size[0], frame.size[1], target, this->Below.data(),
+    this->Region.data(), frame.threads);
+}
+
+bool CPUBackend::WriteBack(const BackendFrame& frame, const PixelRegion& region,
+  const PixelRegion& target, BackendTimes& times)
+{
+  // Only the region the volume touched changes (for a sampled image, the viewport pixels the
+  // magnification reads it into). It is composited over the colour that was there on the
+  // CPU and written with blending off: blending it in OpenGL would round the volume's colour
+  // to 8 bits before the blend (llvmpipe blends 8-bit targets in 8-bit arithmetic), a second
+  // rounding the OpenGL path does not have.
+  if (target.Empty())
   {
     return true;
   }
   auto start = Clock::now();
-  const int width = region.x1 - region.x0, height = region.y1 - region.y0;
+  const int width = target.x1 - target.x0, height = target.y1 - target.y0;
   this->Region.resize(4 * static_cast<std::size_t>(width) * height);
-  this->Compositing.Resolve(region, this->Below.data(), this->Region.data(), frame.threads);
+  if (frame.Sampled())
+  {
+    this->Magnify(frame, region, target);
+  }
+  else
+  {
+    this->Compositing.Resolve(region, this->Below.data(), this->Region.data(), frame.threads);
+  }
   times.composite += SecondsSince(start);
   start = Clock::now();
   this->Image->SetContext(frame.window);
@@ -229,7 +272,7 @@ bool CPUBackend::WriteBack(
   }
   times.upload += SecondsSince(start);
   start = Clock::now();
-  const int origin[2] = { frame.origin[0] + region.x0, frame.origin[1] + region.y0 };
+  const int origin[2] = { frame.origin[0] + target.x0, frame.origin[1] + target.y0 };
   const int size[2] = { width, height };
   const bool written =
     this->Target.WriteToWindow(frame.window, this->Image, origin, size, this->ErrorMessage);

@@ -18,6 +18,13 @@
  * it was made with (an unchanged view, data, transfer function, window size and opaque
  * geometry): that frame only reads back, resolves the image over the new colour beneath it
  * and writes it, which is what keeps an unchanged frame cheap.
+ *
+ * At an image sample distance other than 1 (BackendFrame::imageSize differs from the
+ * viewport's size) the image is composited at its own size, against the opaque depth of the
+ * viewport pixel under each of its pixels' centres (mtpt::SampleDepth), and magnified onto
+ * the viewport with bilinear filtering over the colour read back beneath it, on the CPU
+ * (mtpt::MagnifyOver): the volume's colour is still rounded to 8 bits once. Only the
+ * viewport pixels the filter reads the touched region into are read back and written.
  */
 #ifndef mtpt_CPUBackend_h
 #define mtpt_CPUBackend_h
@@ -47,7 +54,8 @@ public:
   CPUBackend();
   ~CPUBackend() override;
 
-  bool SamplesPixelCentresOnly(vtkOpenGLRenderWindow* window, bool floatFramebuffer) const override;
+  bool SamplesPixelCentresOnly(const BackendFrame& frame) const override;
+  int SampledImageLimit(vtkOpenGLRenderWindow* window) override;
   bool Draw(const BackendFrame& frame, BackendTimes& times) override;
   void ReleaseGraphicsResources(vtkWindow* window) override;
 
@@ -61,7 +69,8 @@ private:
   /**
    * Everything the composited image depends on besides the opaque depth. The order's
    * version stands for the view, the projection (and so the interpolation), the data, the
-   * culling and the viewport; the tables' version for the transfer functions.
+   * culling and the viewport; the tables' version for the transfer functions. `size` is the
+   * composited image's (BackendFrame::imageSize), which the image sample distance sets.
    */
   struct ImageKey
   {
@@ -80,12 +89,18 @@ private:
 
   /// Whether opaque geometry may have written depth that the volume must respect.
   static bool MayHaveOpaqueGeometry(vtkRenderer* renderer);
-  /// The captured depth of the viewport into Depth, or Depth empty where it is the clear value.
+  /// The captured depth of the viewport into Depth (for a sampled image: under its pixels'
+  /// centres), or Depth empty where it is the clear value.
   bool ReadDepth(const BackendFrame& frame);
-  /// The captured colour of `region` into Below.
+  /// The captured colour of `region` (viewport pixels) into Below.
   bool ReadColour(const BackendFrame& frame, const PixelRegion& region);
   void Composite(const BackendFrame& frame, BackendTimes& times);
-  bool WriteBack(const BackendFrame& frame, const PixelRegion& region, BackendTimes& times);
+  /// Writes the viewport pixels of `target`: the image's `region` composited (and for a
+  /// sampled image magnified) over Below.
+  bool WriteBack(const BackendFrame& frame, const PixelRegion& region, const PixelRegion& target,
+    BackendTimes& times);
+  /// The image's `region` magnified onto the viewport's `target` over Below, into Region.
+  void Magnify(const BackendFrame& frame, const PixelRegion& region, const PixelRegion& target);
 
   Compositor Compositing;
   CompositeSettings Settings;
@@ -94,6 +109,8 @@ private:
   ImageKey Kept;
   std::vector<float> KeptDepth; ///< the opaque depth the kept image was composited with
   std::vector<float> Depth;     ///< this frame's opaque depth (empty: nothing opaque)
+  std::vector<float> ViewportDepth; ///< of the viewport, when the image is sampled
+  std::vector<float> Sampled;       ///< the touched region of a sampled image, premultiplied
   BlendTarget Target;
   vtkNew<vtkTextureObject> Image;
   std::vector<std::uint8_t> Below, Region; ///< of the touched region

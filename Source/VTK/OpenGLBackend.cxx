@@ -47,10 +47,28 @@ void MakeTableTexture(vtkTextureObject* texture, vtkOpenGLRenderWindow* window, 
 OpenGLBackend::OpenGLBackend() = default;
 OpenGLBackend::~OpenGLBackend() = default;
 
-bool OpenGLBackend::SamplesPixelCentresOnly(vtkOpenGLRenderWindow*, bool floatFramebuffer) const
+bool OpenGLBackend::SamplesPixelCentresOnly(const BackendFrame& frame) const
 {
-  // The float target is single-sampled; without it the window's own framebuffer is drawn.
-  return (floatFramebuffer && !this->FloatTargetFailed) || !DrawFramebufferIsMultisampled();
+  // The sampled and the float target are single-sampled; without them the window's own
+  // framebuffer is drawn.
+  return (frame.Sampled() && !this->SampledTargetFailed) ||
+    (frame.floatFramebuffer && !this->FloatTargetFailed) || !DrawFramebufferIsMultisampled();
+}
+
+int OpenGLBackend::SampledImageLimit(vtkOpenGLRenderWindow*)
+{
+  if (this->SampledTargetFailed)
+  {
+    return 0;
+  }
+  if (this->MaxTargetSize == 0)
+  {
+    GLint texture = 0, viewport[2] = { 0, 0 };
+    glGetIntegerv(GL_MAX_TEXTURE_SIZE, &texture);
+    glGetIntegerv(GL_MAX_VIEWPORT_DIMS, viewport);
+    this->MaxTargetSize = std::max(1, std::min({ texture, viewport[0], viewport[1] }));
+  }
+  return this->MaxTargetSize;
 }
 
 vtkShaderProgram* OpenGLBackend::ReadyProgram(vtkOpenGLRenderWindow* window)
@@ -139,10 +157,31 @@ bool OpenGLBackend::Draw(const BackendFrame& frame, BackendTimes& times)
     return false;
   }
   this->UploadTables(frame);
-  this->FloatTargetUsed = false;
-  if (frame.floatFramebuffer && !this->FloatTargetFailed)
+  this->BindTarget(frame);
+  const bool drawn = this->DrawBatches(frame, program, times);
+  return this->WriteTarget(frame, drawn, times) && drawn;
+}
+
+void OpenGLBackend::BindTarget(const BackendFrame& frame)
+{
+  vtkOpenGLRenderWindow* window = frame.window;
+  this->FloatTargetUsed = this->SampledTargetUsed = false;
+  std::string error;
+  if (frame.Sampled() && !this->SampledTargetFailed)
   {
-    std::string error;
+    this->SampledTargetUsed = this->SampledTarget.CaptureSampled(
+      window, frame.origin, frame.size, frame.imageSize, this->Target, error);
+    if (!this->SampledTargetUsed)
+    {
+      // In this context: not tried again every frame (SampledImageLimit says 0 from now
+      // on). This frame's cells were culled against the sampled image's pixel centres, so
+      // drawn at the viewport's size it may miss a few of the smallest.
+      this->SampledTargetFailed = true;
+      this->WarningMessage = error + "; drawing at the viewport's size";
+    }
+  }
+  if (!this->SampledTargetUsed && frame.floatFramebuffer && !this->FloatTargetFailed)
+  {
     this->FloatTargetUsed = this->Target.Capture(window, frame.origin, frame.size, error);
     if (!this->FloatTargetUsed)
     {
@@ -150,17 +189,28 @@ bool OpenGLBackend::Draw(const BackendFrame& frame, BackendTimes& times)
       this->WarningMessage = error + "; blending in the window's own framebuffer";
     }
   }
-  bool drawn = this->DrawBatches(frame, program, times);
-  if (this->FloatTargetUsed)
+}
+
+bool OpenGLBackend::WriteTarget(const BackendFrame& frame, bool drawn, BackendTimes& times)
+{
+  const auto start = Clock::now();
+  bool written = true;
+  if (this->SampledTargetUsed)
   {
-    this->Target.Restore(window);
-    const auto start = Clock::now();
-    drawn = drawn &&
-      this->Target.WriteToWindow(
-        window, this->Target.Colour(), frame.origin, frame.size, this->ErrorMessage);
-    times.draw += SecondsSince(start);
+    this->SampledTarget.Restore(frame.window);
+    written = drawn &&
+      this->SampledTarget.BlendOverWindow(
+        frame.window, this->SampledTarget.Colour(), frame.origin, frame.size, this->ErrorMessage);
   }
-  return drawn;
+  else if (this->FloatTargetUsed)
+  {
+    this->Target.Restore(frame.window);
+    written = drawn &&
+      this->Target.WriteToWindow(
+        frame.window, this->Target.Colour(), frame.origin, frame.size, this->ErrorMessage);
+  }
+  times.draw += SecondsSince(start);
+  return written;
 }
 
 bool OpenGLBackend::DrawBatches(
@@ -174,10 +224,11 @@ bool OpenGLBackend::DrawBatches(
   vtkOpenGLState::ScopedglEnableDisable cull(state, GL_CULL_FACE);
   vtkOpenGLState::ScopedglViewport viewport(state);
   vtkOpenGLState::ScopedglScissor scissor(state);
-  if (this->FloatTargetUsed)
+  if (this->SampledTargetUsed || this->FloatTargetUsed)
   {
-    state->vtkglViewport(0, 0, frame.size[0], frame.size[1]);
-    state->vtkglScissor(0, 0, frame.size[0], frame.size[1]);
+    const int* size = this->SampledTargetUsed ? frame.imageSize : frame.size;
+    state->vtkglViewport(0, 0, size[0], size[1]);
+    state->vtkglScissor(0, 0, size[0], size[1]);
   }
   // VTK's PT state: depth test against opaque geometry without depth writes, back-to-front
   // "over" blending of non-premultiplied colour.
@@ -301,8 +352,10 @@ void OpenGLBackend::ReleaseGraphicsResources(vtkWindow* window)
     this->IntegralsLow->ReleaseGraphicsResources(window);
   }
   this->Target.ReleaseGraphicsResources(window);
+  this->SampledTarget.ReleaseGraphicsResources(window);
   this->UploadedBuffers = this->UploadedTables = 0;
-  this->FloatTargetFailed = false;
+  this->FloatTargetFailed = this->SampledTargetFailed = false;
+  this->MaxTargetSize = 0;
 }
 
 } // namespace mtpt

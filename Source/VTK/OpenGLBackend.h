@@ -14,6 +14,12 @@
  * - the transfer-function textures: TransferFunctionTables::Version() at upload;
  * - all of them, the shader program and the float target belong to one context: released
  *   in ReleaseGraphicsResources, after which everything is uploaded again.
+ *
+ * At an image sample distance other than 1 (BackendFrame::imageSize differs from the
+ * viewport's size) the batches are drawn into a float target of the sampled image's size
+ * instead, whose colour starts transparent and whose depth is the window's, under each of
+ * its pixels' centres (BlendTarget::CaptureSampled); that image is then composited over the
+ * window with linear filtering (BlendTarget::BlendOverWindow).
  */
 #ifndef mtpt_OpenGLBackend_h
 #define mtpt_OpenGLBackend_h
@@ -42,7 +48,8 @@ public:
   OpenGLBackend();
   ~OpenGLBackend() override;
 
-  bool SamplesPixelCentresOnly(vtkOpenGLRenderWindow* window, bool floatFramebuffer) const override;
+  bool SamplesPixelCentresOnly(const BackendFrame& frame) const override;
+  int SampledImageLimit(vtkOpenGLRenderWindow* window) override;
   bool Draw(const BackendFrame& frame, BackendTimes& times) override;
   void ReleaseGraphicsResources(vtkWindow* window) override;
 
@@ -56,6 +63,12 @@ private:
   void operator=(const OpenGLBackend&) = delete;
 
   vtkShaderProgram* ReadyProgram(vtkOpenGLRenderWindow* window);
+  /// Binds the target the batches are drawn into: the sampled target, the float target or
+  /// none (the window's framebuffer), setting SampledTargetUsed and FloatTargetUsed.
+  void BindTarget(const BackendFrame& frame);
+  /// Unbinds the target and, when the batches were `drawn`, puts what they drew into the
+  /// window.
+  bool WriteTarget(const BackendFrame& frame, bool drawn, BackendTimes& times);
   void UploadTables(const BackendFrame& frame);
   void SetUniforms(const BackendFrame& frame, vtkShaderProgram* program);
   bool DrawBatches(const BackendFrame& frame, vtkShaderProgram* program, BackendTimes& times);
@@ -67,11 +80,15 @@ private:
   vtkNew<vtkTextureObject> TransferFunction;
   vtkNew<vtkTextureObject> IntegralsHigh, IntegralsLow; // pre-integrated shading
   BlendTarget Target;
+  BlendTarget SampledTarget; ///< at an image sample distance other than 1
 
   std::uint64_t UploadedBuffers = 0; ///< FramePipeline::BufferVersion() in the buffers
   std::uint64_t UploadedTables = 0;  ///< TransferFunctionTables::Version() in the textures
   bool FloatTargetFailed = false;    ///< no float target in this context: do not retry
   bool FloatTargetUsed = false;
+  bool SampledTargetFailed = false; ///< no sampled target in this context: do not retry
+  bool SampledTargetUsed = false;
+  int MaxTargetSize = 0; ///< of this context: the largest texture and viewport (0: not asked)
   std::string WarningMessage;
 };
 

@@ -43,6 +43,12 @@ struct BackendFrame
   vtkOpenGLRenderWindow* window = nullptr;
   int origin[2] = { 0, 0 }; ///< the renderer's tiled viewport in window pixels
   int size[2] = { 0, 0 };
+  /**
+   * The size of the image the volume is composited at (the mapper's ImageSampleDistance,
+   * mtpt/ImageSampling.h): `size` at distance 1, else fewer (or more) pixels, magnified (or
+   * minified) onto the viewport with bilinear filtering. NDC span the viewport either way.
+   */
+  int imageSize[2] = { 0, 0 };
   FramePipeline* pipeline = nullptr;
   const TransferFunctionTables* tables = nullptr;
   Shading shading = Shading::VTKCompatible;
@@ -60,6 +66,9 @@ struct BackendFrame
    * returning false stops the frame there (what was drawn stays). Empty: never stops.
    */
   std::function<bool(double)> afterBatch;
+
+  /// Whether the image is composited at another size than the viewport's.
+  bool Sampled() const { return imageSize[0] != size[0] || imageSize[1] != size[1]; }
 };
 
 /// Seconds spent by the last Draw, and how it ended.
@@ -67,7 +76,7 @@ struct BackendTimes
 {
   double upload = 0;    ///< OpenGL: buffer upload; CPU: read-back of depth and colour, image upload
   double draw = 0;      ///< OpenGL: the draw calls; CPU: the quad that writes the image
-  double composite = 0; ///< CPU: compositing on the CPU
+  double composite = 0; ///< CPU: compositing on the CPU (and magnifying a sampled image)
   double decompose = 0; ///< decomposition of the batches (included in the pipeline's times)
   int batches = 0;      ///< batches drawn
   bool stopped = false; ///< afterBatch stopped the frame
@@ -80,12 +89,19 @@ public:
   virtual ~RenderBackend() = default;
 
   /**
-   * Whether every fragment this backend draws into `window` (with `floatFramebuffer` as the
-   * frame will ask) is sampled at a pixel centre only, so that the pipeline may cull cells
-   * whose projection covers no pixel centre. Ask with the window's framebuffer bound.
+   * Whether every fragment this backend draws for `frame` (its window, floatFramebuffer and
+   * image size) is sampled at a pixel centre of the composited image only, so that the
+   * pipeline may cull cells whose projection covers no pixel centre of that image. Ask with
+   * the window's framebuffer bound.
    */
-  virtual bool SamplesPixelCentresOnly(
-    vtkOpenGLRenderWindow* window, bool floatFramebuffer) const = 0;
+  virtual bool SamplesPixelCentresOnly(const BackendFrame& frame) const = 0;
+
+  /**
+   * The largest side, in pixels, of an image this backend can composite at another size
+   * than the viewport's (BackendFrame::imageSize) in `window`; 0 where it cannot, and then
+   * draws at the viewport's size. Ask with the window's context current.
+   */
+  virtual int SampledImageLimit(vtkOpenGLRenderWindow* window) = 0;
 
   /**
    * Draws the prepared frame over what the renderer drew so far (the colour there, and the

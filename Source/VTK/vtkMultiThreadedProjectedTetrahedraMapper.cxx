@@ -9,7 +9,9 @@
 #include "VolumeInput.h"
 
 #include "mtpt/FramePipeline.h"
+#include "mtpt/ImageSampling.h"
 #include "mtpt/Threads.h"
+#include "mtpt/Timing.h"
 
 #include "vtkBoundingBox.h"
 #include "vtkCamera.h"
@@ -30,11 +32,14 @@
 #include "OpenGLHeader.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <map>
 #include <set>
+#include <sstream>
 #include <string>
+#include <vector>
 
 vtkStandardNewMacro(vtkMultiThreadedProjectedTetrahedraMapper);
 
@@ -56,6 +61,10 @@ mtpt::OrderMutation OrderMutationFromEnvironment()
   }
   return mtpt::OrderMutation::None;
 }
+
+/// Samples per pixel side at most, for image sample distances below 1: the image and its
+/// buffers grow with the square of it.
+constexpr int MaximumSamplesPerPixel = 4;
 
 /// Fraction of a frame's progress reached at the end of each pipeline stage; the backend's
 /// batches share the rest.
@@ -95,6 +104,16 @@ public:
   // What GetBounds() last computed from.
   vtkDataObject* BoundsInput = nullptr;
   vtkMTimeType BoundsTime = 0;
+
+  /// The time of the last frame drawn per renderer and volume (automatic image sample
+  /// distance); entries of destroyed renderers or volumes are dropped.
+  struct RenderTime
+  {
+    vtkWeakPointer<vtkRenderer> renderer;
+    vtkWeakPointer<vtkVolume> volume;
+    double seconds = 0;
+  };
+  std::vector<RenderTime> RenderTimes;
 
   // The last frame.
   mtpt::BackendTimes Times;
@@ -180,6 +199,70 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetBatchSize(vtkIdType size)
     this->BatchSize = size;
     this->Modified();
   }
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::SetDistance(
+  const char* name, float distance, float& setting)
+{
+  if (std::isnan(distance))
+  {
+    vtkWarningMacro(<< "Set" << name << "(nan): an image sample distance must be a number in "
+                    << "[0.1, 100]; keeping " << setting);
+    return;
+  }
+  distance = std::min(100.0f, std::max(0.1f, distance)); // the range of VTK's ray caster
+  if (distance != setting)
+  {
+    setting = distance;
+    this->Modified();
+  }
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::SetImageSampleDistance(float distance)
+{
+  this->SetDistance("ImageSampleDistance", distance, this->ImageSampleDistance);
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::SetMinimumImageSampleDistance(float distance)
+{
+  this->SetDistance("MinimumImageSampleDistance", distance, this->MinimumImageSampleDistance);
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::SetMaximumImageSampleDistance(float distance)
+{
+  this->SetDistance("MaximumImageSampleDistance", distance, this->MaximumImageSampleDistance);
+}
+
+double vtkMultiThreadedProjectedTetrahedraMapper::RetrieveRenderTime(
+  vtkRenderer* renderer, vtkVolume* volume)
+{
+  for (const Internals::RenderTime& entry : this->Internal->RenderTimes)
+  {
+    if (entry.renderer.GetPointer() == renderer && entry.volume.GetPointer() == volume)
+    {
+      return entry.seconds;
+    }
+  }
+  return 0.0;
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::StoreRenderTime(
+  vtkRenderer* renderer, vtkVolume* volume, double seconds)
+{
+  auto& times = this->Internal->RenderTimes;
+  times.erase(std::remove_if(times.begin(), times.end(),
+                [](const Internals::RenderTime& entry)
+                { return !entry.renderer.GetPointer() || !entry.volume.GetPointer(); }),
+    times.end());
+  for (Internals::RenderTime& entry : times)
+  {
+    if (entry.renderer.GetPointer() == renderer && entry.volume.GetPointer() == volume)
+    {
+      entry.seconds = seconds;
+      return;
+    }
+  }
+  times.push_back({ renderer, volume, seconds });
 }
 
 const char* vtkMultiThreadedProjectedTetrahedraMapper::GetOrderMethodAsString()
@@ -521,13 +604,42 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
   {
     return;
   }
+  // Timed from here, as VTK's ray caster times its frames: the update of the input is not
+  // part of the frame. Automatic adjustment scales the distance by the last frame's time.
+  const auto start = mtpt::Clock::now();
+  const float distance = this->ImageSampleDistance;
+  if (this->AutoAdjustSampleDistances)
+  {
+    this->ImageSampleDistance = static_cast<float>(mtpt::AdjustImageSampleDistance(distance,
+      this->RetrieveRenderTime(renderer, volume), volume->GetAllocatedRenderTime(),
+      this->MinimumImageSampleDistance, this->MaximumImageSampleDistance));
+  }
+  if (!this->DrawPrepared(renderer, volume, window, frame))
+  {
+    // No frame, or a stopped one: nothing to learn the next distance from (VTK's ray caster
+    // restores the distance of an aborted frame too).
+    this->ImageSampleDistance = distance;
+    return;
+  }
+  if (this->AutoAdjustSampleDistances)
+  {
+    glFinish(); // the time of the drawing, not of its submission
+  }
+  this->TimeToDraw = mtpt::SecondsSince(start);
+  this->StoreRenderTime(renderer, volume, this->TimeToDraw);
+}
+
+bool vtkMultiThreadedProjectedTetrahedraMapper::DrawPrepared(vtkRenderer* renderer,
+  vtkVolume* volume, vtkOpenGLRenderWindow* window, mtpt::FrameInput& frame)
+{
+  Internals& in = *this->Internal;
   mtpt::BackendFrame draw;
   renderer->GetTiledSizeAndOrigin(&draw.size[0], &draw.size[1], &draw.origin[0], &draw.origin[1]);
   if (draw.size[0] <= 0 || draw.size[1] <= 0)
   {
     // No pixel to draw (a zero-area viewport or tile): no work, and no message, as VTK's
     // own mappers. Its aspect ratio would not even give a usable projection.
-    return;
+    return false;
   }
   mtpt::RenderBackend* backend = this->ChooseBackend();
   this->SetUpFrame(renderer, volume, window, backend, frame, draw);
@@ -541,7 +653,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
                     << " tetrahedra; this mapper draws at most "
                     << mtpt::FramePipeline::MaxTetrahedra());
     }
-    return;
+    return false;
   }
   in.Tetrahedra = static_cast<vtkIdType>(in.Pipeline.SortedCount());
   if (in.Tetrahedra > 0) // else everything is culled: transparent or out of view
@@ -549,6 +661,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
     this->DrawFrame(backend, draw);
   }
   this->ReportProgress(window, 1.0);
+  return !in.Stopped;
 }
 
 void vtkMultiThreadedProjectedTetrahedraMapper::SetUpFrame(vtkRenderer* renderer, vtkVolume* volume,
@@ -558,16 +671,21 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetUpFrame(vtkRenderer* renderer
   Internals& in = *this->Internal;
   mtpt::ViewMatrices(renderer, volume, frame.modelView, frame.projection);
   frame.perspective = renderer->GetActiveCamera()->GetParallelProjection() == 0;
+  draw.renderer = renderer;
+  draw.window = window;
+  draw.floatFramebuffer = this->UseFloatingPointFrameBuffer;
+  this->ChooseImageSize(backend, window, draw);
   if (this->CullInvisibleCells)
   {
     // Cells the opacity function hides are culled (exact: see mtpt/Culling.h), and cells
-    // covering no pixel centre where every fragment is sampled at a pixel centre.
+    // covering no pixel centre of the composited image where every fragment is sampled at
+    // a pixel centre.
     frame.opacity = in.Tables.Table();
     frame.opacityVersion = in.Tables.Version();
-    if (backend->SamplesPixelCentresOnly(window, this->UseFloatingPointFrameBuffer))
+    if (backend->SamplesPixelCentresOnly(draw))
     {
-      frame.viewportWidth = draw.size[0];
-      frame.viewportHeight = draw.size[1];
+      frame.viewportWidth = draw.imageSize[0];
+      frame.viewportHeight = draw.imageSize[1];
     }
   }
   else
@@ -592,8 +710,6 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetUpFrame(vtkRenderer* renderer
   {
     vtkWarningMacro(<< warning);
   }
-  draw.renderer = renderer;
-  draw.window = window;
   draw.pipeline = &in.Pipeline;
   draw.tables = &in.Tables;
   draw.shading = this->ShadingMode == PRE_INTEGRATED_SHADING ? mtpt::Shading::PreIntegrated
@@ -613,7 +729,6 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetUpFrame(vtkRenderer* renderer
   // Orthographic projections give the linear default.
   draw.interpolation = mtpt::PerspectiveInterpolation::FromProjection(frame.projection);
   draw.threads = this->NumberOfThreads;
-  draw.floatFramebuffer = this->UseFloatingPointFrameBuffer;
   draw.synchronizedTiming = this->SynchronizedTiming;
   draw.afterBatch = [this, window](double fraction)
   {
@@ -621,6 +736,44 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetUpFrame(vtkRenderer* renderer
     this->ReportProgress(window, begin + (1.0 - begin) * fraction);
     return window->CheckAbortStatus() == 0;
   };
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::ChooseImageSize(
+  mtpt::RenderBackend* backend, vtkOpenGLRenderWindow* window, mtpt::BackendFrame& draw)
+{
+  int sampled[2];
+  for (int i = 0; i < 2; ++i)
+  {
+    draw.imageSize[i] = draw.size[i];
+    sampled[i] = mtpt::SampledImageSize(draw.size[i], this->ImageSampleDistance);
+  }
+  const int limit = sampled[0] == draw.size[0] && sampled[1] == draw.size[1]
+    ? 0 // distance 1, or close enough to give the viewport's size
+    : backend->SampledImageLimit(window);
+  if (limit > 0)
+  {
+    bool capped = false;
+    for (int i = 0; i < 2; ++i)
+    {
+      const int most = std::min(limit, MaximumSamplesPerPixel * draw.size[i]);
+      capped = capped || sampled[i] > most;
+      draw.imageSize[i] = std::min(sampled[i], most);
+    }
+    if (capped)
+    {
+      std::ostringstream message;
+      message << "ImageSampleDistance " << this->ImageSampleDistance << " asks for an image of "
+              << sampled[0] << " x " << sampled[1] << " pixels; drawing " << draw.imageSize[0]
+              << " x " << draw.imageSize[1] << " (at most " << MaximumSamplesPerPixel
+              << " samples per pixel side and " << limit << " pixels per side here)";
+      if (this->Internal->Report(this, message.str()))
+      {
+        vtkWarningMacro(<< message.str());
+      }
+    }
+  }
+  this->ImageViewportSize[0] = draw.imageSize[0];
+  this->ImageViewportSize[1] = draw.imageSize[1];
 }
 
 void vtkMultiThreadedProjectedTetrahedraMapper::DrawFrame(
@@ -676,6 +829,12 @@ void vtkMultiThreadedProjectedTetrahedraMapper::PrintSelf(ostream& os, vtkIndent
      << "\n";
   os << indent << "ReuseResults: " << this->ReuseResults << "\n";
   os << indent << "CullInvisibleCells: " << this->CullInvisibleCells << "\n";
+  os << indent << "ImageSampleDistance: " << this->ImageSampleDistance << "\n";
+  os << indent << "MinimumImageSampleDistance: " << this->MinimumImageSampleDistance << "\n";
+  os << indent << "MaximumImageSampleDistance: " << this->MaximumImageSampleDistance << "\n";
+  os << indent << "AutoAdjustSampleDistances: " << this->AutoAdjustSampleDistances << "\n";
+  os << indent << "ImageViewportSize (last frame): " << this->ImageViewportSize[0] << " x "
+     << this->ImageViewportSize[1] << "\n";
   const mtpt::FrameStats& stats = this->Internal->Pipeline.Stats();
   os << indent << "Last frame culled: " << stats.opacityCulled << " transparent, "
      << stats.frustumCulled << " outside the view, " << stats.pixelCulled << " covering no pixel; "

@@ -76,6 +76,22 @@
  *   buffers hold one batch (OpenGL: 168 bytes per tetrahedron; CPU: 128) instead of the
  *   whole mesh.
  *
+ * Frames within the time VTK allots, as vtkUnstructuredGridVolumeRayCastMapper and
+ * vtkUnstructuredGridVolumeZSweepMapper do it (ImageSampleDistance, Minimum/Maximum
+ * ImageSampleDistance, AutoAdjustSampleDistances: the same names, meanings, defaults and
+ * ranges): at an image sample distance d the volume is composited into an image of
+ * floor(viewport / d) pixels on each side, against the opaque geometry's depth under each of
+ * its pixels' centres, and stretched over the viewport with bilinear filtering (the CPU
+ * backend filters and blends on the CPU; the OpenGL backend draws into an off-screen target
+ * of that size and blends it over the window with linear filtering). Every other stage is
+ * the same; cells covering no pixel centre of the smaller image are culled. With
+ * AutoAdjustSampleDistances on (the default) each Render scales the distance by
+ * sqrt(last frame's time / the time the renderer allots the volume), within [minimum,
+ * maximum]: VTK's interactors ask for 15 frames a second while the user drags
+ * (vtkRenderWindowInteractor::DesiredUpdateRate), and the volume is then drawn coarser; a
+ * still frame (StillUpdateRate, 0.0001 frames a second) allots so much time that the distance
+ * returns to the minimum, 1 by default, which is the full-resolution image.
+ *
  * Cells other than tetrahedra (hexahedra, voxels, wedges, pyramids, polyhedra, higher-order
  * cells, mixed grids) are split into tetrahedra with vtkDataSetTriangleFilter once per input
  * change (point data passed, cell data copied to each piece); vertices, lines and polygons
@@ -290,6 +306,57 @@ public:
   vtkBooleanMacro(ReuseResults, bool);
   ///@}
 
+  ///@{
+  /**
+   * Sampling distance in the image, in pixels, as vtkUnstructuredGridVolumeRayCastMapper's:
+   * 1 (the default) composites one sample per pixel; 2 one per 2 x 2 pixels (the image is
+   * floor(viewport / 2) pixels on each side, stretched over the viewport with bilinear
+   * filtering); 0.5 four per pixel (at most 4 x 4 per pixel, and at most the largest
+   * texture of the OpenGL context, with a warning beyond). Clamped to [0.1, 100]; NaN is
+   * rejected with a warning. With AutoAdjustSampleDistances on (the default) every Render
+   * sets it from the time the renderer allots: set it with automatic adjustment off for a
+   * fixed distance.
+   */
+  virtual void SetImageSampleDistance(float distance);
+  vtkGetMacro(ImageSampleDistance, float);
+  ///@}
+
+  ///@{
+  /**
+   * The smallest image sample distance automatic adjustment chooses (default 1, the
+   * full-resolution image); clamped to [0.1, 100]. Where it exceeds the maximum it wins.
+   */
+  virtual void SetMinimumImageSampleDistance(float distance);
+  vtkGetMacro(MinimumImageSampleDistance, float);
+  ///@}
+
+  ///@{
+  /// The largest image sample distance automatic adjustment chooses (default 10); clamped to
+  /// [0.1, 100].
+  virtual void SetMaximumImageSampleDistance(float distance);
+  vtkGetMacro(MaximumImageSampleDistance, float);
+  ///@}
+
+  ///@{
+  /**
+   * Whether every Render adjusts ImageSampleDistance to the time the renderer allots the
+   * volume (vtkVolume::GetAllocatedRenderTime, from the render window's desired update
+   * rate), as vtkUnstructuredGridVolumeRayCastMapper does (default on): the distance is
+   * scaled by sqrt(last frame's time / allotted time) and clamped to [minimum, maximum];
+   * the first frame, never timed, is at the minimum. A frame stopped by the abort check
+   * keeps the previous distance and is not timed. With it on, each frame waits for OpenGL
+   * to finish (glFinish) before its time is taken, as VTK's GPU ray cast mapper does, so
+   * that the time is that of the drawing and not of its submission.
+   */
+  vtkSetClampMacro(AutoAdjustSampleDistances, vtkTypeBool, 0, 1);
+  vtkGetMacro(AutoAdjustSampleDistances, vtkTypeBool);
+  vtkBooleanMacro(AutoAdjustSampleDistances, vtkTypeBool);
+  ///@}
+
+  /// The size of the image the last Render composited the volume at: the viewport's at
+  /// image sample distance 1, else floor(viewport / ImageSampleDistance) (0, 0 before any).
+  vtkGetVectorMacro(ImageViewportSize, int, 2);
+
   /// Tetrahedra sorted and decomposed by the last Render (after culling).
   vtkIdType GetNumberOfTetrahedra();
 
@@ -381,6 +448,22 @@ protected:
   vtkIdType BatchSize = 1 << 20;
   bool ReuseResults = true;
   bool CullInvisibleCells = true;
+  float ImageSampleDistance = 1.0f;
+  float MinimumImageSampleDistance = 1.0f;
+  float MaximumImageSampleDistance = 10.0f;
+  vtkTypeBool AutoAdjustSampleDistances = 1;
+  int ImageViewportSize[2] = { 0, 0 };
+
+  ///@{
+  /**
+   * The time of the last frame this mapper drew `volume` in `renderer`, seconds (0 when it
+   * has not), from which automatic adjustment scales the image sample distance; as
+   * vtkUnstructuredGridVolumeRayCastMapper keeps it, per renderer and volume. Retrieve is
+   * virtual so that a test can supply simulated frame times.
+   */
+  void StoreRenderTime(vtkRenderer* renderer, vtkVolume* volume, double seconds);
+  virtual double RetrieveRenderTime(vtkRenderer* renderer, vtkVolume* volume);
+  ///@}
 
 private:
   vtkMultiThreadedProjectedTetrahedraMapper(
@@ -390,7 +473,13 @@ private:
   // The steps of Render: the glue between VTK, the core's frame pipeline and a backend.
   void MoveToWindow(vtkOpenGLRenderWindow* window);
   bool PrepareInput(vtkVolumeProperty* property, mtpt::FrameInput& frame);
+  bool DrawPrepared(vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window,
+    mtpt::FrameInput& frame);
   mtpt::RenderBackend* ChooseBackend();
+  void ChooseImageSize(
+    mtpt::RenderBackend* backend, vtkOpenGLRenderWindow* window, mtpt::BackendFrame& draw);
+  /// Sets an image sample distance setting, clamped to VTK's range; NaN is rejected.
+  void SetDistance(const char* name, float distance, float& setting);
   void SetUpFrame(vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window,
     mtpt::RenderBackend* backend, mtpt::FrameInput& frame, mtpt::BackendFrame& draw);
   void DrawFrame(mtpt::RenderBackend* backend, mtpt::BackendFrame& draw);

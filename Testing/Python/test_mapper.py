@@ -86,6 +86,15 @@ def test_import_and_settings():
     assert mapper.GetOrderMethodAsString() == "PartitionSort"
     mapper.SetBackendToCPU()
     assert mapper.GetBackend() == Mapper.CPU_BACKEND
+    # Image sample distance: VTK's ray caster's defaults and range.
+    assert mapper.GetAutoAdjustSampleDistances() == 1
+    assert (mapper.GetImageSampleDistance(), mapper.GetMinimumImageSampleDistance(),
+            mapper.GetMaximumImageSampleDistance()) == (1.0, 1.0, 10.0)
+    mapper.AutoAdjustSampleDistancesOff()
+    mapper.SetImageSampleDistance(2.5)
+    assert mapper.GetImageSampleDistance() == 2.5
+    mapper.SetImageSampleDistance(1000)  # clamped, as VTK's ray caster clamps it
+    assert mapper.GetImageSampleDistance() == 100.0
 
 
 def test_render_matches_vtk_pt():

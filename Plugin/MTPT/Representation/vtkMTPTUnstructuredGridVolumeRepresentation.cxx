@@ -75,6 +75,54 @@ int vtkMTPTUnstructuredGridVolumeRepresentation::GetShadingMode()
   return this->MTPTMapper->GetShadingMode();
 }
 
+// With automatic adjustment on, every render overwrites the mapper's distance (as in VTK's
+// ray caster); the distance the property holds is kept here and given to the mapper again
+// when the adjustment is turned off, so that the panel's value is the one drawn with.
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetImageSampleDistance(double distance)
+{
+  this->ImageSampleDistance = distance;
+  this->MTPTMapper->SetImageSampleDistance(static_cast<float>(distance));
+}
+
+double vtkMTPTUnstructuredGridVolumeRepresentation::GetImageSampleDistance()
+{
+  return this->MTPTMapper->GetImageSampleDistance();
+}
+
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetMinimumImageSampleDistance(double distance)
+{
+  this->MTPTMapper->SetMinimumImageSampleDistance(static_cast<float>(distance));
+}
+
+double vtkMTPTUnstructuredGridVolumeRepresentation::GetMinimumImageSampleDistance()
+{
+  return this->MTPTMapper->GetMinimumImageSampleDistance();
+}
+
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetMaximumImageSampleDistance(double distance)
+{
+  this->MTPTMapper->SetMaximumImageSampleDistance(static_cast<float>(distance));
+}
+
+double vtkMTPTUnstructuredGridVolumeRepresentation::GetMaximumImageSampleDistance()
+{
+  return this->MTPTMapper->GetMaximumImageSampleDistance();
+}
+
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetAutoAdjustSampleDistances(int adjust)
+{
+  this->MTPTMapper->SetAutoAdjustSampleDistances(adjust);
+  if (!adjust)
+  {
+    this->MTPTMapper->SetImageSampleDistance(static_cast<float>(this->ImageSampleDistance));
+  }
+}
+
+int vtkMTPTUnstructuredGridVolumeRepresentation::GetAutoAdjustSampleDistances()
+{
+  return this->MTPTMapper->GetAutoAdjustSampleDistances();
+}
+
 //------------------------------------------------------------------------------
 void vtkMTPTUnstructuredGridVolumeRepresentation::PrintSelf(ostream& os, vtkIndent indent)
 {

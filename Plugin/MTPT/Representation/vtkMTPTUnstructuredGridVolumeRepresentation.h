@@ -46,6 +46,14 @@ public:
   int GetBackend();
   void SetShadingMode(int mode);
   int GetShadingMode();
+  void SetImageSampleDistance(double distance);
+  double GetImageSampleDistance();
+  void SetMinimumImageSampleDistance(double distance);
+  double GetMinimumImageSampleDistance();
+  void SetMaximumImageSampleDistance(double distance);
+  double GetMaximumImageSampleDistance();
+  void SetAutoAdjustSampleDistances(int adjust);
+  int GetAutoAdjustSampleDistances();
   ///@}
 
   /// The mapper this representation draws with.
@@ -56,6 +64,9 @@ protected:
   ~vtkMTPTUnstructuredGridVolumeRepresentation() override;
 
   vtkNew<vtkMultiThreadedProjectedTetrahedraMapper> MTPTMapper;
+  /// The Image Sample Distance property's value, given to the mapper again when automatic
+  /// adjustment (which overwrites the mapper's) is turned off.
+  double ImageSampleDistance = 1.0;
 
 private:
   vtkMTPTUnstructuredGridVolumeRepresentation(
