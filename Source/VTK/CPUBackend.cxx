@@ -136,8 +136,8 @@ bool CPUBackend::ReadDepth(const BackendFrame& frame)
   const bool sampled = frame.Sampled();
   std::vector<float>& viewport = sampled ? this->ViewportDepth : this->Depth;
   viewport.resize(static_cast<std::size_t>(frame.size[0]) * frame.size[1]);
-  if (!this->Target.Read(frame.window, 0, 0, frame.size[0], frame.size[1], viewport.data(),
-        nullptr, this->ErrorMessage))
+  if (!this->Target.Read(frame.window, 0, 0, frame.size[0], frame.size[1], viewport.data(), nullptr,
+        this->ErrorMessage))
   {
     return false;
   }
@@ -204,25 +204,17 @@ void CPUBackend::Composite(const BackendFrame& frame, BackendTimes& times)
   // drew. Decomposition and compositing both use every thread, so they take turns.
   FramePipeline& pipeline = *frame.pipeline;
   this->Compositing.Begin(settings);
-  const std::size_t total = pipeline.SortedCount();
-  const std::size_t batch = std::max<std::size_t>(1, frame.batchSize);
-  for (std::size_t first = 0; first < total; first += batch)
-  {
-    auto start = Clock::now();
-    pipeline.DecomposeFans(first, batch, frame.threads);
-    times.decompose += SecondsSince(start);
-    start = Clock::now();
-    this->Compositing.Composite(pipeline.Fans().data(), pipeline.FanCount(), frame.threads);
-    times.composite += SecondsSince(start);
-    ++times.batches;
-    const std::size_t done = std::min(total, first + batch);
-    if (done < total && frame.afterBatch &&
-      !frame.afterBatch(static_cast<double>(done) / static_cast<double>(total)))
+  ForEachBatch(
+    frame, times,
+    [&](std::size_t first, std::size_t count)
+    { pipeline.DecomposeFans(first, count, frame.threads); },
+    [&]
     {
-      times.stopped = true;
-      break;
-    }
-  }
+      const auto start = Clock::now();
+      this->Compositing.Composite(pipeline.Fans().data(), pipeline.FanCount(), frame.threads);
+      times.composite += SecondsSince(start);
+      return true;
+    });
 }
 
 void CPUBackend::Magnify(
@@ -231,10 +223,9 @@ void CPUBackend::Magnify(
   const std::size_t width = static_cast<std::size_t>(region.x1 - region.x0);
   this->Sampled.resize(4 * width * static_cast<std::size_t>(region.y1 - region.y0));
   this->Compositing.Resolve(region, nullptr, this->Sampled.data(), frame.threads);
-  const SampledImage image{ this->Sampled.data(), region, frame.imageSize[0],
-    frame.imageSize[1] };
-  MagnifyOver(image, frame.size[0], frame.size[1], target, this->Below.data(),
-    this->Region.data(), frame.threads);
+  const SampledImage image{ this->Sampled.data(), region, frame.imageSize[0], frame.imageSize[1] };
+  MagnifyOver(image, frame.size[0], frame.size[1], target, this->Below.data(), this->Region.data(),
+    frame.threads);
 }
 
 bool CPUBackend::WriteBack(const BackendFrame& frame, const PixelRegion& region,

@@ -21,6 +21,7 @@
 
 #include <algorithm>
 #include <climits>
+#include <cstddef>
 #include <vector>
 
 namespace mtpt
@@ -246,38 +247,28 @@ bool OpenGLBackend::DrawBatches(
   // Batch after batch: decompose, upload, draw. Draw calls return before the rasterizer is
   // done, so the next batch's decomposition overlaps the previous batch's drawing.
   FramePipeline& pipeline = *frame.pipeline;
-  const std::size_t total = pipeline.SortedCount();
-  const std::size_t batch = std::max<std::size_t>(1, frame.batchSize);
-  bool drawn = true;
-  for (std::size_t first = 0; first < total; first += batch)
-  {
-    auto start = Clock::now();
-    pipeline.DecomposeBatch(first, batch, frame.threads);
-    times.decompose += SecondsSince(start);
-    this->Upload(frame, times);
-    start = Clock::now();
-    this->DrawUploaded(program);
-    if (frame.synchronizedTiming)
+  const bool drawn = ForEachBatch(
+    frame, times,
+    [&](std::size_t first, std::size_t count)
+    { pipeline.DecomposeBatch(first, count, frame.threads); },
+    [&]
     {
-      glFinish();
-    }
-    times.draw += SecondsSince(start);
-    ++times.batches;
-    const std::string failed = TakeOpenGLErrors();
-    if (!failed.empty())
-    {
-      this->ErrorMessage = "drawing the tetrahedra failed (" + failed + ")";
-      drawn = false;
-      break;
-    }
-    const std::size_t done = std::min(total, first + batch);
-    if (done < total && frame.afterBatch &&
-      !frame.afterBatch(static_cast<double>(done) / static_cast<double>(total)))
-    {
-      times.stopped = true;
-      break;
-    }
-  }
+      this->Upload(frame, times);
+      const auto start = Clock::now();
+      this->DrawUploaded(program);
+      if (frame.synchronizedTiming)
+      {
+        glFinish();
+      }
+      times.draw += SecondsSince(start);
+      const std::string failed = TakeOpenGLErrors();
+      if (!failed.empty())
+      {
+        this->ErrorMessage = "drawing the tetrahedra failed (" + failed + ")";
+        return false;
+      }
+      return true;
+    });
   this->TransferFunction->Deactivate();
   this->IntegralsHigh->Deactivate();
   this->IntegralsLow->Deactivate();
@@ -295,7 +286,7 @@ void OpenGLBackend::Upload(const BackendFrame& frame, BackendTimes& times)
   const std::size_t count = pipeline.TetrahedronCount();
   this->VertexBuffer->SetStride(static_cast<unsigned int>(sizeof(TetVertex)));
   this->VertexBuffer->Upload(reinterpret_cast<const float*>(pipeline.Vertices().data()),
-    count * VerticesPerTetrahedron * 6, vtkOpenGLBufferObject::ArrayBuffer);
+    count * VerticesPerTetrahedron * FloatsPerVertex, vtkOpenGLBufferObject::ArrayBuffer);
   this->Triangles.IBO->Upload(pipeline.Indices().data(), count * IndicesPerTetrahedron,
     vtkOpenGLBufferObject::ElementArrayBuffer);
   this->Triangles.IBO->IndexCount = count * IndicesPerTetrahedron;
@@ -315,21 +306,22 @@ void OpenGLBackend::DrawUploaded(vtkShaderProgram* program)
   {
     // The layout of mtpt::TetVertex.
     const auto stride = sizeof(TetVertex);
-    this->Triangles.VAO->AddAttributeArray(
-      program, this->VertexBuffer, "vertexNDC", 0, stride, VTK_FLOAT, 3, false);
-    this->Triangles.VAO->AddAttributeArray(
-      program, this->VertexBuffer, "scalarFrontBack", 12, stride, VTK_FLOAT, 2, false);
+    this->Triangles.VAO->AddAttributeArray(program, this->VertexBuffer, "vertexNDC",
+      offsetof(TetVertex, x), stride, VTK_FLOAT, 3, false);
+    this->Triangles.VAO->AddAttributeArray(program, this->VertexBuffer, "scalarFrontBack",
+      offsetof(TetVertex, scalarFront), stride, VTK_FLOAT, 2, false);
     // The same bytes as four normalized 16-bit channels (mtpt::StoreVertexColour).
-    this->Triangles.VAO->AddAttributeArray(
-      program, this->VertexBuffer, "vertexColour", 12, stride, VTK_UNSIGNED_SHORT, 4, true);
-    this->Triangles.VAO->AddAttributeArray(
-      program, this->VertexBuffer, "thickness", 20, stride, VTK_FLOAT, 1, false);
+    this->Triangles.VAO->AddAttributeArray(program, this->VertexBuffer, "vertexColour",
+      offsetof(TetVertex, scalarFront), stride, VTK_UNSIGNED_SHORT, 4, true);
+    this->Triangles.VAO->AddAttributeArray(program, this->VertexBuffer, "thickness",
+      offsetof(TetVertex, thickness), stride, VTK_FLOAT, 1, false);
     this->Triangles.AttributeUpdateTime.Modified();
   }
   this->Triangles.IBO->Bind();
   // GLsizei is 32-bit: draw in chunks of whole tetrahedra below that limit.
   const std::size_t indices = this->Triangles.IBO->IndexCount;
-  const std::size_t chunk = (static_cast<std::size_t>(INT_MAX) / 12) * 12;
+  const std::size_t chunk =
+    (static_cast<std::size_t>(INT_MAX) / IndicesPerTetrahedron) * IndicesPerTetrahedron;
   for (std::size_t offset = 0; offset < indices; offset += chunk)
   {
     const std::size_t size = std::min(chunk, indices - offset);

@@ -1,7 +1,12 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "RenderBackend.h"
 
+#include "mtpt/FramePipeline.h"
+#include "mtpt/Timing.h"
+
 #include "OpenGLHeader.h"
+
+#include <algorithm>
 
 #include <string>
 
@@ -53,6 +58,33 @@ bool DrawFramebufferIsMultisampled()
   GLint sampleBuffers = 0;
   glGetIntegerv(GL_SAMPLE_BUFFERS, &sampleBuffers);
   return sampleBuffers > 0;
+}
+
+bool RenderBackend::ForEachBatch(const BackendFrame& frame, BackendTimes& times,
+  const std::function<void(std::size_t first, std::size_t count)>& decompose,
+  const std::function<bool()>& draw)
+{
+  const std::size_t total = frame.pipeline->SortedCount();
+  const std::size_t batch = std::max<std::size_t>(1, frame.batchSize);
+  for (std::size_t first = 0; first < total; first += batch)
+  {
+    const auto start = Clock::now();
+    decompose(first, batch);
+    times.decompose += SecondsSince(start);
+    ++times.batches;
+    if (!draw())
+    {
+      return false;
+    }
+    const std::size_t done = std::min(total, first + batch);
+    if (done < total && frame.afterBatch &&
+      !frame.afterBatch(static_cast<double>(done) / static_cast<double>(total)))
+    {
+      times.stopped = true;
+      break;
+    }
+  }
+  return true;
 }
 
 } // namespace mtpt

@@ -17,7 +17,7 @@
 #define mtpt_RenderBackend_h
 
 #include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
-#include "mtpt/Compositor.h"
+#include "mtpt/Shading.h"
 
 #include <cstddef>
 #include <cstdint>
@@ -117,6 +117,17 @@ public:
   const std::string& Error() const { return this->ErrorMessage; }
 
 protected:
+  /**
+   * The batch loop of both backends: for each window of frame.batchSize tetrahedra of the
+   * order, back to front, `decompose(first, count)` has the pipeline decompose it (its time
+   * goes to times.decompose) and `draw()` draws it, returning false when it failed (the loop
+   * stops, and so does this function's result). After each batch but the last,
+   * frame.afterBatch may stop the frame (times.stopped).
+   */
+  static bool ForEachBatch(const BackendFrame& frame, BackendTimes& times,
+    const std::function<void(std::size_t first, std::size_t count)>& decompose,
+    const std::function<bool()>& draw);
+
   std::string ErrorMessage;
 };
 
