@@ -256,6 +256,8 @@ void Compositor::Rasterize(int threads)
   frame.vertexColours = s.vertexColours;
   frame.interpolation = s.interpolation;
   frame.inverseUnit = static_cast<float>(1.0 / s.unitDistance);
+  frame.clipToRange = s.depthRange != nullptr;
+  frame.clipping = s.clipping;
   const auto jobs = static_cast<std::int64_t>(this->Tiles.size());
   std::size_t triangles = 0, fragments = 0;
   // Threads take tiles: no more threads than tiles, nor than the binned fans are worth.
@@ -265,6 +267,7 @@ void Compositor::Rasterize(int threads)
 #pragma omp parallel num_threads(team) reduction(+ : triangles, fragments)
   {
     std::vector<float> depth(s.opaqueDepth ? TilePixels : 0);
+    std::vector<float> range(s.depthRange ? 2 * TilePixels : 0);
 #pragma omp for schedule(dynamic, 1)
     for (std::int64_t job = 0; job < jobs; ++job)
     {
@@ -283,6 +286,16 @@ void Compositor::Rasterize(int threads)
           std::copy(row + target.x0, row + target.x0 + target.width, depth.data() + j * TileSize);
         }
         target.depth = depth.data();
+      }
+      if (s.depthRange)
+      {
+        for (int j = 0; j < target.height; ++j)
+        {
+          const float* row =
+            s.depthRange + 2 * (static_cast<std::size_t>(target.y0 + j) * s.width + target.x0);
+          std::copy(row, row + 2 * target.width, range.data() + 2 * j * TileSize);
+        }
+        target.range = range.data();
       }
       detail::RasterCounts counts;
       const std::size_t first = this->TileStart[tile], end = this->TileStart[tile + 1];

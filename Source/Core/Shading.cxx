@@ -29,4 +29,23 @@ PerspectiveInterpolation PerspectiveInterpolation::FromProjection(const Matrix4&
   return v;
 }
 
+DepthClipping DepthClipping::FromProjection(const Matrix4& p)
+{
+  DepthClipping c;
+  c.ray = PerspectiveInterpolation::FromProjection(p);
+  c.perspective = c.ray.perspective;
+  if (c.perspective)
+  {
+    c.a = c.ray.inverseWScale;
+    c.b = c.ray.inverseWOffset;
+  }
+  else if (p[10] != 0.0)
+  {
+    // Orthographic: z_ndc = p10 ez + p11 with ez = -D.
+    c.a = -1.0 / p[10];
+    c.b = p[11] / p[10];
+  }
+  return c;
+}
+
 } // namespace mtpt

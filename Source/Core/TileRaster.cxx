@@ -894,6 +894,100 @@ void ShadeIntegrated(const RasterFrame& f, const TileTarget& tile, Mode mode, co
   }
 }
 
+/// A fragment's ray segment: eye depths of its ends, eye length, and the scalars at its ends
+/// (pre-integrated shading), from the planes at one pixel.
+struct FragmentSegment
+{
+  double front, back, length, scalarFront = 0, scalarBack = 0, z;
+};
+
+FragmentSegment SegmentAt(
+  const RasterFrame& f, const TileTarget& tile, Mode mode, const Planes& p, int x, int y)
+{
+  const float i = static_cast<float>(x), j = static_cast<float>(y - tile.y0);
+  auto value = [&](int k) { return p.base[k] + p.dx[k] * i + p.dy[k] * j; };
+  FragmentSegment s;
+  if (mode == Mode::ExactIntegral)
+  {
+    const double frontW = value(1), backW = value(3), rayX = value(4), rayY = value(5);
+    s.front = 1.0 / frontW;
+    s.back = 1.0 / backW;
+    s.scalarFront = value(0) / frontW;
+    s.scalarBack = value(2) / backW;
+    s.length = std::max(0.0, s.back - s.front) * std::sqrt(1.0 + rayX * rayX + rayY * rayY);
+    s.z = value(6);
+    return s;
+  }
+  const bool compatible = mode == Mode::Compatible;
+  s.z = value(compatible ? 5 : 3);
+  s.length = value(compatible ? 4 : 2);
+  if (!compatible)
+  {
+    s.scalarFront = value(0);
+    s.scalarBack = value(1);
+  }
+  const double ndcX = 2.0 * (tile.x0 + x + 0.5) / f.width - 1.0;
+  const double ndcY = 2.0 * (y + 0.5) / f.height - 1.0;
+  s.front = f.clipping.EyeDepth(0.5 * (s.z + 1.0));
+  s.back = s.front + s.length / f.clipping.RayLength(ndcX, ndcY);
+  return s;
+}
+
+/**
+ * Depth peeling: the pixels [lo, hi] of row y, each fragment contributing only the part of
+ * its segment inside its pixel's range of window depths (TileTarget::range, DepthClipping).
+ * VTK-compatible fragments keep the segment's colour and attenuation over the part's
+ * length; pre-integrated ones are queued with the part's scalars and length. One fragment
+ * at a time: peeling frames are few, and their fragments straddle depth boundaries.
+ */
+void ShadeClipped(const RasterFrame& f, const TileTarget& tile, Mode mode, const Planes& p, int y,
+  int lo, int hi, WaitingFragments& waiting)
+{
+  if (mode != Mode::Compatible && !f.preIntegration->Covers(f.transferFunction))
+  {
+    return; // every segment transparent
+  }
+  const TileRow row = RowOf(tile, y);
+  const std::size_t lanes = hn::Lanes(SegmentTag());
+  for (int x = lo - tile.x0; x <= hi - tile.x0; ++x)
+  {
+    const FragmentSegment s = SegmentAt(f, tile, mode, p, x, y);
+    const float* range = tile.range + 2 * (static_cast<std::size_t>(y - tile.y0) * T + x);
+    double t0, t1;
+    if (s.z < -1.0 || s.z > 1.0 || !f.clipping.Part(s.front, s.back, range[0], range[1], t0, t1))
+    {
+      continue;
+    }
+    const double part = (t1 - t0) * s.length;
+    if (mode != Mode::Compatible)
+    {
+      const std::size_t n = waiting.count;
+      waiting.front[n] = static_cast<float>(s.scalarFront + t0 * (s.scalarBack - s.scalarFront));
+      waiting.back[n] = static_cast<float>(s.scalarFront + t1 * (s.scalarBack - s.scalarFront));
+      waiting.length[n] = static_cast<float>(part);
+      waiting.x[n] = x;
+      waiting.y[n] = y;
+      if (++waiting.count == lanes)
+      {
+        ShadeWaiting(f, tile, waiting);
+      }
+      continue;
+    }
+    const float i = static_cast<float>(x), j = static_cast<float>(y - tile.y0);
+    auto value = [&](int k) { return p.base[k] + p.dx[k] * i + p.dy[k] * j; };
+    const float opacity = static_cast<float>(-std::expm1(-value(3) * part * f.inverseUnit));
+    if (!(opacity > 0.0f))
+    {
+      continue;
+    }
+    const float rest = 1.0f - opacity;
+    row.r[x] = opacity * value(0) + rest * row.r[x];
+    row.g[x] = opacity * value(1) + rest * row.g[x];
+    row.b[x] = opacity * value(2) + rest * row.b[x];
+    row.a[x] = opacity + rest * row.a[x];
+  }
+}
+
 /**
  * Rasterizes the triangle of corners v into the tile. Coverage comes first: the corners'
  * values and the attribute planes are set up only once a pixel is known to be covered.
@@ -947,7 +1041,11 @@ void DrawTriangle(const RasterFrame& f, const TileTarget& tile, Mode mode, Corne
       return;
     }
     counts.fragments += static_cast<std::size_t>(hi - lo + 1);
-    if (mode == Mode::Compatible)
+    if (f.clipToRange)
+    {
+      ShadeClipped(f, tile, mode, *p, y, lo, hi, waiting);
+    }
+    else if (mode == Mode::Compatible)
     {
       ShadeCompatible(f, tile, *p, y, lo, hi);
     }
@@ -966,7 +1064,7 @@ void DrawTriangle(const RasterFrame& f, const TileTarget& tile, Mode mode, Corne
     {
       return;
     }
-    if (mode == Mode::Compatible && edges.extent <= SmallTriangle)
+    if (mode == Mode::Compatible && edges.extent <= SmallTriangle && !f.clipToRange)
     {
       ShadeSmall(f, tile, edges, getPlanes, x0, x1, y0, y1, counts);
     }

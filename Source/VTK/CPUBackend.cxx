@@ -2,6 +2,7 @@
 #include "CPUBackend.h"
 
 #include "TransferFunctionTables.h"
+#include "VolumetricPeel.h"
 
 #include "mtpt/FramePipeline.h"
 #include "mtpt/ImageSampling.h"
@@ -186,7 +187,47 @@ bool CPUBackend::ImageKey::operator==(const ImageKey& o) const
     a.scaleY == b.scaleY && a.shiftY == b.shiftY;
 }
 
-void CPUBackend::Composite(const BackendFrame& frame, BackendTimes& times)
+bool CPUBackend::DrawPeel(const BackendFrame& frame, BackendTimes& times)
+{
+  this->ErrorMessage.clear();
+  TakeOpenGLErrors(); // errors left by others are not this backend's to report
+  // The compositor's image will be a peel's, not the kept frame's.
+  this->HaveImage = false;
+  auto start = Clock::now();
+  if (!frame.peel->ReadRanges(
+        frame.window, this->PeelRanges[0], this->PeelRanges[1], this->ErrorMessage))
+  {
+    return false;
+  }
+  times.upload += SecondsSince(start);
+  CompositorStats stats;
+  for (int which = 0; which < 2 && !times.stopped; ++which)
+  {
+    this->Composite(frame, times, this->PeelRanges[which].data());
+    start = Clock::now();
+    std::vector<float>& image = this->PeelColours[which];
+    image.resize(4 * static_cast<std::size_t>(frame.size[0]) * frame.size[1]);
+    this->Compositing.Resolve({ 0, 0, frame.size[0], frame.size[1] },
+      static_cast<const float*>(nullptr), image.data(), frame.threads);
+    times.composite += SecondsSince(start);
+    const CompositorStats& part = this->Compositing.Stats();
+    stats.fans += part.fans;
+    stats.binEntries += part.binEntries;
+    stats.triangles += part.triangles;
+    stats.fragments += part.fragments;
+    stats.tiles += part.tiles;
+    stats.binSeconds += part.binSeconds;
+    stats.rasterSeconds += part.rasterSeconds;
+  }
+  this->LastStats = stats;
+  start = Clock::now();
+  const bool uploaded = frame.peel->UploadColours(
+    frame.window, this->PeelColours[0].data(), this->PeelColours[1].data(), this->ErrorMessage);
+  times.upload += SecondsSince(start);
+  return uploaded;
+}
+
+void CPUBackend::Composite(const BackendFrame& frame, BackendTimes& times, const float* ranges)
 {
   CompositeSettings& settings = this->Settings;
   settings = CompositeSettings{};
@@ -194,7 +235,9 @@ void CPUBackend::Composite(const BackendFrame& frame, BackendTimes& times)
   settings.height = frame.imageSize[1];
   settings.transferFunction = frame.tables->Table();
   settings.unitDistance = frame.unitDistance;
-  settings.opaqueDepth = this->Depth.empty() ? nullptr : this->Depth.data();
+  settings.opaqueDepth = this->Depth.empty() || ranges ? nullptr : this->Depth.data();
+  settings.depthRange = ranges;
+  settings.clipping = frame.clipping;
   settings.vertexColours = frame.vertexColours;
   if (frame.shading == Shading::PreIntegrated && !frame.vertexColours)
   {

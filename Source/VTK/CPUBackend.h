@@ -57,6 +57,7 @@ public:
   bool SamplesPixelCentresOnly(const BackendFrame& frame) const override;
   int SampledImageLimit(vtkOpenGLRenderWindow* window) override;
   bool Draw(const BackendFrame& frame, BackendTimes& times) override;
+  bool DrawPeel(const BackendFrame& frame, BackendTimes& times) override;
   void ReleaseGraphicsResources(vtkWindow* window) override;
 
   /// The compositor's work in the last Draw (zero counts when it reused its image).
@@ -94,7 +95,8 @@ private:
   bool ReadDepth(const BackendFrame& frame);
   /// The captured colour of `region` (viewport pixels) into Below.
   bool ReadColour(const BackendFrame& frame, const PixelRegion& region);
-  void Composite(const BackendFrame& frame, BackendTimes& times);
+  /// The frame's image; with `ranges` (depth peeling) each fragment clipped to its pixel's.
+  void Composite(const BackendFrame& frame, BackendTimes& times, const float* ranges = nullptr);
   /// Writes the viewport pixels of `target`: the image's `region` composited (and for a
   /// sampled image magnified) over Below.
   bool WriteBack(const BackendFrame& frame, const PixelRegion& region, const PixelRegion& target,
@@ -109,8 +111,9 @@ private:
   ImageKey Kept;
   std::vector<float> KeptDepth; ///< the opaque depth the kept image was composited with
   std::vector<float> Depth;     ///< this frame's opaque depth (empty: nothing opaque)
-  std::vector<float> ViewportDepth; ///< of the viewport, when the image is sampled
-  std::vector<float> Sampled;       ///< the touched region of a sampled image, premultiplied
+  std::vector<float> PeelRanges[2], PeelColours[2]; ///< depth peeling: front, back
+  std::vector<float> ViewportDepth;                 ///< of the viewport, when the image is sampled
+  std::vector<float> Sampled; ///< the touched region of a sampled image, premultiplied
   BlendTarget Target;
   vtkNew<vtkTextureObject> Image;
   std::vector<std::uint8_t> Below, Region; ///< of the touched region

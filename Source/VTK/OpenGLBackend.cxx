@@ -2,6 +2,7 @@
 #include "OpenGLBackend.h"
 
 #include "TransferFunctionTables.h"
+#include "VolumetricPeel.h"
 #include "vtkMTPTTetrahedraFS.h"
 #include "vtkMTPTTetrahedraVS.h"
 
@@ -143,6 +144,45 @@ void OpenGLBackend::SetUniforms(const BackendFrame& frame, vtkShaderProgram* pro
   program->SetUniform2f("rayScale", rayScale);
   program->SetUniform2f("rayShift", rayShift);
   program->SetUniformf("inverseUnitDistance", static_cast<float>(1.0 / frame.unitDistance));
+  program->SetUniformi("peelRanges", frame.peel ? 1 : 0);
+  if (frame.peel)
+  {
+    program->SetUniformi("peelFront", frame.peel->Ranges(0)->GetTextureUnit());
+    program->SetUniformi("peelBack", frame.peel->Ranges(1)->GetTextureUnit());
+    const DepthClipping& clipping = frame.clipping;
+    program->SetUniformi("depthPerspective", clipping.perspective ? 1 : 0);
+    program->SetUniformf("depthA", static_cast<float>(clipping.a));
+    program->SetUniformf("depthB", static_cast<float>(clipping.b));
+    const float size[2] = { static_cast<float>(frame.size[0]), static_cast<float>(frame.size[1]) };
+    program->SetUniform2f("viewportSize", size);
+  }
+}
+
+bool OpenGLBackend::DrawPeel(const BackendFrame& frame, BackendTimes& times)
+{
+  this->ErrorMessage.clear();
+  TakeOpenGLErrors(); // errors left by others are not this backend's to report
+  vtkShaderProgram* program = this->ReadyProgram(frame.window);
+  if (!program)
+  {
+    this->ErrorMessage = "could not compile the MTPT shaders";
+    return false;
+  }
+  this->UploadTables(frame);
+  if (!frame.peel->BindColourTarget(frame.window, this->ErrorMessage))
+  {
+    return false;
+  }
+  this->FloatTargetUsed = this->SampledTargetUsed = false;
+  this->PeelTargetUsed = true;
+  frame.peel->Ranges(0)->Activate();
+  frame.peel->Ranges(1)->Activate();
+  const bool drawn = this->DrawBatches(frame, program, times);
+  frame.peel->Ranges(0)->Deactivate();
+  frame.peel->Ranges(1)->Deactivate();
+  this->PeelTargetUsed = false;
+  frame.peel->UnbindColourTarget(frame.window);
+  return drawn;
 }
 
 bool OpenGLBackend::Draw(const BackendFrame& frame, BackendTimes& times)
@@ -225,16 +265,29 @@ bool OpenGLBackend::DrawBatches(
   vtkOpenGLState::ScopedglEnableDisable cull(state, GL_CULL_FACE);
   vtkOpenGLState::ScopedglViewport viewport(state);
   vtkOpenGLState::ScopedglScissor scissor(state);
-  if (this->SampledTargetUsed || this->FloatTargetUsed)
+  if (this->SampledTargetUsed || this->FloatTargetUsed || this->PeelTargetUsed)
   {
     const int* size = this->SampledTargetUsed ? frame.imageSize : frame.size;
     state->vtkglViewport(0, 0, size[0], size[1]);
     state->vtkglScissor(0, 0, size[0], size[1]);
   }
+  // A peeling pass may have left another blend equation (GL_MAX).
+  GLint equation[2] = { GL_FUNC_ADD, GL_FUNC_ADD };
+  glGetIntegerv(GL_BLEND_EQUATION_RGB, &equation[0]);
+  glGetIntegerv(GL_BLEND_EQUATION_ALPHA, &equation[1]);
+  state->vtkglBlendEquationSeparate(GL_FUNC_ADD, GL_FUNC_ADD);
   // VTK's PT state: depth test against opaque geometry without depth writes, back-to-front
-  // "over" blending of non-premultiplied colour.
+  // "over" blending of non-premultiplied colour. A peel's ranges end at the opaque depth
+  // already, and its target has no depth.
   state->vtkglDepthMask(GL_FALSE);
-  state->vtkglEnable(GL_DEPTH_TEST);
+  if (this->PeelTargetUsed)
+  {
+    state->vtkglDisable(GL_DEPTH_TEST);
+  }
+  else
+  {
+    state->vtkglEnable(GL_DEPTH_TEST);
+  }
   state->vtkglEnable(GL_BLEND);
   state->vtkglDisable(GL_CULL_FACE);
   state->vtkglBlendFuncSeparate(
@@ -272,6 +325,8 @@ bool OpenGLBackend::DrawBatches(
   this->TransferFunction->Deactivate();
   this->IntegralsHigh->Deactivate();
   this->IntegralsLow->Deactivate();
+  state->vtkglBlendEquationSeparate(
+    static_cast<GLenum>(equation[0]), static_cast<GLenum>(equation[1]));
   return drawn;
 }
 

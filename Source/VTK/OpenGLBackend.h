@@ -51,6 +51,7 @@ public:
   bool SamplesPixelCentresOnly(const BackendFrame& frame) const override;
   int SampledImageLimit(vtkOpenGLRenderWindow* window) override;
   bool Draw(const BackendFrame& frame, BackendTimes& times) override;
+  bool DrawPeel(const BackendFrame& frame, BackendTimes& times) override;
   void ReleaseGraphicsResources(vtkWindow* window) override;
 
   /// Whether the last Draw blended in a float target (false: in the window's framebuffer).
@@ -86,6 +87,7 @@ private:
   std::uint64_t UploadedTables = 0;  ///< TransferFunctionTables::Version() in the textures
   bool FloatTargetFailed = false;    ///< no float target in this context: do not retry
   bool FloatTargetUsed = false;
+  bool PeelTargetUsed = false;      ///< DrawBatches draws into the peel's colour target
   bool SampledTargetFailed = false; ///< no sampled target in this context: do not retry
   bool SampledTargetUsed = false;
   int MaxTargetSize = 0; ///< of this context: the largest texture and viewport (0: not asked)

@@ -35,6 +35,7 @@ namespace mtpt
 
 class FramePipeline;
 class TransferFunctionTables;
+class VolumetricPeel;
 
 /// What a backend needs to draw one frame that FramePipeline::Prepare has sorted.
 struct BackendFrame
@@ -56,11 +57,19 @@ struct BackendFrame
   /// VTK-compatibly whatever `shading` says; the tables are not read.
   bool vertexColours = false;
   PerspectiveInterpolation interpolation; ///< of this frame's projection
-  double unitDistance = 1.0;              ///< ScalarOpacityUnitDistance, positive
-  std::size_t batchSize = 1;              ///< tetrahedra decomposed per batch (>= 1)
-  int threads = 0;                        ///< OpenMP threads (<= 0: the default)
-  bool floatFramebuffer = true;           ///< blend in a float target (OpenGL backend)
-  bool synchronizedTiming = false;        ///< glFinish after upload and draw
+  /**
+   * Depth peeling: this frame is one peel of a pass that peels volumes (VolumetricPeel,
+   * which has recorded the ranges asked for); the backend composites the volume over each
+   * pixel's two ranges into the peel's colour target (DrawPeel), each fragment clipped with
+   * `clipping`. Null: an ordinary frame.
+   */
+  VolumetricPeel* peel = nullptr;
+  DepthClipping clipping;          ///< of this frame's projection
+  double unitDistance = 1.0;       ///< ScalarOpacityUnitDistance, positive
+  std::size_t batchSize = 1;       ///< tetrahedra decomposed per batch (>= 1)
+  int threads = 0;                 ///< OpenMP threads (<= 0: the default)
+  bool floatFramebuffer = true;    ///< blend in a float target (OpenGL backend)
+  bool synchronizedTiming = false; ///< glFinish after upload and draw
   /**
    * Called after each batch with the fraction of the sorted tetrahedra drawn so far;
    * returning false stops the frame there (what was drawn stays). Empty: never stops.
@@ -110,6 +119,14 @@ public:
    * before the backend wrote to it (the CPU backend checks every read before it writes).
    */
   virtual bool Draw(const BackendFrame& frame, BackendTimes& times) = 0;
+
+  /**
+   * Depth peeling (frame.peel): composites the volume over the peel's recorded ranges into
+   * its colour target, each fragment's segment clipped to its pixel's range. Writes nothing
+   * to the pass's own targets (VolumetricPeel::Answer does). Returns false with a message
+   * in Error() when OpenGL failed.
+   */
+  virtual bool DrawPeel(const BackendFrame& frame, BackendTimes& times) = 0;
 
   /// Frees the OpenGL objects; `window` is the window whose context owns them, current.
   virtual void ReleaseGraphicsResources(vtkWindow* window) = 0;

@@ -10,6 +10,13 @@
 #include "mtpt/ReferenceRenderer.h"
 
 #include "vtkAbstractVolumeMapper.h"
+#include "vtkActor.h"
+#include "vtkActorCollection.h"
+#include "vtkCellArray.h"
+#include "vtkMapper.h"
+#include "vtkPolyData.h"
+#include "vtkProperty.h"
+#include "vtkTriangleFilter.h"
 #include "vtkAppendFilter.h"
 #include "vtkCamera.h"
 #include "vtkDataObjectTree.h"
@@ -199,6 +206,77 @@ bool ConvertTransferFunctions(vtkVolumeProperty* property, const double dataRang
 
 } // namespace
 
+namespace
+{
+
+/**
+ * The renderer's visible translucent actors (opacity strictly between 0 and 1) that draw
+ * polygonal data, as triangles in eye coordinates with the flat colour VTK draws them with
+ * when lighting is off: ambient * ambient colour + diffuse * diffuse colour, clamped.
+ * Returns the number of such actors whose lighting is on (not modelled).
+ */
+int TranslucentTriangles(vtkRenderer* renderer, std::vector<mtpt::ReferenceTriangle>& triangles)
+{
+  int lit = 0;
+  vtkMatrix4x4* view = renderer->GetActiveCamera()->GetModelViewTransformMatrix();
+  vtkActorCollection* actors = renderer->GetActors();
+  vtkCollectionSimpleIterator it;
+  actors->InitTraversal(it);
+  while (vtkActor* actor = actors->GetNextActor(it))
+  {
+    vtkProperty* p = actor->GetProperty();
+    auto* poly = vtkPolyData::SafeDownCast(
+      actor->GetMapper() ? actor->GetMapper()->GetInputAsDataSet() : nullptr);
+    const double opacity = p->GetOpacity();
+    if (!actor->GetVisibility() || !poly || !(opacity > 0.0 && opacity < 1.0))
+    {
+      continue;
+    }
+    lit += p->GetLighting() ? 1 : 0;
+    vtkNew<vtkTriangleFilter> split;
+    split->SetInputData(poly);
+    split->PassVertsOff();
+    split->PassLinesOff();
+    split->Update();
+    vtkNew<vtkMatrix4x4> toEye;
+    vtkMatrix4x4::Multiply4x4(view, actor->GetMatrix(), toEye);
+    double ambient[3], diffuse[3];
+    p->GetAmbientColor(ambient);
+    p->GetDiffuseColor(diffuse);
+    mtpt::ReferenceTriangle t{};
+    for (int c = 0; c < 3; ++c)
+    {
+      t.rgb[c] = std::min(1.0, p->GetAmbient() * ambient[c] + p->GetDiffuse() * diffuse[c]);
+    }
+    t.opacity = opacity;
+    vtkPolyData* out = split->GetOutput();
+    vtkIdType n = 0;
+    const vtkIdType* ids = nullptr;
+    vtkCellArray* polys = out->GetPolys();
+    for (polys->InitTraversal(); polys->GetNextCell(n, ids);)
+    {
+      for (int k = 0; k < 3 && n == 3; ++k)
+      {
+        double model[4] = { 0, 0, 0, 1 }, eye[4];
+        out->GetPoint(ids[k], model);
+        model[3] = 1.0;
+        toEye->MultiplyPoint(model, eye);
+        for (int d = 0; d < 3; ++d)
+        {
+          t.eye[k][d] = eye[d] / eye[3];
+        }
+      }
+      if (n == 3)
+      {
+        triangles.push_back(t);
+      }
+    }
+  }
+  return lit;
+}
+
+} // namespace
+
 bool vtkMTPTReferenceRenderer::CheckScene(
   vtkRenderer* renderer, vtkVolume* volume, vtkUnstructuredGridBase*& input, int size[2])
 {
@@ -296,6 +374,11 @@ bool vtkMTPTReferenceRenderer::Render(
   this->ExactTransferFunctions =
     ConvertTransferFunctions(property, dataRange, this->TransferFunctionSamples, settings);
   mtpt::ViewMatrices(renderer, volume, settings.modelView, settings.projection);
+  if (const int lit = TranslucentTriangles(renderer, settings.triangles))
+  {
+    vtkWarningMacro(<< lit << " translucent actor(s) have lighting on; the reference draws "
+                    << "them with their flat colour (lighting off)");
+  }
   settings.width = size[0];
   settings.height = size[1];
   settings.unitDistance = mtpt::UnitDistance(property);

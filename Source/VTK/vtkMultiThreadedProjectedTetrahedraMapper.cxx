@@ -7,6 +7,7 @@
 #include "OpenGLBackend.h"
 #include "TransferFunctionTables.h"
 #include "VolumeInput.h"
+#include "VolumetricPeel.h"
 
 #include "mtpt/FramePipeline.h"
 #include "mtpt/ImageSampling.h"
@@ -93,6 +94,10 @@ public:
   mtpt::TransferFunctionTables Tables;
   mtpt::DependentColours Colours; ///< of dependent components
   bool Dependent = false;         ///< the last input has dependent components
+  mtpt::VolumetricPeel Peel;
+  /// The pass peeling volumes this frame (depth peeling for volumes), and the volume drawn.
+  vtkOpenGLRenderPass* PeelPass = nullptr;
+  vtkVolume* PeelVolume = nullptr;
   mtpt::OpenGLBackend OpenGL;
   mtpt::CPUBackend CPU;
 
@@ -464,6 +469,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::ReleaseGraphicsResources(vtkWind
   Internals& in = *this->Internal;
   in.OpenGL.ReleaseGraphicsResources(window);
   in.CPU.ReleaseGraphicsResources(window);
+  in.Peel.ReleaseGraphicsResources(window);
   in.SoftwareRenderer = -1;
   in.LastWindow = nullptr;
   in.ForgetOpenGLReports();
@@ -629,8 +635,8 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
   this->StoreRenderTime(renderer, volume, this->TimeToDraw);
 }
 
-bool vtkMultiThreadedProjectedTetrahedraMapper::DrawPrepared(vtkRenderer* renderer,
-  vtkVolume* volume, vtkOpenGLRenderWindow* window, mtpt::FrameInput& frame)
+bool vtkMultiThreadedProjectedTetrahedraMapper::DrawPrepared(
+  vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window, mtpt::FrameInput& frame)
 {
   Internals& in = *this->Internal;
   mtpt::BackendFrame draw;
@@ -675,6 +681,18 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetUpFrame(vtkRenderer* renderer
   draw.window = window;
   draw.floatFramebuffer = this->UseFloatingPointFrameBuffer;
   this->ChooseImageSize(backend, window, draw);
+  // Inside a depth-peeling pass's peel loop: the pass's targets are the viewport's size at
+  // the origin, and the volume is composited at that size (no image sample distance).
+  in.PeelPass = mtpt::VolumetricPeel::ActivePass(volume, this);
+  in.PeelVolume = volume;
+  if (in.PeelPass)
+  {
+    draw.peel = &in.Peel;
+    draw.origin[0] = draw.origin[1] = 0;
+    draw.imageSize[0] = draw.size[0];
+    draw.imageSize[1] = draw.size[1];
+  }
+  draw.clipping = mtpt::DepthClipping::FromProjection(frame.projection);
   if (this->CullInvisibleCells)
   {
     // Cells the opacity function hides are culled (exact: see mtpt/Culling.h), and cells
@@ -783,7 +801,19 @@ void vtkMultiThreadedProjectedTetrahedraMapper::DrawFrame(
   const std::size_t sorted = in.Pipeline.SortedCount();
   draw.batchSize =
     this->BatchSize > 0 ? std::min(sorted, static_cast<std::size_t>(this->BatchSize)) : sorted;
-  const bool drawn = backend->Draw(draw, in.Times);
+  auto run = [&draw, &in](mtpt::RenderBackend* b)
+  { return draw.peel ? b->DrawPeel(draw, in.Times) : b->Draw(draw, in.Times); };
+  std::string peelError;
+  if (draw.peel &&
+    !in.Peel.RecordRanges(draw.window, in.PeelPass, this, in.PeelVolume, draw.size, peelError))
+  {
+    if (in.ReportOpenGL(peelError))
+    {
+      vtkErrorMacro(<< "depth peeling: " << peelError);
+    }
+    return;
+  }
+  bool drawn = run(backend);
   if (!in.OpenGL.Warning().empty() && in.ReportOpenGL(in.OpenGL.Warning()))
   {
     vtkWarningMacro(<< in.OpenGL.Warning());
@@ -801,13 +831,21 @@ void vtkMultiThreadedProjectedTetrahedraMapper::DrawFrame(
     {
       in.LastBackend = OPENGL_BACKEND;
       in.Times = mtpt::BackendTimes{};
-      if (!in.OpenGL.Draw(draw, in.Times) && in.ReportOpenGL(in.OpenGL.Error()))
+      drawn = run(&in.OpenGL);
+      if (!drawn && in.ReportOpenGL(in.OpenGL.Error()))
       {
         vtkErrorMacro(<< "the OpenGL backend failed too: " << in.OpenGL.Error());
       }
     }
   }
   in.Stopped = in.Times.stopped;
+  // A peel's answer goes into the pass's targets even when stopped: what was composited.
+  if (draw.peel && drawn &&
+    !in.Peel.Answer(draw.window, in.PeelPass, this, in.PeelVolume, peelError) &&
+    in.ReportOpenGL(peelError))
+  {
+    vtkErrorMacro(<< "depth peeling: " << peelError);
+  }
 }
 
 void vtkMultiThreadedProjectedTetrahedraMapper::PrintSelf(ostream& os, vtkIndent indent)

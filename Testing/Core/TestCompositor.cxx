@@ -307,6 +307,109 @@ TEST(Compositor, CullingCellsThatCoverNoPixelChangesNothing)
   }
 }
 
+/// A jittered grid composited through fans with `settings` (its image: premultiplied RGBA).
+std::vector<float> CompositeFans(mtpt::FramePipeline& pipeline, const mtpt::CompositeSettings& s)
+{
+  pipeline.DecomposeFans(0, pipeline.SortedCount(), 2);
+  mtpt::Compositor compositor;
+  compositor.Begin(s);
+  compositor.Composite(pipeline.Fans().data(), pipeline.FanCount(), 2);
+  std::vector<float> rgba(4 * static_cast<std::size_t>(s.width) * s.height);
+  compositor.Resolve(
+    { 0, 0, s.width, s.height }, static_cast<const float*>(nullptr), rgba.data(), 2);
+  return rgba;
+}
+
+TEST(Compositor, DepthRangesSplitSegmentsExactly)
+{
+  // Depth peeling composites the volume between two window depths per pixel. The whole
+  // range [0, 1] must give the unclipped image, and the part in front of a depth composited
+  // over the part behind it must give it too: segments are cut where the depth crosses them,
+  // with the length (and in pre-integrated shading the scalars) of each part.
+  const mtpt::test::TetMesh mesh = mtpt::test::JitteredGrid(10, 9);
+  std::vector<float> table;
+  for (int i = 0; i < 64; ++i)
+  {
+    const float t = i / 63.0f;
+    table.insert(table.end(), { t, 1 - t, 0.5f, 3.0f * t * t });
+  }
+  const int w = 72, h = 60;
+  mtpt::PreIntegrationTable integrals;
+  for (bool perspective : { false, true })
+  {
+    mtpt::FrameInput input;
+    input.points = mesh.Points();
+    input.cells = mesh.Cells();
+    input.scalars = { mesh.scalars.data(), mtpt::ScalarsView::Association::Points };
+    input.modelView = mtpt::test::LookAt({ 1.2, 1.5, 3.5 }, { 0, 0, 0 }, { 0, 1, 0 });
+    input.projection = perspective ? mtpt::test::Perspective(45, 1.2, 1.5, 6)
+                                   : mtpt::test::Ortho(-1.8, 1.8, -1.5, 1.5, 1.5, 6);
+    input.perspective = perspective;
+    mtpt::FramePipeline pipeline;
+    ASSERT_TRUE(pipeline.Prepare(input, 2));
+    for (auto shading : { mtpt::Shading::VTKCompatible, mtpt::Shading::PreIntegrated })
+    {
+      SCOPED_TRACE(::testing::Message()
+        << (perspective ? "perspective" : "orthographic")
+        << (shading == mtpt::Shading::PreIntegrated ? ", pre-integrated" : ""));
+      auto s = Settings(w, h, table);
+      s.transferFunction.low = -1.0;
+      s.transferFunction.high = 2.0;
+      s.unitDistance = 0.5;
+      integrals.Build(s.transferFunction);
+      if (shading == mtpt::Shading::PreIntegrated)
+      {
+        s.UsePreIntegration(
+          integrals, mtpt::PerspectiveInterpolation::FromProjection(input.projection));
+      }
+      const std::vector<float> whole = CompositeFans(pipeline, s);
+      s.clipping = mtpt::DepthClipping::FromProjection(input.projection);
+      // The window depth of the mesh's centre splits it in two.
+      const double eyeZ = -mtpt::test::Apply(input.modelView, { 0, 0, 0 })[2];
+      const mtpt::test::Vec3 centre = mtpt::test::Apply(input.projection, { 0, 0, -eyeZ });
+      const float middle = static_cast<float>(0.5 * (centre[2] + 1.0));
+      std::vector<float> ranges(2 * w * h), front, back, all, none;
+      auto fill = [&](float nearDepth, float farDepth)
+      {
+        for (int i = 0; i < w * h; ++i)
+        {
+          ranges[2 * i] = nearDepth;
+          ranges[2 * i + 1] = farDepth;
+        }
+        s.depthRange = ranges.data();
+        return CompositeFans(pipeline, s);
+      };
+      all = fill(0.0f, 1.0f);
+      front = fill(0.0f, middle);
+      back = fill(middle, 1.0f);
+      none = fill(1.0f, 0.0f);
+      double worstAll = 0, worstSplit = 0, frontAlpha = 0, backAlpha = 0, wholeAlpha = 0;
+      for (int i = 0; i < w * h; ++i)
+      {
+        for (int c = 0; c < 4; ++c)
+        {
+          const float over = front[4 * i + c] + (1.0f - front[4 * i + 3]) * back[4 * i + c];
+          worstAll = std::max(worstAll, std::fabs(double(all[4 * i + c]) - whole[4 * i + c]));
+          worstSplit = std::max(worstSplit, std::fabs(double(over) - whole[4 * i + c]));
+          ASSERT_EQ(none[4 * i + c], 0.0f);
+        }
+        frontAlpha = std::max(frontAlpha, double(front[4 * i + 3]));
+        backAlpha = std::max(backAlpha, double(back[4 * i + 3]));
+        wholeAlpha = std::max(wholeAlpha, double(whole[4 * i + 3]));
+      }
+      std::printf("whole range %.2g, split %.2g; largest alpha front %.2f back %.2f whole %.2f\n",
+        worstAll, worstSplit, frontAlpha, backAlpha, wholeAlpha);
+      EXPECT_GT(frontAlpha, 0.3);
+      EXPECT_GT(backAlpha, 0.3);
+      EXPECT_LT(worstAll, 2e-5);
+      // Split, the two parts are blended in the exact depth order at the cut, the whole in
+      // the centroid order, which is not exact for every pair of cells: measured 6.5e-4 and
+      // 8e-5 (VTK-compatible), 2.2e-3 and 2.3e-3 (pre-integrated, whose steps also differ).
+      EXPECT_LT(worstSplit, shading == mtpt::Shading::PreIntegrated ? 5e-3 : 2e-3);
+    }
+  }
+}
+
 } // namespace
 
 namespace

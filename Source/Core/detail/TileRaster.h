@@ -25,6 +25,8 @@ struct RasterFrame
   TransferFunctionTable transferFunction;
   const PreIntegrationTable* preIntegration = nullptr; ///< null: VTK-compatible shading
   bool vertexColours = false; ///< the records hold colours (CompositeSettings::vertexColours)
+  bool clipToRange = false;   ///< CompositeSettings::depthRange is set (TileTarget::range)
+  DepthClipping clipping;
   PerspectiveInterpolation interpolation;
   float inverseUnit = 1.0f; ///< 1 / ScalarOpacityUnitDistance
 };
@@ -37,6 +39,7 @@ struct TileTarget
   int width = 0, height = 0;    ///< its pixels inside the image
   float* rgba = nullptr;        ///< R, G, B, A planes of TileSize * TileSize floats
   const float* depth = nullptr; ///< opaque depth; null: none
+  const float* range = nullptr; ///< depth peeling: near and far window depth per pixel
 };
 
 /// Work counted while rasterizing.

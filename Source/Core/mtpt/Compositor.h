@@ -80,6 +80,16 @@ struct CompositeSettings
    * VTK-compatible with those colours whatever `shading` says; the table is not read.
    */
   bool vertexColours = false;
+  /**
+   * Depth peeling: per pixel a range of window depths, near then far (width * height pairs,
+   * row 0 at the bottom; near > far: none). Each fragment then contributes only the part of
+   * its segment inside its pixel's range (`clipping`), with the length and, in
+   * pre-integrated shading, the scalars of that part (VTK-compatible shading keeps the
+   * segment's colour and attenuation); the opaque depth is not read. Null: whole segments,
+   * kept when their front is not behind the opaque depth.
+   */
+  const float* depthRange = nullptr;
+  DepthClipping clipping;
 
   /// Switches to pre-integrated shading with `table` (the integral functions of
   /// transferFunction, kept alive by the caller) and the view's `interpolation`.

@@ -10,6 +10,8 @@
 
 #include "mtpt/MeshView.h"
 
+#include <cmath>
+
 namespace mtpt
 {
 
@@ -42,6 +44,65 @@ struct PerspectiveInterpolation
   /// From an OpenGL-style projection (row-major). A matrix whose last two rows depend on
   /// eye x or y (none that VTK builds) gives the orthographic (linear) default.
   static PerspectiveInterpolation FromProjection(const Matrix4& projection);
+};
+
+/**
+ * Depth peeling (Documentation/algorithm.md, "Translucent geometry and depth peeling"): a
+ * fragment contributes only the part of its ray segment between two window depths. Along
+ * one ray, eye depth (the distance along the view axis) is linear in the distance travelled,
+ * so the part is found in eye depth: window depth z_win maps to NDC z = 2 z_win - 1 and to
+ * eye depth D by 1 / D = a z_ndc + b in a perspective view and D = a z_ndc + b in an
+ * orthographic one; a segment of eye length L starting at eye depth D runs to
+ * D + L / |d|, with |d| the ray's eye length per unit of depth (PerspectiveInterpolation;
+ * 1 in orthographic views).
+ */
+struct DepthClipping
+{
+  bool perspective = false;
+  double a = 1.0, b = 0.0;
+  PerspectiveInterpolation ray; ///< the eye ray per unit depth at a pixel (perspective)
+
+  /// From an OpenGL-style projection (row-major), perspective or orthographic.
+  static DepthClipping FromProjection(const Matrix4& projection);
+
+  /// Eye depth at window depth `windowDepth`.
+  double EyeDepth(double windowDepth) const
+  {
+    const double ndc = 2.0 * windowDepth - 1.0;
+    return this->perspective ? 1.0 / (this->a * ndc + this->b) : this->a * ndc + this->b;
+  }
+
+  /// The eye length per unit of eye depth of the ray through NDC (x, y).
+  double RayLength(double x, double y) const
+  {
+    if (!this->perspective)
+    {
+      return 1.0;
+    }
+    const double rx = (x + this->ray.shiftX) * this->ray.scaleX;
+    const double ry = (y + this->ray.shiftY) * this->ray.scaleY;
+    return std::sqrt(1.0 + rx * rx + ry * ry);
+  }
+
+  /**
+   * The part [t0, t1] (fractions of the segment, 0 at its front) of a segment from eye depth
+   * `front` to `back` that lies between window depths `nearDepth` and `farDepth`; false
+   * when no part of positive length does.
+   */
+  bool Part(
+    double front, double back, float nearDepth, float farDepth, double& t0, double& t1) const
+  {
+    const double span = back - front;
+    if (!(span > 0.0) || !(nearDepth <= farDepth))
+    {
+      return false;
+    }
+    const double from = (this->EyeDepth(nearDepth) - front) / span;
+    const double to = (this->EyeDepth(farDepth) - front) / span;
+    t0 = from > 0.0 ? (from < 1.0 ? from : 1.0) : 0.0;
+    t1 = to > 0.0 ? (to < 1.0 ? to : 1.0) : 0.0;
+    return t1 > t0;
+  }
 };
 
 } // namespace mtpt

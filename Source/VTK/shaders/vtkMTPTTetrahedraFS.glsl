@@ -120,31 +120,107 @@ vec4 PreIntegrated(float ua, float ub, float len)
   return alpha > 0.0 ? vec4(colour / alpha, alpha) : vec4(0.0);
 }
 
-void main()
+// Depth peeling (mtpt::VolumetricPeel): the volume's parts between the window depths each
+// pixel's front and back range record (x start, y end, z 1 where the pass asked), composited
+// into two targets. Eye depth at window depth z: 1 / D = a z_ndc + b (perspective) or
+// D = a z_ndc + b (orthographic), mtpt::DepthClipping.
+uniform int peelRanges;
+uniform sampler2D peelFront;
+uniform sampler2D peelBack;
+uniform int depthPerspective;
+uniform float depthA;
+uniform float depthB;
+uniform vec2 viewportSize;
+uniform vec2 rayScale;
+uniform vec2 rayShift;
+
+float EyeDepth(float windowDepth)
 {
-  vec4 fragment;
+  float ndc = 2.0 * windowDepth - 1.0;
+  return depthPerspective == 1 ? 1.0 / (depthA * ndc + depthB) : depthA * ndc + depthB;
+}
+
+// The fragment's segment: eye depths of its front and back, eye length, and the scalars at
+// its ends (table entry units; pre-integrated shading).
+struct FragmentSegment
+{
+  float front, back, len, scalarFront, scalarBack;
+};
+
+FragmentSegment SegmentOfFragment(bool depths)
+{
+  FragmentSegment s;
+  if (shadingMode == 1 && perspectiveExact == 1)
+  {
+    // Front and back faces are planes: their 1 / depth is affine in screen space.
+    s.front = 1.0 / exactFrontBack.y;
+    s.back = 1.0 / exactFrontBack.w;
+    s.len = max(0.0, s.back - s.front) * sqrt(1.0 + dot(exactRay, exactRay));
+    s.scalarFront = exactFrontBack.x / exactFrontBack.y;
+    s.scalarBack = exactFrontBack.z / exactFrontBack.w;
+    return s;
+  }
+  s.len = preIntegration.z;
+  s.scalarFront = preIntegration.x;
+  s.scalarBack = preIntegration.y;
+  s.front = 0.0;
+  s.back = 0.0;
+  if (!depths)
+  {
+    return s;
+  }
+  s.front = EyeDepth(gl_FragCoord.z);
+  float rayLength = 1.0;
+  if (depthPerspective == 1)
+  {
+    vec2 ray = (gl_FragCoord.xy / viewportSize * 2.0 - 1.0 + rayShift) * rayScale;
+    rayLength = sqrt(1.0 + dot(ray, ray));
+  }
+  s.back = s.front + s.len / rayLength;
+  return s;
+}
+
+// The fragment of the part [t0, t1] of the segment (fractions from its front).
+vec4 ShadePart(FragmentSegment s, float t0, float t1)
+{
+  float len = t1 - t0 < 1.0 ? s.len * (t1 - t0) : s.len;
   if (shadingMode != 1)
   {
-    // VTK-compatible, from the table or the vertex colours. The exponential is taken per fragment: interpolating it per vertex would not match
-    // (the opacity of a segment is not linear in its length).
-    fragment =
-      vec4(classified.rgb, 1.0 - exp(-classified.a * preIntegration.z * inverseUnitDistance));
+    // VTK-compatible, from the table or the vertex colours. The exponential is taken per
+    // fragment: interpolating it per vertex would not match (the opacity of a segment is not
+    // linear in its length).
+    return vec4(classified.rgb, 1.0 - exp(-classified.a * len * inverseUnitDistance));
   }
-  else
+  float ds = s.scalarBack - s.scalarFront;
+  float a = t0 > 0.0 ? s.scalarFront + t0 * ds : s.scalarFront;
+  float b = t1 < 1.0 ? s.scalarFront + t1 * ds : s.scalarBack;
+  return PreIntegrated(a, b, len);
+}
+
+// The part of the segment inside the recorded range, or nothing.
+vec4 ShadeInRange(FragmentSegment s, vec4 range)
+{
+  float span = s.back - s.front;
+  if (range.z < 0.5 || !(span > 0.0))
   {
-    if (perspectiveExact == 1)
-    {
-      // Front and back faces are planes: their 1 / depth is affine in screen space.
-      float length = max(0.0, 1.0 / exactFrontBack.w - 1.0 / exactFrontBack.y) *
-        sqrt(1.0 + dot(exactRay, exactRay));
-      fragment = PreIntegrated(
-        exactFrontBack.x / exactFrontBack.y, exactFrontBack.z / exactFrontBack.w, length);
-    }
-    else
-    {
-      fragment = PreIntegrated(preIntegration.x, preIntegration.y, preIntegration.z);
-    }
+    return vec4(0.0);
   }
+  float t0 = clamp((EyeDepth(range.x) - s.front) / span, 0.0, 1.0);
+  float t1 = clamp((EyeDepth(range.y) - s.front) / span, 0.0, 1.0);
+  return t1 > t0 ? ShadePart(s, t0, t1) : vec4(0.0);
+}
+
+void main()
+{
+  FragmentSegment segment = SegmentOfFragment(peelRanges == 1);
+  if (peelRanges == 1)
+  {
+    ivec2 pixel = ivec2(gl_FragCoord.xy);
+    gl_FragData[0] = ShadeInRange(segment, texelFetch(peelFront, pixel, 0));
+    gl_FragData[1] = ShadeInRange(segment, texelFetch(peelBack, pixel, 0));
+    return;
+  }
+  vec4 fragment = ShadePart(segment, 0.0, 1.0);
   if (fragment.a <= 0.0)
   {
     discard;
