@@ -277,6 +277,26 @@ void Compositor::Rasterize(int threads)
       target.y0 = (tile / this->TilesX) * TileSize;
       target.width = std::min(TileSize, s.width - target.x0);
       target.height = std::min(TileSize, s.height - target.y0);
+      if (s.depthRange)
+      {
+        // Depth peeling: a tile where no pixel has a range to composite is left untouched.
+        bool asked = false;
+        for (int j = 0; j < target.height; ++j)
+        {
+          const float* row =
+            s.depthRange + 2 * (static_cast<std::size_t>(target.y0 + j) * s.width + target.x0);
+          std::copy(row, row + 2 * target.width, range.data() + 2 * j * TileSize);
+          for (int i = 0; i < target.width && !asked; ++i)
+          {
+            asked = row[2 * i] <= row[2 * i + 1];
+          }
+        }
+        if (!asked)
+        {
+          continue;
+        }
+        target.range = range.data();
+      }
       target.rgba = this->Tile(tile);
       if (s.opaqueDepth)
       {
@@ -286,16 +306,6 @@ void Compositor::Rasterize(int threads)
           std::copy(row + target.x0, row + target.x0 + target.width, depth.data() + j * TileSize);
         }
         target.depth = depth.data();
-      }
-      if (s.depthRange)
-      {
-        for (int j = 0; j < target.height; ++j)
-        {
-          const float* row =
-            s.depthRange + 2 * (static_cast<std::size_t>(target.y0 + j) * s.width + target.x0);
-          std::copy(row, row + 2 * target.width, range.data() + 2 * j * TileSize);
-        }
-        target.range = range.data();
       }
       detail::RasterCounts counts;
       const std::size_t first = this->TileStart[tile], end = this->TileStart[tile + 1];

@@ -951,8 +951,12 @@ void ShadeClipped(const RasterFrame& f, const TileTarget& tile, Mode mode, const
   const std::size_t lanes = hn::Lanes(SegmentTag());
   for (int x = lo - tile.x0; x <= hi - tile.x0; ++x)
   {
-    const FragmentSegment s = SegmentAt(f, tile, mode, p, x, y);
     const float* range = tile.range + 2 * (static_cast<std::size_t>(y - tile.y0) * T + x);
+    if (!(range[0] <= range[1]))
+    {
+      continue; // no range asked at this pixel
+    }
+    const FragmentSegment s = SegmentAt(f, tile, mode, p, x, y);
     double t0, t1;
     if (s.z < -1.0 || s.z > 1.0 || !f.clipping.Part(s.front, s.back, range[0], range[1], t0, t1))
     {

@@ -383,6 +383,22 @@ TEST(Compositor, DepthRangesSplitSegmentsExactly)
       front = fill(0.0f, middle);
       back = fill(middle, 1.0f);
       none = fill(1.0f, 0.0f);
+      // Ranges asked only left of column 40: the pixels asked are the whole image's, the
+      // others and the tile right of column 64, where none is asked, stay empty.
+      for (int i = 0; i < w * h; ++i)
+      {
+        ranges[2 * i] = i % w < 40 ? 0.0f : 1.0f;
+        ranges[2 * i + 1] = i % w < 40 ? 1.0f : 0.0f;
+      }
+      const std::vector<float> left = CompositeFans(pipeline, s);
+      for (int i = 0; i < w * h; ++i)
+      {
+        for (int c = 0; c < 4; ++c)
+        {
+          ASSERT_NEAR(left[4 * i + c], i % w < 40 ? all[4 * i + c] : 0.0f, 1e-6f)
+            << "pixel " << i % w << ", " << i / w;
+        }
+      }
       double worstAll = 0, worstSplit = 0, frontAlpha = 0, backAlpha = 0, wholeAlpha = 0;
       for (int i = 0; i < w * h; ++i)
       {
