@@ -3,16 +3,19 @@
 #   1. pvpython and 2. pvbatch load the plugin, show the blunt-fin mesh as the representation
 #      "Multi-threaded projected tetra" and compare the image with ParaView's own
 #      "Projected tetra" of the same view, then change each mapper setting by its property;
-#   3. pvbatch on 2 MPI ranks: the mesh redistributed over the ranks (each must hold cells),
+#   3. pvpython: a translucent sphere in front of, behind and inside the mesh, the view
+#      depth-peeling volumes: the picture against the composite of its layers, both backends;
+#   4. pvbatch on 2 MPI ranks: the mesh redistributed over the ranks (each must hold cells),
 #      drawn by the mapper on each and blended by ParaView's ordered compositing, compared
 #      with the same script's image from 1 rank;
-#   4. client-server: pvpython connected to a 2-rank pvserver, the plugin loaded on both
+#   5. client-server: pvpython connected to a 2-rank pvserver, the plugin loaded on both
 #      sides, compared with the same 1-rank image.
 # Prints the figures (RMSE in [0,1] RGB) and exits non-zero on any failure.
 #
 # Usage: scripts/plugin.sh [build-dir]   (default: build-plugin)
 # Needs the packages of scripts/install-deps.sh (paraview, paraview-dev, openmpi-bin, xvfb).
-# MTPT_UPDATE_SCREENSHOT=1 also copies the pvpython image to Documentation/paraview_plugin.png.
+# MTPT_UPDATE_SCREENSHOT=1 also copies the pvpython image to Documentation/paraview_plugin.png
+# and the depth-peeling test's sphere inside the mesh to Documentation/paraview_peeling.png.
 #
 # python3-paraview (pvpython, and the paraview Python package that pvbatch runs) conflicts
 # with python3-vtk9, which Debian's VTK 9.1 (libvtk9-dev, the main build) needs, and
@@ -110,6 +113,7 @@ step() { # step NAME COMMAND...: runs a test, keeps its output in NAME.log, stop
 
 step pvpython "$pvpython" "$tests/test_plugin_render.py" "$plugin" "$data" "$out" pvpython
 step pvbatch "$pvbatch" "$tests/test_plugin_render.py" "$plugin" "$data" "$out" pvbatch
+step peeling "$pvpython" "$tests/test_plugin_peeling.py" "$plugin" "$data" "$out" peeling
 step pvbatch_1rank "$pvbatch" "$tests/test_plugin_parallel.py" "$plugin" "$data" "$out" \
   parallel_1rank
 step pvbatch_2ranks timeout 500 mpiexec --allow-run-as-root --oversubscribe -n 2 \
@@ -120,10 +124,12 @@ step pvserver_2ranks "$tests/client_server.sh" "$pvpython" "$plugin" "$data" "$o
 
 if [ "${MTPT_UPDATE_SCREENSHOT:-0}" = 1 ]; then
   cp "$out/pvpython_mtpt.png" "$here/Documentation/paraview_plugin.png"
+  cp "$out/peeling_inside_cpu_fxaa.png" "$here/Documentation/paraview_peeling.png"
 fi
 
 echo "plugin.sh: figures"
-grep -h -E 'RMSE [0-9]' "$out"/pvpython.log "$out"/pvbatch.log "$out"/pvbatch_2ranks.log \
+grep -h -E 'RMSE [0-9]' "$out"/pvpython.log "$out"/pvbatch.log "$out"/peeling.log \
+  "$out"/pvbatch_2ranks.log \
   "$out"/pvserver_2ranks.log \
   | grep -v -E '^(PASS|FAIL)' | sed 's/^/  /' || true
 echo "plugin.sh: all plugin tests passed (images in $out)"

@@ -31,6 +31,11 @@ def arguments(names):
     return dict(zip(names, args))
 
 
+def output_path(args, suffix):
+    """OUTPUT_DIR/NAME_suffix.png, from the arguments of a test script."""
+    return os.path.join(args["OUTPUT_DIR"], "%s_%s.png" % (args["NAME"], suffix))
+
+
 def load_plugin(path):
     """Loads the plugin (pvbatch with MPI: on every rank) and checks that the new
     representation type is known."""
