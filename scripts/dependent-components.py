@@ -13,20 +13,15 @@ import argparse
 import math
 
 from vtkmodules.vtkCommonCore import vtkFloatArray, vtkUnsignedCharArray
-from vtkmodules.vtkCommonDataModel import vtkPiecewiseFunction, vtkUnstructuredGrid
-
-from vtkmodules.vtkFiltersGeneral import vtkDataSetTriangleFilter
-from vtkmodules.vtkImagingCore import vtkRTAnalyticSource
-from vtkmodules.vtkIOImage import vtkPNGWriter
-from vtkmodules.vtkRenderingCore import (vtkColorTransferFunction, vtkRenderer,
-                                         vtkRenderWindow, vtkVolume, vtkVolumeProperty,
-                                         vtkWindowToImageFilter)
-from vtkmodules.vtkRenderingVolume import vtkProjectedTetrahedraMapper
+from vtkmodules.vtkCommonDataModel import vtkUnstructuredGrid
 from vtkmodules.vtkFiltersCore import vtkImageAppend
+from vtkmodules.vtkRenderingCore import vtkRenderer, vtkRenderWindow, vtkVolume
+from vtkmodules.vtkRenderingVolume import vtkProjectedTetrahedraMapper
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 (factory overrides)
 import vtkmodules.vtkRenderingVolumeOpenGL2  # noqa: F401
 
-from mtpt import vtkMTPTReferenceRenderer, vtkMultiThreadedProjectedTetrahedraMapper as Mapper
+from mtpt import vtkMultiThreadedProjectedTetrahedraMapper as Mapper
+import mtpt_figures as figures
 
 parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
 parser.add_argument("--size", type=int, default=256)
@@ -36,18 +31,6 @@ args = parser.parse_args()
 
 BACKGROUND = (0.1, 0.1, 0.2)
 VIEWS = ((30, 20), (210, -10), (100, 60))  # azimuth, elevation
-
-
-def wavelet():
-    source = vtkRTAnalyticSource()
-    e = args.extent
-    source.SetWholeExtent(-e, e, -e, e, -e, e)
-    tetra = vtkDataSetTriangleFilter()
-    tetra.SetInputConnection(source.GetOutputPort())
-    tetra.Update()
-    grid = vtkUnstructuredGrid()
-    grid.ShallowCopy(tetra.GetOutput())
-    return grid
 
 
 def with_components(grid, kind):
@@ -75,18 +58,9 @@ def with_components(grid, kind):
 
 
 def dependent_property():
-    color = vtkColorTransferFunction()
-    color.AddRGBPoint(0.0, 0.2, 0.3, 0.9)
-    color.AddRGBPoint(0.5, 0.95, 0.95, 0.6)
-    color.AddRGBPoint(1.0, 0.9, 0.2, 0.1)
-    opacity = vtkPiecewiseFunction()
-    opacity.AddPoint(0.0, 0.0)
-    opacity.AddPoint(0.4, 0.02)
-    opacity.AddPoint(1.0, 0.5)
-    prop = vtkVolumeProperty()
-    prop.SetColor(color)
-    prop.SetScalarOpacity(opacity)
-    prop.SetScalarOpacityUnitDistance(2.0)
+    prop = figures.volume_property(
+        colours=((0.0, 0.2, 0.3, 0.9), (0.5, 0.95, 0.95, 0.6), (1.0, 0.9, 0.2, 0.1)),
+        opacities=((0.0, 0.0), (0.4, 0.02), (1.0, 0.5)), unit_distance=2.0)
     prop.IndependentComponentsOff()
     return prop
 
@@ -112,60 +86,10 @@ def render(grid, mapper, view, multisamples=None):
     renderer.GetActiveCamera().OrthogonalizeViewUp()
     renderer.ResetCameraClippingRange()
     window.Render()
-    grab = vtkWindowToImageFilter()
-    grab.SetInput(window)
-    grab.SetInputBufferTypeToRGB()
-    grab.ReadFrontBufferOff()
-    grab.ShouldRerenderOff()
-    grab.Update()
-    image = grab.GetOutput()
-    return image, renderer, volume, window
+    return figures.grab(window), renderer, volume, window
 
 
-def reference(renderer, volume):
-    exact = vtkMTPTReferenceRenderer()
-    if not exact.Render(renderer, volume):
-        raise RuntimeError("no reference image")
-    values = exact.GetImage()
-    image = vtkUnsignedCharArray()
-    image.SetNumberOfComponents(3)
-    image.SetNumberOfTuples(values.GetNumberOfTuples())
-    for i in range(values.GetNumberOfTuples()):
-        image.SetTuple(i, [min(255, max(0, math.floor(255 * v + 0.5)))
-                           for v in values.GetTuple3(i)])
-    return image
-
-
-def pixels(image):
-    return image.GetPointData().GetScalars() if hasattr(image, "GetPointData") else image
-
-
-def difference(a, b):
-    """Covered-pixel RMSE and worst channel difference, in 0-255."""
-    a, b = pixels(a), pixels(b)
-    bg = [255 * c for c in BACKGROUND]
-    total, count, worst = 0.0, 0, 0.0
-    for i in range(a.GetNumberOfTuples()):
-        p, q = a.GetTuple3(i), b.GetTuple3(i)
-        if all(abs(p[k] - bg[k]) <= 2 and abs(q[k] - bg[k]) <= 2 for k in range(3)):
-            continue
-        count += 1
-        for k in range(3):
-            d = p[k] - q[k]
-            total += d * d
-            worst = max(worst, abs(d))
-    return math.sqrt(total / max(1, 3 * count)), worst
-
-
-def as_image(array):
-    from vtkmodules.vtkCommonDataModel import vtkImageData
-    image = vtkImageData()
-    image.SetDimensions(args.size, args.size, 1)
-    image.GetPointData().SetScalars(array)
-    return image
-
-
-grid = wavelet()
+_, grid = figures.wavelet(args.extent)
 print(f"tetrahedralized wavelet: {grid.GetNumberOfCells()} tetrahedra, {args.size}x{args.size}")
 rows = []
 for kind in ("rgba8", "two"):
@@ -178,15 +102,15 @@ for kind in ("rgba8", "two"):
             mapper.SetBackend(backend)
             ours, renderer, volume, window = render(data, mapper, view)
             if exact is None:
-                exact = as_image(reference(renderer, volume))
+                exact = figures.reference(renderer, volume)
             name = "gl" if backend == Mapper.OPENGL_BACKEND else "cpu"
-            vtk_rmse, vtk_worst = difference(ours, theirs)
-            ref_rmse, ref_worst = difference(ours, exact)
+            vtk_rmse, vtk_worst = figures.difference(ours, theirs, BACKGROUND, 255)
+            ref_rmse, ref_worst = figures.difference(ours, exact, BACKGROUND, 255)
             print(f"{kind:5s} view {v} {name:3s}: against VTK's PT RMSE {vtk_rmse:5.2f} worst "
                   f"{vtk_worst:3.0f}; against the reference RMSE {ref_rmse:5.2f} worst "
                   f"{ref_worst:3.0f} (of 255)")
             if v == 0 and backend == Mapper.CPU_BACKEND:
-                pt_rmse, pt_worst = difference(theirs, exact)
+                pt_rmse, pt_worst = figures.difference(theirs, exact, BACKGROUND, 255)
                 print(f"{kind:5s} view 0 VTK's PT against the reference RMSE {pt_rmse:5.2f} "
                       f"worst {pt_worst:3.0f}")
                 row = vtkImageAppend()
@@ -196,14 +120,6 @@ for kind in ("rgba8", "two"):
                 row.Update()
                 rows.append(row.GetOutput())
             mapper.ReleaseGraphicsResources(window)
-picture = vtkImageAppend()
-picture.SetAppendAxis(1)
-for row in reversed(rows):  # first case on top
-    picture.AddInputData(row)
-picture.Update()
-writer = vtkPNGWriter()
-writer.SetFileName(args.picture)
-writer.SetInputData(picture.GetOutput())
-writer.Write()
+figures.write_picture(args.picture, list(reversed(rows)), 1)  # first case on top
 print(f"wrote {args.picture}: rows four unsigned chars, two floats; columns MTPT (CPU backend), "
       "VTK's PT, the exact reference")

@@ -1,0 +1,112 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""Shared parts of the figure scripts (dependent-components.py, depth-peeling.py): the
+tetrahedralized wavelet, a window's image, the exact reference as an image, and the
+covered-pixel difference of two images. Debian's python3 (python3-vtk9) with the build's
+`mtpt` package on PYTHONPATH."""
+import math
+
+from vtkmodules.vtkCommonCore import vtkUnsignedCharArray
+from vtkmodules.vtkCommonDataModel import vtkImageData, vtkPiecewiseFunction, vtkUnstructuredGrid
+from vtkmodules.vtkFiltersGeneral import vtkDataSetTriangleFilter
+from vtkmodules.vtkFiltersCore import vtkImageAppend
+from vtkmodules.vtkImagingCore import vtkRTAnalyticSource
+from vtkmodules.vtkIOImage import vtkPNGWriter
+from vtkmodules.vtkRenderingCore import (vtkColorTransferFunction, vtkVolumeProperty,
+                                         vtkWindowToImageFilter)
+
+from mtpt import vtkMTPTReferenceRenderer
+
+
+def wavelet(extent):
+    """VTK's wavelet over -extent..extent per axis, as image data and tetrahedralized."""
+    source = vtkRTAnalyticSource()
+    source.SetWholeExtent(-extent, extent, -extent, extent, -extent, extent)
+    source.Update()
+    image = vtkImageData()
+    image.DeepCopy(source.GetOutput())
+    tetra = vtkDataSetTriangleFilter()
+    tetra.SetInputData(image)
+    tetra.Update()
+    grid = vtkUnstructuredGrid()
+    grid.ShallowCopy(tetra.GetOutput())
+    return image, grid
+
+
+def volume_property(colours, opacities, unit_distance):
+    """A volume property from (value, r, g, b) colour and (value, opacity) nodes."""
+    colour = vtkColorTransferFunction()
+    for node in colours:
+        colour.AddRGBPoint(*node)
+    opacity = vtkPiecewiseFunction()
+    for node in opacities:
+        opacity.AddPoint(*node)
+    prop = vtkVolumeProperty()
+    prop.SetColor(colour)
+    prop.SetScalarOpacity(opacity)
+    prop.SetScalarOpacityUnitDistance(unit_distance)
+    return prop
+
+
+def grab(window):
+    """The window's back buffer as RGB image data (a copy), without rendering again."""
+    g = vtkWindowToImageFilter()
+    g.SetInput(window)
+    g.SetInputBufferTypeToRGB()
+    g.ReadFrontBufferOff()
+    g.ShouldRerenderOff()
+    g.Update()
+    image = vtkImageData()
+    image.DeepCopy(g.GetOutput())
+    return image
+
+
+def reference(renderer, volume):
+    """The exact reference of `volume` in `renderer` (with its visible translucent actors),
+    rounded to bytes as the window's image is, as RGB image data of the renderer's size."""
+    exact = vtkMTPTReferenceRenderer()
+    if not exact.Render(renderer, volume):
+        raise RuntimeError("no reference image")
+    values = exact.GetImage()
+    pixels = vtkUnsignedCharArray()
+    pixels.SetNumberOfComponents(3)
+    pixels.SetNumberOfTuples(values.GetNumberOfTuples())
+    for i in range(values.GetNumberOfTuples()):
+        pixels.SetTuple(i, [min(255, max(0, math.floor(255 * v + 0.5)))
+                            for v in values.GetTuple3(i)])
+    width, height = renderer.GetSize()
+    image = vtkImageData()
+    image.SetDimensions(width, height, 1)
+    image.GetPointData().SetScalars(pixels)
+    return image
+
+
+def difference(a, b, background, scale=1.0):
+    """Covered-pixel RMSE and worst channel difference of two RGB images, in bytes / 255 *
+    `scale` (1: [0, 1]; 255: 0-255). A pixel is covered unless both images are within 2 of
+    `background` (RGB in [0, 1]) in every channel."""
+    a, b = a.GetPointData().GetScalars(), b.GetPointData().GetScalars()
+    bg = [255 * c for c in background]
+    total, count, worst = 0.0, 0, 0.0
+    for i in range(a.GetNumberOfTuples()):
+        p, q = a.GetTuple3(i), b.GetTuple3(i)
+        if all(abs(p[k] - bg[k]) <= 2 and abs(q[k] - bg[k]) <= 2 for k in range(3)):
+            continue
+        count += 1
+        for k in range(3):
+            d = (p[k] - q[k]) * scale / 255.0
+            total += d * d
+            worst = max(worst, abs(d))
+    return math.sqrt(total / max(1, 3 * count)), worst
+
+
+def write_picture(path, images, axis):
+    """Writes `images` side by side (axis 0) or stacked bottom to top (axis 1) as a PNG."""
+    picture = vtkImageAppend()
+    picture.SetAppendAxis(axis)
+    for image in images:
+        picture.AddInputData(image)
+    picture.Update()
+    writer = vtkPNGWriter()
+    writer.SetFileName(path)
+    writer.SetInputData(picture.GetOutput())
+    writer.Write()
