@@ -990,6 +990,8 @@ void DrawTriangle(const RasterFrame& f, const TileTarget& tile, Mode mode, Corne
   }
 }
 
+#include "detail/FanRaster-inl.h" // FanPath: this namespace's fan path
+
 void RasterizeTileImpl(const RasterFrame& f, const TileTarget& tile, const Fan* fans,
   std::size_t count, RasterCounts& counts)
 {
@@ -997,9 +999,14 @@ void RasterizeTileImpl(const RasterFrame& f, const TileTarget& tile, const Fan* 
     ? Mode::Compatible
     : (f.interpolation.perspective ? Mode::ExactIntegral : Mode::Integrated);
   WaitingFragments waiting; // pre-integrated fragments
+  FanPath fanPath(f, tile); // VTK-compatible fans drawn whole
   for (std::size_t e = 0; e < count; ++e)
   {
     const Fan& fan = fans[e];
+    if (mode == Mode::Compatible && fanPath.Draw(fan, counts))
+    {
+      continue; // the fan as a whole, as its triangles would be drawn
+    }
     const int n = fan.count;
     Corner corners[5];
     bool finite = PlaceCorner(f, fan.centre, corners[n]);

@@ -27,6 +27,9 @@ struct RasterFrame
   bool vertexColours = false; ///< the records hold colours (CompositeSettings::vertexColours)
   PerspectiveInterpolation interpolation;
   float inverseUnit = 1.0f; ///< 1 / ScalarOpacityUnitDistance
+  /// VTK-compatible fans drawn whole where they can be (FanRaster-inl.h), which gives the
+  /// image of drawing them triangle by triangle bit for bit; false (tests) draws them so.
+  bool fanPath = true;
 };
 
 /// One tile: its pixels, its image and opaque depth (TileSize x TileSize each, row-major,

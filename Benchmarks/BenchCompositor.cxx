@@ -1,0 +1,239 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * mtpt_bench_compositor: the CPU backend's frame without VTK or a window: the core's CPU
+ * stages, the fans (DecomposeFans) and the CPU compositor (binning, rasterization, resolve),
+ * on a generated grid of about the wavelet's size (1.08M tetrahedra by default), in a
+ * perspective view that turns before every frame, with the frame benchmark's transfer
+ * functions (cool-warm colours, opacity rising linearly over the scalars, unit distance a
+ * fiftieth of the diagonal) and an opaque depth of 1 everywhere, as the CPU backend reads it
+ * back from an empty window. Prints a Markdown table of medians per image size: stage times,
+ * fragments, nanoseconds per fragment and core, tetrahedra per second of the CPU stages.
+ *
+ * Without VTK and X it runs the same under a profiler (valgrind --tool=callgrind, perf) as
+ * alone; the frame benchmark (BenchFrames.cxx) measures whole frames against VTK's mappers.
+ */
+#include "Statistics.h"
+#include "TetrahedralGrid.h"
+
+#include "mtpt/Compositor.h"
+#include "mtpt/FramePipeline.h"
+#include "mtpt/Threads.h"
+#include "mtpt/Timing.h"
+
+#include <CLI/CLI.hpp>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace
+{
+
+using mtpt::Matrix4;
+using mtpt::bench::Median;
+using Vec3 = std::array<double, 3>;
+
+struct Options
+{
+  long long tetrahedra = 1080000;
+  std::vector<int> sizes = { 512, 1024 };
+  int frames = 5;
+  int threads = 0;
+  double step = 1.0;
+  std::string shading = "vtk";
+};
+
+Vec3 Normalized(const Vec3& v)
+{
+  const double length = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  return { v[0] / length, v[1] / length, v[2] / length };
+}
+
+Vec3 Cross(const Vec3& a, const Vec3& b)
+{
+  return { a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0] };
+}
+
+double Dot(const Vec3& a, const Vec3& b)
+{
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+/// gluLookAt and gluPerspective (row-major, column vectors: MeshView.h).
+Matrix4 LookAt(const Vec3& eye, const Vec3& centre, const Vec3& up)
+{
+  const Vec3 forward = Normalized({ centre[0] - eye[0], centre[1] - eye[1], centre[2] - eye[2] });
+  const Vec3 side = Normalized(Cross(forward, up));
+  const Vec3 trueUp = Cross(side, forward);
+  return { side[0], side[1], side[2], -Dot(side, eye), trueUp[0], trueUp[1], trueUp[2],
+    -Dot(trueUp, eye), -forward[0], -forward[1], -forward[2], Dot(forward, eye), 0, 0, 0, 1 };
+}
+
+Matrix4 Perspective(double fovyDegrees, double aspect, double zNear, double zFar)
+{
+  const double f = 1.0 / std::tan(0.5 * fovyDegrees * 3.14159265358979323846 / 180.0);
+  Matrix4 m{};
+  m[0] = f / aspect;
+  m[5] = f;
+  m[10] = (zFar + zNear) / (zNear - zFar);
+  m[11] = 2 * zFar * zNear / (zNear - zFar);
+  m[14] = -1;
+  return m;
+}
+
+/// The view of frame `frame`: the grid (within [-1, 1]^3) filling a 30 degree view from an
+/// oblique direction (azimuth 30, elevation 20, as the frame benchmark starts), turned by
+/// `step` degrees of azimuth per frame.
+void SetView(mtpt::FrameInput& input, int frame, double step)
+{
+  const double pi = 3.14159265358979323846;
+  const double azimuth = (30.0 + step * frame) * pi / 180, elevation = 20.0 * pi / 180;
+  const double distance = std::sqrt(3.0) / std::sin(15.0 * pi / 180);
+  const Vec3 eye = { distance * std::cos(elevation) * std::sin(azimuth),
+    distance * std::sin(elevation), distance * std::cos(elevation) * std::cos(azimuth) };
+  input.modelView = LookAt(eye, { 0, 0, 0 }, { 0, 1, 0 });
+  input.projection = Perspective(30, 1, distance - 2, distance + 2);
+  input.perspective = true;
+}
+
+/// The frame benchmark's transfer functions (Harness.cxx, MakeProperty) as a table over
+/// the scalars' range [0, 1]: cool-warm colours, opacity 0 -> 1.
+std::vector<float> Table(int entries)
+{
+  std::vector<float> table;
+  for (int i = 0; i < entries; ++i)
+  {
+    const float t = i / (entries - 1.0f), u = t < 0.5f ? 2 * t : 2 * t - 1;
+    const float low[3] = { 0.23f, 0.30f, 0.75f }, mid[3] = { 0.87f, 0.87f, 0.87f },
+                high[3] = { 0.71f, 0.02f, 0.15f };
+    for (int c = 0; c < 3; ++c)
+    {
+      table.push_back(t < 0.5f ? low[c] + u * (mid[c] - low[c]) : mid[c] + u * (high[c] - mid[c]));
+    }
+    table.push_back(t);
+  }
+  return table;
+}
+
+struct FrameFigures
+{
+  double stages = 0, decompose = 0, bin = 0, raster = 0, resolve = 0, total = 0;
+  double fragments = 0;
+};
+
+FrameFigures Frame(mtpt::FramePipeline& pipeline, mtpt::Compositor& compositor,
+  mtpt::FrameInput& input, const mtpt::CompositeSettings& settings, std::vector<float>& image,
+  int threads)
+{
+  FrameFigures f;
+  const auto start = mtpt::Clock::now();
+  pipeline.Prepare(input, threads);
+  pipeline.DecomposeFans(0, pipeline.SortedCount(), threads);
+  const mtpt::StageTimes& times = pipeline.Times();
+  f.stages = 1e3 * times.Total();
+  f.decompose = 1e3 * times.decompose;
+  compositor.Begin(settings);
+  compositor.Composite(pipeline.Fans().data(), pipeline.FanCount(), threads);
+  const mtpt::PixelRegion region{ 0, 0, settings.width, settings.height };
+  compositor.Resolve(region, nullptr, image.data(), threads);
+  f.total = 1e3 * mtpt::SecondsSince(start);
+  const mtpt::CompositorStats& stats = compositor.Stats();
+  f.bin = 1e3 * stats.binSeconds;
+  f.raster = 1e3 * stats.rasterSeconds;
+  f.resolve = 1e3 * stats.resolveSeconds;
+  f.fragments = static_cast<double>(stats.fragments);
+  return f;
+}
+
+} // namespace
+
+int main(int argc, char* argv[])
+{
+  Options o;
+  CLI::App app{ "The CPU backend's frame without VTK: CPU stages, fans and the CPU compositor "
+                "on a generated grid, the view turning before every frame." };
+  app.add_option("--tets", o.tetrahedra, "tetrahedra of the generated grid, at least")
+    ->check(CLI::PositiveNumber);
+  app.add_option("--sizes", o.sizes, "square image sizes")->check(CLI::Range(1, 16384));
+  app.add_option("--frames", o.frames, "timed frames per size (median), after one warm-up")
+    ->check(CLI::PositiveNumber);
+  app.add_option("--threads", o.threads, "threads (0: the default)")->check(CLI::NonNegativeNumber);
+  app.add_option("--step", o.step, "degrees the view turns before every frame");
+  app.add_option("--shading", o.shading, "vtk or pre-integrated")
+    ->check(CLI::IsMember({ "vtk", "pre-integrated" }));
+  CLI11_PARSE(app, argc, argv);
+
+  mtpt::bench::GridOptions grid;
+  grid.cells = mtpt::bench::GridCellsForTetrahedra(
+    static_cast<std::size_t>(o.tetrahedra), mtpt::bench::HexSplit::Five);
+  grid.jitter = 0.3 * mtpt::bench::MaxJitter(grid.split);
+  const mtpt::bench::TetMesh mesh = mtpt::bench::GenerateTetrahedralGrid(grid);
+  const int threads = mtpt::ResolveThreadCount(o.threads);
+  const std::vector<float> table = Table(256);
+  mtpt::FrameInput input;
+  input.points = mesh.Points();
+  input.cells = mesh.Cells();
+  input.scalars = mesh.Scalars();
+  input.opacity = { table.data(), 256, 0.0, 1.0 };
+  std::printf("Generated grid, %zu tetrahedra, %d threads, %s shading, the view turning %.1f "
+              "degrees before each frame; median of %d frames (ms)\n\n",
+    mesh.CellCount(), threads, o.shading.c_str(), o.step, o.frames);
+  std::printf("| image | CPU stages | of which decompose | Mtets/s (CPU stages) | bin | raster | "
+              "resolve | frame | fragments | ns per fragment x core |\n"
+              "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  for (int size : o.sizes)
+  {
+    mtpt::CompositeSettings settings;
+    settings.width = settings.height = size;
+    settings.transferFunction = input.opacity;
+    settings.unitDistance = 2 * std::sqrt(3.0) / 50;
+    mtpt::PreIntegrationTable integrals;
+    if (o.shading == "pre-integrated")
+    {
+      integrals.Build(settings.transferFunction);
+      settings.UsePreIntegration(
+        integrals, mtpt::PerspectiveInterpolation::FromProjection(input.projection));
+    }
+    const std::vector<float> depth(static_cast<std::size_t>(size) * size, 1.0f);
+    settings.opaqueDepth = depth.data();
+    std::vector<float> image(4 * static_cast<std::size_t>(size) * size);
+    input.viewportWidth = input.viewportHeight = size;
+    mtpt::FramePipeline pipeline;
+    pipeline.SetReuse(true);
+    mtpt::Compositor compositor;
+    std::vector<FrameFigures> figures;
+    for (int frame = 0; frame <= o.frames; ++frame)
+    {
+      SetView(input, frame, o.step);
+      if (o.shading == "pre-integrated")
+      {
+        settings.interpolation = mtpt::PerspectiveInterpolation::FromProjection(input.projection);
+      }
+      const FrameFigures f = Frame(pipeline, compositor, input, settings, image, threads);
+      if (frame > 0)
+      {
+        figures.push_back(f);
+      }
+    }
+    auto median = [&](double FrameFigures::*field)
+    {
+      std::vector<double> values;
+      for (const FrameFigures& f : figures)
+      {
+        values.push_back(f.*field);
+      }
+      return Median(values);
+    };
+    const double fragments = median(&FrameFigures::fragments);
+    const double raster = median(&FrameFigures::raster), stages = median(&FrameFigures::stages);
+    std::printf("| %dx%d | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.0f | %.1f |\n", size,
+      size, stages, median(&FrameFigures::decompose), 1e-3 * mesh.CellCount() / stages,
+      median(&FrameFigures::bin), raster, median(&FrameFigures::resolve),
+      median(&FrameFigures::total), fragments,
+      fragments > 0 ? 1e6 * raster * threads / fragments : 0);
+    std::fflush(stdout);
+  }
+  return 0;
+}
