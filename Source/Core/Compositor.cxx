@@ -19,6 +19,12 @@ namespace
 {
 
 constexpr std::size_t TilePixels = static_cast<std::size_t>(TileSize) * TileSize;
+/// Fans a rasterizing thread gathers from a tile's list at a time (64 KiB: in cache while
+/// they are drawn).
+constexpr std::size_t FansPerChunk = 512;
+/// How far ahead in a tile's list the gathering thread asks for fans (their indices grow,
+/// with gaps the hardware's prefetchers do not follow).
+constexpr std::size_t PrefetchDistance = 16;
 
 /**
  * The rows [y0, y1] and columns [x0, x1] whose pixel centres the fan's vertices span; false
@@ -76,6 +82,29 @@ bool Usable(const CompositeSettings& s)
       s.preIntegration->integrals.size() >= 4 * static_cast<std::size_t>(s.transferFunction.size));
 }
 
+/// Tile `tile` of an image of tilesX tiles across as the rasterizer draws it: its pixels
+/// `rgba`, and the opaque depth of its pixels copied into `depth` (TileSize^2 floats).
+detail::TileTarget TargetOf(
+  int tile, int tilesX, const CompositeSettings& s, float* rgba, std::vector<float>& depth)
+{
+  detail::TileTarget target;
+  target.x0 = (tile % tilesX) * TileSize;
+  target.y0 = (tile / tilesX) * TileSize;
+  target.width = std::min(TileSize, s.width - target.x0);
+  target.height = std::min(TileSize, s.height - target.y0);
+  target.rgba = rgba;
+  if (s.opaqueDepth)
+  {
+    for (int j = 0; j < target.height; ++j)
+    {
+      const float* row = s.opaqueDepth + static_cast<std::size_t>(target.y0 + j) * s.width;
+      std::copy(row + target.x0, row + target.x0 + target.width, depth.data() + j * TileSize);
+    }
+    target.depth = depth.data();
+  }
+  return target;
+}
+
 } // namespace
 
 void Compositor::Begin(const CompositeSettings& settings)
@@ -116,7 +145,7 @@ void Compositor::Composite(const Fan* fans, std::size_t count, int threads)
   this->Bin(fans, count, threads);
   this->Statistics.binSeconds += detail::SecondsSince(start);
   start = Clock::now();
-  this->Rasterize(threads);
+  this->Rasterize(fans, threads);
   this->Statistics.rasterSeconds += detail::SecondsSince(start);
 }
 
@@ -124,13 +153,15 @@ void Compositor::Bin(const Fan* fans, std::size_t count, int threads)
 {
   // A counting sort of (fan, tile) pairs by tile: block b of the fans (contiguous in
   // visibility order) counts its pairs per tile, the counts become each (tile, block)'s
-  // place in one array, tile by tile and block by block within a tile, and each block copies
-  // its fans there. A tile's fans are then contiguous and in visibility order, whatever the
-  // thread count, and rasterization reads them sequentially.
+  // place in one array, tile by tile and block by block within a tile, and each block writes
+  // its fans' indices there. A tile's fans are then listed contiguously and in visibility
+  // order, whatever the thread count; rasterization gathers them a chunk at a time. (Copying
+  // the 128-byte fans themselves into the lists moved the whole frame's fans through memory
+  // twice more.)
   const int blocks = ThreadsForWork(count, detail::FansPerThread, threads);
   this->CountPairs(fans, count, blocks);
   const std::size_t total = this->PlaceEntries(blocks);
-  this->CopyEntries(fans, count, blocks);
+  this->ListEntries(count, blocks);
   this->Statistics.binEntries += total;
   this->Statistics.tiles += this->Tiles.size();
 }
@@ -219,7 +250,7 @@ std::size_t Compositor::PlaceEntries(int blocks)
   return total;
 }
 
-void Compositor::CopyEntries(const Fan* fans, std::size_t count, int blocks)
+void Compositor::ListEntries(std::size_t count, int blocks)
 {
   const std::size_t tiles = static_cast<std::size_t>(this->TilesX) * this->TilesY;
 #pragma omp parallel num_threads(blocks)
@@ -234,17 +265,15 @@ void Compositor::CopyEntries(const Fan* fans, std::size_t count, int blocks)
         {
           for (int tx = range.x0; tx <= range.x1; ++tx)
           {
-            detail::StoreFan(
-              fans[i], this->Entries.data() + cursor[ty * this->TilesX + tx]++, true);
+            this->Entries[cursor[ty * this->TilesX + tx]++] = static_cast<std::uint32_t>(i);
           }
         }
       }
     }
-    detail::FinishStores(); // the copies are visible before the region ends
   }
 }
 
-void Compositor::Rasterize(int threads)
+void Compositor::Rasterize(const Fan* fans, int threads)
 {
   const CompositeSettings& s = this->Settings;
   detail::RasterFrame frame;
@@ -265,28 +294,31 @@ void Compositor::Rasterize(int threads)
 #pragma omp parallel num_threads(team) reduction(+ : triangles, fragments)
   {
     std::vector<float> depth(s.opaqueDepth ? TilePixels : 0);
+    std::vector<Fan> chunk(FansPerChunk);
 #pragma omp for schedule(dynamic, 1)
     for (std::int64_t job = 0; job < jobs; ++job)
     {
       const int tile = this->Tiles[job];
-      detail::TileTarget target;
-      target.x0 = (tile % this->TilesX) * TileSize;
-      target.y0 = (tile / this->TilesX) * TileSize;
-      target.width = std::min(TileSize, s.width - target.x0);
-      target.height = std::min(TileSize, s.height - target.y0);
-      target.rgba = this->Tile(tile);
-      if (s.opaqueDepth)
-      {
-        for (int j = 0; j < target.height; ++j)
-        {
-          const float* row = s.opaqueDepth + static_cast<std::size_t>(target.y0 + j) * s.width;
-          std::copy(row + target.x0, row + target.x0 + target.width, depth.data() + j * TileSize);
-        }
-        target.depth = depth.data();
-      }
+      const detail::TileTarget target = TargetOf(tile, this->TilesX, s, this->Tile(tile), depth);
       detail::RasterCounts counts;
-      const std::size_t first = this->TileStart[tile], end = this->TileStart[tile + 1];
-      detail::RasterizeTile(frame, target, this->Entries.data() + first, end - first, counts);
+      // The tile's fans, gathered a chunk at a time (in visibility order) and drawn.
+      for (std::size_t first = this->TileStart[tile], end = this->TileStart[tile + 1]; first < end;
+           first += FansPerChunk)
+      {
+        const std::size_t n = std::min(FansPerChunk, end - first);
+        const std::uint32_t* list = this->Entries.data() + first;
+        for (std::size_t k = 0; k < n; ++k)
+        {
+          if (k + PrefetchDistance < n)
+          {
+            const char* ahead = reinterpret_cast<const char*>(fans + list[k + PrefetchDistance]);
+            __builtin_prefetch(ahead);
+            __builtin_prefetch(ahead + 64);
+          }
+          chunk[k] = fans[list[k]];
+        }
+        detail::RasterizeTile(frame, target, chunk.data(), n, counts);
+      }
       triangles += counts.triangles;
       fragments += counts.fragments;
     }

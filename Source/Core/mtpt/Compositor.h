@@ -166,13 +166,13 @@ public:
 private:
   void Bin(const Fan* fans, std::size_t count, int threads);
   /// Binning's three steps: count each block's (fan, tile) pairs and the touched region;
-  /// turn the counts into places (returns the pairs); copy the fans to their places.
+  /// turn the counts into places (returns the pairs); list the fans' indices in their places.
   void CountPairs(const Fan* fans, std::size_t count, int blocks);
   std::size_t PlaceEntries(int blocks);
-  void CopyEntries(const Fan* fans, std::size_t count, int blocks);
+  void ListEntries(std::size_t count, int blocks);
   template <typename T>
   void ResolveInto(const PixelRegion& region, const T* below, T* rgba, int threads);
-  void Rasterize(int threads);
+  void Rasterize(const Fan* fans, int threads);
   float* Tile(int tile);
 
   /// Tiles a fan touches (inclusive; empty when x0 > x1).
@@ -189,7 +189,7 @@ private:
   std::vector<TileRange> Ranges;      ///< per fan of the last Composite
   std::vector<std::uint32_t> Counts;  ///< per (block, tile): pairs, then the block's cursor
   std::vector<std::size_t> TileStart; ///< per tile: its first entry (tiles + 1 values)
-  std::vector<Fan> Entries;           ///< the fans, tile by tile, in visibility order
+  std::vector<std::uint32_t> Entries; ///< fans of the last Composite, tile by tile, in order
   std::vector<int> Tiles;             ///< tiles with fans in the last Composite
   PixelRegion Touched;
   std::vector<Fan> SlotFans; ///< the slot entry point's fans
