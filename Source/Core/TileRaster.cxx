@@ -389,14 +389,34 @@ using FragmentTag = hn::CappedTag<float, 8>;
 constexpr std::size_t MaxLanes = 8;
 
 /**
- * A fragment's opacity 1 - exp(-density), as -expm1(-density): no cancellation for thin
- * segments. Highway's Expm1 is a polynomial approximation of bounded error (tested against
- * std::expm1 by the core tests through OpacitiesOfDensities).
+ * A fragment's opacity 1 - exp(-density), with no cancellation for thin segments: with
+ * -density = q ln 2 + r (q whole, |r| <= ln 2 / 2) and s = 2^q, it is (1 - s) - s expm1(r),
+ * which for q = 0 is -expm1(r) itself and otherwise subtracts nothing close. expm1(r) is its
+ * Taylor polynomial of degree 7 (the remainder is below 2e-8 relative on that interval); the
+ * densities are clamped to [-87, 88], where 2^q is a normal float and the opacity already 1
+ * in float at the top. NaN stays NaN. Within 4 units in the last place of the float result
+ * (tested against std::expm1 by the core tests through OpacitiesOfDensities), at about half
+ * the operations of a general exponential.
  */
 template <class D, class V>
 HWY_INLINE V OpacityOfDensity(D d, V density)
 {
-  return hn::Neg(hn::Expm1(d, hn::Neg(density)));
+  const hn::RebindToSigned<D> di;
+  const V x = hn::Min(hn::Max(density, hn::Set(d, -87.0f)), hn::Set(d, 88.0f));
+  const V q = hn::Round(hn::Mul(x, hn::Set(d, -1.44269504088896341f)));
+  // r = -x - q ln 2, ln 2 in two parts (Cody and Waite) so that q ln 2 is exact enough.
+  const V r = hn::NegMulAdd(
+    q, hn::Set(d, 1.42860682e-6f), hn::NegMulAdd(q, hn::Set(d, 0.693145752f), hn::Neg(x)));
+  V p = hn::Set(d, 1.0f / 5040);
+  const float coefficients[] = { 1.0f / 720, 1.0f / 120, 1.0f / 24, 1.0f / 6, 0.5f, 1.0f };
+  for (float c : coefficients)
+  {
+    p = hn::MulAdd(p, r, hn::Set(d, c));
+  }
+  p = hn::Mul(p, r); // expm1(r)
+  const V s = hn::BitCast(d, hn::ShiftLeft<23>(hn::Add(hn::ConvertTo(di, q), hn::Set(di, 127))));
+  const V opacity = hn::NegMulAdd(s, p, hn::Sub(hn::Set(d, 1.0f), s));
+  return hn::IfThenElse(hn::Eq(density, density), opacity, density);
 }
 
 /// VTK-compatible shading of the lanes `keep` of the vector at tile column x of `row`, with

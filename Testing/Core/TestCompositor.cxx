@@ -392,10 +392,11 @@ TEST_P(CompositorSimd, TrianglesBeyondTheFixedPointRangeAreClippedNotDropped)
 
 TEST_P(CompositorSimd, FragmentOpacityApproximationIsWithinFourUlpOfTheExactExponential)
 {
-  // The SIMD fragment loop computes 1 - exp(-density) with Highway's polynomial Expm1. Its
-  // error, over densities from the thinnest segments (1e-30) to saturation (1e4), must stay
-  // within 4 units in the last place of the float result (relative 4 * 2^-24), so that thin
-  // segments keep their tiny opacities and thick ones reach 1.
+  // The SIMD fragment loop computes 1 - exp(-density) with its own reduction and polynomial
+  // (OpacityOfDensity). Its error, over densities from the thinnest segments (1e-30) to
+  // saturation (1e4), must stay within 4 units in the last place of the float result
+  // (relative 4 * 2^-24), so that thin segments keep their tiny opacities and thick ones
+  // reach 1.
   std::vector<float> density;
   for (double e = -30; e <= 4; e += 0.001)
   {
