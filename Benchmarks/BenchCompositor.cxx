@@ -156,7 +156,9 @@ int main(int argc, char* argv[])
                 "on a generated grid, the view turning before every frame." };
   app.add_option("--tets", o.tetrahedra, "tetrahedra of the generated grid, at least")
     ->check(CLI::PositiveNumber);
-  app.add_option("--sizes", o.sizes, "square image sizes")->check(CLI::Range(1, 16384));
+  app.add_option("--sizes", o.sizes, "square image sizes, comma-separated")
+    ->delimiter(',')
+    ->check(CLI::Range(1, 16384));
   app.add_option("--frames", o.frames, "timed frames per size (median), after one warm-up")
     ->check(CLI::PositiveNumber);
   app.add_option("--threads", o.threads, "threads (0: the default)")->check(CLI::NonNegativeNumber);
