@@ -105,6 +105,48 @@ detail::TileTarget TargetOf(
   return target;
 }
 
+/**
+ * Draws the fans listed in `list` (count of them, in visibility order: back to front) into
+ * `target` front to back: gathered from the list's end, a chunk at a time.
+ */
+void DrawFrontToBack(const Fan* fans, const std::uint32_t* list, std::size_t count,
+  const detail::RasterFrame& frame, const detail::TileTarget& target, std::vector<Fan>& chunk,
+  detail::RasterCounts& counts)
+{
+  for (std::size_t left = count; left > 0;)
+  {
+    const std::size_t n = std::min(FansPerChunk, left);
+    left -= n;
+    for (std::size_t k = 0; k < n; ++k)
+    {
+      const std::size_t at = left + n - 1 - k;
+      if (at >= PrefetchDistance)
+      {
+        const char* ahead = reinterpret_cast<const char*>(fans + list[at - PrefetchDistance]);
+        __builtin_prefetch(ahead);
+        __builtin_prefetch(ahead + 64);
+      }
+      chunk[k] = fans[list[at]];
+    }
+    detail::RasterizeTile(frame, target, chunk.data(), n, counts);
+  }
+}
+
+/// Composites the tile image `front` (premultiplied colour and coverage alpha planes) over
+/// `back`: back = front + (1 - front alpha) back.
+void Over(const float* front, float* back)
+{
+  const float* alpha = front + 3 * TilePixels;
+  for (std::size_t c = 0; c < 4; ++c)
+  {
+    for (std::size_t i = 0; i < TilePixels; ++i)
+    {
+      back[c * TilePixels + i] =
+        front[c * TilePixels + i] + (1.0f - alpha[i]) * back[c * TilePixels + i];
+    }
+  }
+}
+
 } // namespace
 
 void Compositor::Begin(const CompositeSettings& settings)
@@ -286,45 +328,45 @@ void Compositor::Rasterize(const Fan* fans, int threads)
   frame.interpolation = s.interpolation;
   frame.inverseUnit = static_cast<float>(1.0 / s.unitDistance);
   const auto jobs = static_cast<std::int64_t>(this->Tiles.size());
-  std::size_t triangles = 0, fragments = 0;
+  std::size_t triangles = 0, fragments = 0, hidden = 0;
   // Threads take tiles: no more threads than tiles, nor than the binned fans are worth.
   const std::size_t entries = this->TileStart.empty() ? 0 : this->TileStart.back();
   const int team = std::min(ThreadsForWork(this->Tiles.size(), 1, threads),
     ThreadsForWork(entries, detail::FansPerThread, threads));
-#pragma omp parallel num_threads(team) reduction(+ : triangles, fragments)
+#pragma omp parallel num_threads(team) reduction(+ : triangles, fragments, hidden)
   {
-    std::vector<float> depth(s.opaqueDepth ? TilePixels : 0);
+    std::vector<float> depth(s.opaqueDepth ? TilePixels : 0), batch;
     std::vector<Fan> chunk(FansPerChunk);
 #pragma omp for schedule(dynamic, 1)
     for (std::int64_t job = 0; job < jobs; ++job)
     {
       const int tile = this->Tiles[job];
-      const detail::TileTarget target = TargetOf(tile, this->TilesX, s, this->Tile(tile), depth);
-      detail::RasterCounts counts;
-      // The tile's fans, gathered a chunk at a time (in visibility order) and drawn.
-      for (std::size_t first = this->TileStart[tile], end = this->TileStart[tile + 1]; first < end;
-           first += FansPerChunk)
+      // A tile drawn by an earlier Composite holds what lies behind these fans: they are
+      // drawn into a transparent image of their own, composited over it afterwards.
+      const bool behind = this->Cleared[tile] != 0;
+      float* pixels = this->Tile(tile);
+      if (behind)
       {
-        const std::size_t n = std::min(FansPerChunk, end - first);
-        const std::uint32_t* list = this->Entries.data() + first;
-        for (std::size_t k = 0; k < n; ++k)
-        {
-          if (k + PrefetchDistance < n)
-          {
-            const char* ahead = reinterpret_cast<const char*>(fans + list[k + PrefetchDistance]);
-            __builtin_prefetch(ahead);
-            __builtin_prefetch(ahead + 64);
-          }
-          chunk[k] = fans[list[k]];
-        }
-        detail::RasterizeTile(frame, target, chunk.data(), n, counts);
+        batch.assign(4 * TilePixels, 0.0f);
+      }
+      const detail::TileTarget target =
+        TargetOf(tile, this->TilesX, s, behind ? batch.data() : pixels, depth);
+      detail::RasterCounts counts;
+      const std::size_t first = this->TileStart[tile];
+      DrawFrontToBack(fans, this->Entries.data() + first, this->TileStart[tile + 1] - first, frame,
+        target, chunk, counts);
+      if (behind)
+      {
+        Over(batch.data(), pixels);
       }
       triangles += counts.triangles;
       fragments += counts.fragments;
+      hidden += counts.hidden;
     }
   }
   this->Statistics.triangles += triangles;
   this->Statistics.fragments += fragments;
+  this->Statistics.hiddenFans += hidden;
 }
 
 const char* Compositor::InstructionSet()

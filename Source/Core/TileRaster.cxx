@@ -419,6 +419,41 @@ HWY_INLINE V OpacityOfDensity(D d, V density)
   return hn::IfThenElse(hn::Eq(density, density), opacity, density);
 }
 
+/**
+ * A pixel whose coverage alpha reached this hides what lies behind it: fragments drawn there
+ * later (farther: fans are drawn front to back) are skipped. They could add at most
+ * 1 - OpaqueAlpha = 2^-11 of full intensity to the pixel, an eighth of an 8-bit step.
+ */
+constexpr float OpaqueAlpha = 1.0f - 1.0f / 2048;
+
+/// The lanes of the vector at tile column x of `row` that are not yet opaque.
+template <class D>
+HWY_INLINE hn::Mask<D> Transparent(D d, const TileRow& row, int x)
+{
+  return hn::Lt(hn::LoadU(d, row.a + x), hn::Set(d, OpaqueAlpha));
+}
+
+/**
+ * Blends fragments of opacity a and colour c under what the lanes `keep` of the vector at
+ * tile column x of `row` hold (premultiplied colour C, coverage alpha A), front to back:
+ * C += (1 - A) a c, A += (1 - A) a. Back to front with OpenGL's blending (VTK's PT's, over)
+ * gives the same image up to rounding.
+ */
+template <class D>
+HWY_INLINE void BlendUnder(
+  D d, const TileRow& row, int x, hn::Vec<D> opacity, const hn::Vec<D> colour[3], hn::Mask<D> keep)
+{
+  const auto alpha = hn::LoadU(d, row.a + x);
+  const auto weight = hn::Mul(hn::Sub(hn::Set(d, 1.0f), alpha), opacity);
+  float* planes[3] = { row.r, row.g, row.b };
+  for (int k = 0; k < 3; ++k)
+  {
+    const auto in = hn::LoadU(d, planes[k] + x);
+    hn::StoreU(hn::IfThenElse(keep, hn::MulAdd(weight, colour[k], in), in), d, planes[k] + x);
+  }
+  hn::StoreU(hn::IfThenElse(keep, hn::Add(alpha, weight), alpha), d, row.a + x);
+}
+
 /// VTK-compatible shading of the lanes `keep` of the vector at tile column x of `row`, with
 /// the OpenGL path's fragment math. start[k]: plane k at the row's column 0.
 template <class D>
@@ -434,22 +469,22 @@ void ShadeVector(D d, const RasterFrame& f, const TileRow& row, const Planes& p,
     const auto depth = hn::MulAdd(z, hn::Set(d, 0.5f), hn::Set(d, 0.5f));
     keep = hn::And(keep, hn::Le(depth, hn::LoadU(d, row.depth + x)));
   }
+  keep = hn::And(keep, Transparent(d, row, x));
+  if (hn::AllFalse(d, keep))
+  {
+    return;
+  }
   const auto attenuation = hn::MulAdd(hn::Set(d, p.dx[3]), i, hn::Set(d, start[3]));
   const auto length = hn::MulAdd(hn::Set(d, p.dx[4]), i, hn::Set(d, start[4]));
   const auto opacity =
     OpacityOfDensity(d, hn::Mul(hn::Mul(attenuation, length), hn::Set(d, f.inverseUnit)));
   keep = hn::And(keep, hn::Gt(opacity, hn::Zero(d)));
-  const auto rest = hn::Sub(one, opacity);
-  float* planes[3] = { row.r, row.g, row.b };
+  hn::Vec<D> colour[3];
   for (int k = 0; k < 3; ++k)
   {
-    const auto colour = hn::MulAdd(hn::Set(d, p.dx[k]), i, hn::Set(d, start[k]));
-    const auto below = hn::LoadU(d, planes[k] + x);
-    const auto blended = hn::MulAdd(opacity, colour, hn::Mul(rest, below));
-    hn::StoreU(hn::IfThenElse(keep, blended, below), d, planes[k] + x);
+    colour[k] = hn::MulAdd(hn::Set(d, p.dx[k]), i, hn::Set(d, start[k]));
   }
-  const auto alpha = hn::LoadU(d, row.a + x);
-  hn::StoreU(hn::IfThenElse(keep, hn::MulAdd(rest, alpha, opacity), alpha), d, row.a + x);
+  BlendUnder(d, row, x, opacity, colour, keep);
 }
 
 /// The planes' values at column 0 of tile row j.
@@ -856,13 +891,14 @@ void ShadeWaiting(const RasterFrame& f, const TileTarget& tile, WaitingFragments
     {
       continue;
     }
+    // Under what the pixel holds (BlendUnder).
     const TileRow row = RowOf(tile, w.y[l]);
     const int x = w.x[l];
-    const float rest = 1.0f - opacity;
-    row.r[x] = opacity * rgba[0][l] + rest * row.r[x];
-    row.g[x] = opacity * rgba[1][l] + rest * row.g[x];
-    row.b[x] = opacity * rgba[2][l] + rest * row.b[x];
-    row.a[x] = opacity + rest * row.a[x];
+    const float weight = (1.0f - row.a[x]) * opacity;
+    row.r[x] += weight * rgba[0][l];
+    row.g[x] += weight * rgba[1][l];
+    row.b[x] += weight * rgba[2][l];
+    row.a[x] += weight;
   }
   w.count = 0;
 }

@@ -26,7 +26,8 @@
 //   the triangles' planes are set up four at a time in single precision from the same
 //   snapped corners: they differ from the triangle path's (SetUpPlanes, in double
 //   precision) by rounding, a few units in the last place of a float;
-// - the fragment math is ShadeVector's, operation for operation.
+// - the fragment math is ShadeVector's, operation for operation, blended under what the tile
+//   holds (BlendUnder; fans come front to back) where it is not yet opaque.
 // Fans that are not convex, whose centre is not strictly inside (a triangle without area or
 // folded over), that reach beyond the fixed-point range or are large (FanExtentLimit), single
 // triangles (the slot entry point's), fans with dependent components' colours, and every
@@ -431,16 +432,7 @@ HWY_INLINE void ShadeLanes(
   const auto opacity =
     OpacityOfDensity(d, hn::Mul(hn::Mul(value[3], value[4]), hn::Set(d, f.inverseUnit)));
   keep = hn::And(keep, hn::Gt(opacity, hn::Zero(d)));
-  const auto rest = hn::Sub(one, opacity);
-  float* planes[3] = { row.r, row.g, row.b };
-  for (int k = 0; k < 3; ++k)
-  {
-    const auto below = hn::LoadU(d, planes[k] + x);
-    const auto blended = hn::MulAdd(opacity, value[k], hn::Mul(rest, below));
-    hn::StoreU(hn::IfThenElse(keep, blended, below), d, planes[k] + x);
-  }
-  const auto alpha = hn::LoadU(d, row.a + x);
-  hn::StoreU(hn::IfThenElse(keep, hn::MulAdd(rest, alpha, opacity), alpha), d, row.a + x);
+  BlendUnder(d, row, x, opacity, value, keep);
 }
 
 /// The triangle each lane lies in (of the lanes inside the silhouette): triangle k when the
@@ -497,6 +489,14 @@ public:
     , Applies(f.fanPath && !f.vertexColours && hn::Lanes(FragmentTag()) >= MaxFanTriangles)
   {
     this->Planes.Clear();
+    for (int j = 0; j < T && this->Applies; ++j)
+    {
+      this->Opaque[j] = 0;
+      for (int x = 0; x < T; x += static_cast<int>(hn::Lanes(FragmentTag())))
+      {
+        this->MarkOpaque(j, x);
+      }
+    }
   }
 
   /**
@@ -515,6 +515,11 @@ public:
     if (g.x0 > g.x1 || g.y0 > g.y1)
     {
       return true; // no pixel centre of the tile in the box: nothing to draw either way
+    }
+    if (this->Hidden(g))
+    {
+      ++counts.hidden;
+      return true; // every pixel of its box opaque: nothing of it can show
     }
     if (!FanEdges(fan.count, g))
     {
@@ -559,6 +564,10 @@ private:
         {
           keep = hn::And(keep, bounding[k].Inside(d, x - start));
         }
+        const std::size_t covered = hn::CountTrue(d, keep);
+        counts.fragments += covered;
+        // Fragments behind opaque pixels are skipped; a fan all behind them is not set up.
+        keep = hn::And(keep, Transparent(d, row, x));
         if (hn::AllFalse(d, keep))
         {
           continue;
@@ -574,8 +583,8 @@ private:
           this->Planes.Row(d, y - tile.y0);
           rowReady = true;
         }
-        counts.fragments += hn::CountTrue(d, keep);
         ShadeFanLanes(d, this->Frame, row, this->Planes, spokes, x, x - start, keep);
+        this->MarkOpaque(y - tile.y0, x);
       }
       for (int k = 0; k < g.triangles; ++k)
       {
@@ -583,6 +592,33 @@ private:
         spokes[k].NextRow();
       }
     }
+  }
+
+  /// Marks the opaque pixels among the vector's at tile row j, column x.
+  HWY_INLINE void MarkOpaque(int j, int x)
+  {
+    const FragmentTag d;
+    std::uint8_t bits[(MaxLanes + 7) / 8] = {};
+    const float* alpha = this->Tile.rgba + 3 * T * T + j * T + x;
+    hn::StoreMaskBits(d, hn::Ge(hn::LoadU(d, alpha), hn::Set(d, OpaqueAlpha)), bits);
+    this->Opaque[j] |= static_cast<std::uint64_t>(bits[0]) << x;
+  }
+
+  /// Whether every pixel of the fan's box in the tile is opaque (Opaque is conservative: only
+  /// the fan path marks what it makes opaque, besides what was opaque when it started).
+  bool Hidden(const FanGeometry& g) const
+  {
+    const int first = g.x0 - this->Tile.x0, width = g.x1 - g.x0 + 1;
+    const std::uint64_t span =
+      (width >= T ? ~std::uint64_t{ 0 } : ((std::uint64_t{ 1 } << width) - 1)) << first;
+    for (int y = g.y0; y <= g.y1; ++y)
+    {
+      if ((this->Opaque[y - this->Tile.y0] & span) != span)
+      {
+        return false;
+      }
+    }
+    return true;
   }
 
   /// The corners' values and the triangles' planes, once the fan covers a pixel.
@@ -598,6 +634,7 @@ private:
   const TableLookup Lookup;
   const bool Applies;
   FanPlanes Planes;
+  std::uint64_t Opaque[T]; ///< per tile row, bit i: column i opaque (OpaqueAlpha)
 };
 
 #else // HWY_SCALAR: one lane, no lookups across lanes; every fan takes the triangle path

@@ -30,7 +30,10 @@
  *   transfer-function features between the vertex scalars are not missed.
  * - Blending, as glBlendFuncSeparate(SRC_ALPHA, ONE_MINUS_SRC_ALPHA, ONE,
  *   ONE_MINUS_SRC_ALPHA) starting from a transparent image: the image holds premultiplied
- *   colour and coverage alpha; Resolve composites it over what lies below.
+ *   colour and coverage alpha; Resolve composites it over what lies below. It is computed
+ *   front to back (C += (1 - A) a c, A += (1 - A) a: the same image up to rounding), and a
+ *   pixel whose alpha reached 1 - 2^-11 skips the fragments behind it, which could change it
+ *   by at most 2^-11 (an eighth of an 8-bit step).
  * - Depth: with an opaque depth image, a fragment is kept if its depth is <= the opaque
  *   depth at that pixel (GL_LEQUAL, no depth writes); fragments outside the near and far
  *   planes are dropped.
@@ -40,10 +43,13 @@
  *    appends each fan that covers a pixel centre of a tile to its own list for that tile
  *    (TileSize x TileSize pixels). Concatenated in thread order, a tile's lists are in
  *    visibility order, whatever the thread count.
- * 2. Rasterization: threads take tiles; a tile's fans are set up and drawn, triangle by
- *    triangle, span by span (exact row spans, no per-pixel coverage test), a span's pixels
- *    SIMD lanes wide (Google Highway, the widest instruction set the processor has, chosen
- *    at run time). A tile's pixels stay in its own cache-sized buffer.
+ * 2. Rasterization: threads take tiles; a tile's fans are drawn front to back, a fan of
+ *    VTK-compatible shading as a whole (its silhouette's edges tested a vector of a row at
+ *    a time, each pixel shaded with its triangle's planes), others triangle by triangle,
+ *    span by span (exact row spans), SIMD lanes wide (Google Highway, the widest instruction
+ *    set the processor has, chosen at run time). A fan whose box is all opaque already is
+ *    skipped. A tile's pixels stay in its own cache-sized buffer; a tile drawn by an earlier
+ *    Composite gets the new fans drawn apart and composited over it.
  * The image is therefore bit-identical for any thread count.
  */
 #ifndef mtpt_Compositor_h
@@ -97,7 +103,10 @@ struct CompositorStats
   std::size_t fans = 0;       ///< fans given that touch the image
   std::size_t binEntries = 0; ///< (fan, tile) pairs
   std::size_t triangles = 0;  ///< (triangle, tile) pairs that covered a pixel (set up)
-  std::size_t fragments = 0;  ///< pixels covered by a triangle and shaded
+  /// Pixels covered by a triangle of the fans drawn: shaded, or skipped behind pixels already
+  /// opaque (fans are drawn front to back; Compositor.h, "Rasterization").
+  std::size_t fragments = 0;
+  std::size_t hiddenFans = 0; ///< (fan, tile) pairs skipped whole behind opaque pixels
   std::size_t tiles = 0;      ///< tiles that had fans
   double binSeconds = 0;      ///< binning
   double rasterSeconds = 0;   ///< set-up and fragments
