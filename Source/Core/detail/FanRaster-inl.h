@@ -598,10 +598,14 @@ private:
   HWY_INLINE void MarkOpaque(int j, int x)
   {
     const FragmentTag d;
-    std::uint8_t bits[(MaxLanes + 7) / 8] = {};
     const float* alpha = this->Tile.rgba + 3 * T * T + j * T + x;
-    hn::StoreMaskBits(d, hn::Ge(hn::LoadU(d, alpha), hn::Set(d, OpaqueAlpha)), bits);
-    this->Opaque[j] |= static_cast<std::uint64_t>(bits[0]) << x;
+    const auto opaque = hn::Ge(hn::LoadU(d, alpha), hn::Set(d, OpaqueAlpha));
+    if (!hn::AllFalse(d, opaque)) // mostly none, in a scene that is not opaque anywhere
+    {
+      std::uint8_t bits[(MaxLanes + 7) / 8] = {};
+      hn::StoreMaskBits(d, opaque, bits);
+      this->Opaque[j] |= static_cast<std::uint64_t>(bits[0]) << x;
+    }
   }
 
   /// Whether every pixel of the fan's box in the tile is opaque (Opaque is conservative: only
