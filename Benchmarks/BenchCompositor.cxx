@@ -46,6 +46,7 @@ struct Options
   int threads = 0;
   double step = 1.0;
   std::string shading = "vtk";
+  double attenuation = 1.0; ///< the table's attenuations times this
 };
 
 Vec3 Normalized(const Vec3& v)
@@ -102,8 +103,8 @@ void SetView(mtpt::FrameInput& input, int frame, double step)
 }
 
 /// The frame benchmark's transfer functions (Harness.cxx, MakeProperty) as a table over
-/// the scalars' range [0, 1]: cool-warm colours, opacity 0 -> 1.
-std::vector<float> Table(int entries)
+/// the scalars' range [0, 1]: cool-warm colours, opacity 0 -> `opacity`.
+std::vector<float> Table(int entries, double opacity)
 {
   std::vector<float> table;
   for (int i = 0; i < entries; ++i)
@@ -115,7 +116,7 @@ std::vector<float> Table(int entries)
     {
       table.push_back(t < 0.5f ? low[c] + u * (mid[c] - low[c]) : mid[c] + u * (high[c] - mid[c]));
     }
-    table.push_back(t);
+    table.push_back(static_cast<float>(t * opacity));
   }
   return table;
 }
@@ -180,6 +181,10 @@ int main(int argc, char* argv[])
   app.add_option("--step", o.step, "degrees the view turns before every frame");
   app.add_option("--shading", o.shading, "vtk or pre-integrated")
     ->check(CLI::IsMember({ "vtk", "pre-integrated" }));
+  app
+    .add_option("--attenuation", o.attenuation,
+      "the opacity ramp's top (1: opaque pixels behind most of the image; 0.01: nearly none)")
+    ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
 
   mtpt::bench::GridOptions grid;
@@ -188,15 +193,15 @@ int main(int argc, char* argv[])
   grid.jitter = 0.3 * mtpt::bench::MaxJitter(grid.split);
   const mtpt::bench::TetMesh mesh = mtpt::bench::GenerateTetrahedralGrid(grid);
   const int threads = mtpt::ResolveThreadCount(o.threads);
-  const std::vector<float> table = Table(256);
+  const std::vector<float> table = Table(256, o.attenuation);
   mtpt::FrameInput input;
   input.points = mesh.Points();
   input.cells = mesh.Cells();
   input.scalars = mesh.Scalars();
   input.opacity = { table.data(), 256, 0.0, 1.0 };
-  std::printf("Generated grid, %zu tetrahedra, %d threads, %s shading, the view turning %.1f "
-              "degrees before each frame; median of %d frames (ms)\n\n",
-    mesh.CellCount(), threads, o.shading.c_str(), o.step, o.frames);
+  std::printf("Generated grid, %zu tetrahedra, %d threads, %s shading, opacity 0 -> %g, the view "
+              "turning %.1f degrees before each frame; median of %d frames (ms)\n\n",
+    mesh.CellCount(), threads, o.shading.c_str(), o.attenuation, o.step, o.frames);
   std::printf("| image | CPU stages | of which decompose | Mtets/s (CPU stages) | bin | raster | "
               "resolve | frame | fragments covered | of the fans drawn | fans skipped behind "
               "opaque pixels | ns per covered fragment x core |\n"
