@@ -11,6 +11,7 @@
  * sorted keys and bit-identical vertex and index buffers; a difference exits with 1.
  */
 #include "DataFolder.h"
+#include "Camera.h"
 #include "Statistics.h"
 #include "TetrahedralGrid.h"
 #ifdef MTPT_BENCH_HAVE_VTK
@@ -116,58 +117,12 @@ struct View
   bool perspective;
 };
 
-using Vec3 = std::array<double, 3>;
-
-Vec3 Normalized(const Vec3& v)
-{
-  const double length = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-  return { v[0] / length, v[1] / length, v[2] / length };
-}
-
-Vec3 Cross(const Vec3& a, const Vec3& b)
-{
-  return { a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0] };
-}
-
-double Dot(const Vec3& a, const Vec3& b)
-{
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-Matrix4 LookAt(const Vec3& eye, const Vec3& center, const Vec3& up)
-{
-  const Vec3 forward = Normalized({ center[0] - eye[0], center[1] - eye[1], center[2] - eye[2] });
-  const Vec3 side = Normalized(Cross(forward, up));
-  const Vec3 trueUp = Cross(side, forward);
-  return { side[0], side[1], side[2], -Dot(side, eye), trueUp[0], trueUp[1], trueUp[2],
-    -Dot(trueUp, eye), -forward[0], -forward[1], -forward[2], Dot(forward, eye), 0, 0, 0, 1 };
-}
-
-Matrix4 Ortho(double left, double right, double bottom, double top, double zNear, double zFar)
-{
-  Matrix4 m{};
-  m[0] = 2 / (right - left);
-  m[3] = -(right + left) / (right - left);
-  m[5] = 2 / (top - bottom);
-  m[7] = -(top + bottom) / (top - bottom);
-  m[10] = -2 / (zFar - zNear);
-  m[11] = -(zFar + zNear) / (zFar - zNear);
-  m[15] = 1;
-  return m;
-}
-
-Matrix4 Frustum(double left, double right, double bottom, double top, double zNear, double zFar)
-{
-  Matrix4 m{};
-  m[0] = 2 * zNear / (right - left);
-  m[2] = (right + left) / (right - left);
-  m[5] = 2 * zNear / (top - bottom);
-  m[6] = (top + bottom) / (top - bottom);
-  m[10] = -(zFar + zNear) / (zFar - zNear);
-  m[11] = -2 * zFar * zNear / (zFar - zNear);
-  m[14] = -1;
-  return m;
-}
+using mtpt::bench::Dot;
+using mtpt::bench::Frustum;
+using mtpt::bench::LookAt;
+using mtpt::bench::Normalized;
+using mtpt::bench::Ortho;
+using mtpt::bench::Vec3;
 
 // Both views look at the bounding sphere from the same oblique direction (no axis of a grid
 // is parallel to the view, so depths are not tied in whole layers) and frame all of it:

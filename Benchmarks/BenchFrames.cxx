@@ -4,7 +4,10 @@
 // mappers, on the same scenes in one run, with the camera turning before every timed frame
 // (Harness.h states the rules). Per measurement: the median frame, for MTPT its stages and
 // the CPU compositor's work (fragments, nanoseconds per fragment and core, binning against
-// fragment work), and each image's difference from VTK's PT at the same final view.
+// fragment work), and each image's difference from VTK's PT at the same final view. Every
+// contender is timed in VTK's default window (multisampled) and single-sampled
+// (--multisampling), and the ratios between VTK's mappers and MTPT take each at its faster
+// window; --rounds repeats everything with the contenders alternating.
 // --unchanged also times frames whose view does not change, as a separate column.
 // --csv writes every figure; run under a display (Testing/xvfb-launch.sh without one).
 #include "Harness.h"
@@ -40,14 +43,30 @@ struct Options
   std::string csv;
 };
 
-void PrintScene(const Scene& scene, int width, int height, const std::vector<std::string>& names,
-  std::map<std::string, Measurement>& results, const Options& o, std::ofstream& csv)
+/// The image of VTK's PT that others are compared with: single-sampled when measured (VTK's
+/// PT speckles along cell edges in a multisampled window), else its first window's.
+const Measurement* ReferenceImage(const std::map<std::string, WindowMeasurements>& results)
 {
-  const Measurement* pt = results.count("vtk-pt") ? &results["vtk-pt"] : nullptr;
+  const auto pt = results.find("vtk-pt");
+  if (pt == results.end())
+  {
+    return nullptr;
+  }
+  const Measurement* single = pt->second.In(false);
+  return single ? single : &pt->second.measurements.front();
+}
+
+void PrintHeader(const Scene& scene, int width, int height, const Options& o)
+{
   std::printf("\n%s, %lld tetrahedra, %dx%d, camera turning %.2f degrees per frame, median of %d "
-              "(* one frame, slower than %.0f s)\n",
+              "(* one frame, slower than %.0f s)",
     scene.name.c_str(), static_cast<long long>(scene.grid->GetNumberOfCells()), width, height,
     o.common.timing.step, o.common.timing.repeat, o.common.timing.slowLimit);
+  if (o.common.rounds > 1)
+  {
+    std::printf("; median round of %d, contenders and windows alternating", o.common.rounds);
+  }
+  std::printf("\n");
   if (o.common.desiredUpdateRate > 0)
   {
     std::printf("Windows ask for %g frames a second; MTPT adjusts its image sample distance "
@@ -58,44 +77,115 @@ void PrintScene(const Scene& scene, int width, int height, const std::vector<std
   {
     std::printf("MTPT's image sample distance: %g\n", o.common.mapper.imageSampleDistance);
   }
-  std::printf("| contender | ms (moving) |%s VTK PT / this | RMSE vs VTK PT | MTPT: CPU stages | "
-              "composite (bin + raster) | upload + draw | fragments | ns per fragment x core |\n",
+  std::printf("| contender | window | ms (moving) |%s VTK PT / this, same window | RMSE vs VTK "
+              "PT | MTPT: CPU stages | composite (bin + raster) | upload + draw | fragments | ns "
+              "per fragment x core |\n",
     o.unchanged ? " ms (unchanged view) |" : "");
-  std::printf("|---|---:|%s---:|---:|---:|---:|---:|---:|---:|\n", o.unchanged ? "---:|" : "");
+  std::printf("|---|---|---:|%s---:|---:|---:|---:|---:|---:|---:|\n", o.unchanged ? "---:|" : "");
+}
+
+/// One row of the table (and of the CSV): `name` in window `w` of `m`.
+void PrintRow(const Scene& scene, int width, int height, const std::string& name,
+  const WindowMeasurements& m, std::size_t w, const std::map<std::string, WindowMeasurements>& all,
+  const Options& o, int threads, std::ofstream& csv)
+{
+  const Measurement& r = m.measurements[w];
+  const auto pt = all.find("vtk-pt");
+  const Measurement* ptSame = pt != all.end() ? pt->second.In(m.windows[w]) : nullptr;
+  const Measurement* reference = ReferenceImage(all);
+  const double ratio = ptSame ? ptSame->moving.median / r.moving.median : 0;
+  const double fastest =
+    pt != all.end() ? pt->second.Fastest().moving.median / m.Fastest().moving.median : 0;
+  const ImageError e = reference ? CompareImages(r.image, reference->image) : ImageError{};
+  const StageFigures& f = r.mtpt;
+  const double nsPerFragment = f.fragments > 0 ? 1e6 * f.raster * threads / f.fragments : 0;
+  std::printf(
+    "| %s | %s | %s |%s %.2fx | %.4f | %.1f | %.1f (%.1f + %.1f) | %.1f | %.0f | %.1f |\n",
+    name.c_str(), WindowName(m.windows[w]), FormatMs(r.moving).c_str(),
+    o.unchanged ? (" " + FormatMs(r.unchanged) + " |").c_str() : "", ratio, e.rmse, f.cpuStages,
+    f.composite, f.bin, f.raster, f.upload + f.draw, f.fragments, nsPerFragment);
+  if (csv)
+  {
+    csv << scene.name << ',' << scene.grid->GetNumberOfCells() << ',' << width << ',' << height
+        << ',' << name << ',' << (m.windows[w] ? "on" : "off") << ',' << o.common.mapper.shading
+        << ',' << r.moving.median << ',' << (r.moving.slow ? 1 : 0) << ',' << r.unchanged.median
+        << ',' << ratio << ',' << fastest << ',' << e.rmse << ',' << e.worst << ',' << f.cpuStages
+        << ',' << f.composite << ',' << f.bin << ',' << f.raster << ',' << f.upload << ',' << f.draw
+        << ',' << f.fragments << ',' << nsPerFragment << ',' << f.sorted << ',' << f.pixelCulled
+        << ',' << threads << '\n';
+  }
+}
+
+/// The headline ratios: every VTK mapper against every MTPT contender, each at its faster
+/// window.
+void PrintRatios(
+  const std::vector<std::string>& names, const std::map<std::string, WindowMeasurements>& results)
+{
+  for (const std::string& theirs : names)
+  {
+    if (theirs.rfind("mtpt", 0) == 0)
+    {
+      continue;
+    }
+    const WindowMeasurements& v = results.at(theirs);
+    for (const std::string& ours : names)
+    {
+      if (ours.rfind("mtpt", 0) != 0)
+      {
+        continue;
+      }
+      const WindowMeasurements& m = results.at(ours);
+      const Measurement &a = v.Fastest(), &b = m.Fastest();
+      std::printf("%s / %s, each in its faster window: %s ms (%s) / %s ms (%s) = **%.2fx**",
+        theirs.c_str(), ours.c_str(), FormatMs(a.moving).c_str(), WindowName(v.windows[v.Faster()]),
+        FormatMs(b.moving).c_str(), WindowName(m.windows[m.Faster()]),
+        a.moving.median / b.moving.median);
+      for (std::size_t w = 0; w < m.windows.size() && m.windows.size() > 1; ++w)
+      {
+        const Measurement* same = v.In(m.windows[w]);
+        if (same)
+        {
+          std::printf("%s%s %.2fx", w == 0 ? " (" : ", ", WindowName(m.windows[w]),
+            same->moving.median / m.measurements[w].moving.median);
+        }
+      }
+      std::printf("%s\n", m.windows.size() > 1 ? ")" : "");
+    }
+  }
+}
+
+void PrintScene(const Scene& scene, int width, int height, const std::vector<std::string>& names,
+  const std::map<std::string, WindowMeasurements>& results, const Options& o, std::ofstream& csv)
+{
+  PrintHeader(scene, width, height, o);
   vtkNew<Mapper> probe;
   const int threads = probe->GetEffectiveNumberOfThreads();
   for (const std::string& name : names)
   {
-    Measurement& m = results[name];
-    const double ratio = pt ? pt->moving.median / m.moving.median : 0;
-    const ImageError e = pt ? CompareImages(m.image, pt->image) : ImageError{};
-    const double nsPerFragment = m.mtpt.fragments > 0 ? 1e6 * m.mtpt.raster * threads / m.mtpt.fragments : 0;
-    std::printf("| %s | %s |%s %.2fx | %.4f | %.1f | %.1f (%.1f + %.1f) | %.1f | %.0f | %.1f |\n",
-      name.c_str(), FormatMs(m.moving).c_str(),
-      o.unchanged ? (" " + FormatMs(m.unchanged) + " |").c_str() : "", ratio, e.rmse, m.mtpt.cpuStages,
-      m.mtpt.composite, m.mtpt.bin, m.mtpt.raster, m.mtpt.upload + m.mtpt.draw, m.mtpt.fragments, nsPerFragment);
-    if (csv)
+    const WindowMeasurements& m = results.at(name);
+    for (std::size_t w = 0; w < m.windows.size(); ++w)
     {
-      csv << scene.name << ',' << scene.grid->GetNumberOfCells() << ',' << width << ',' << height
-          << ',' << name << ',' << o.common.mapper.shading << ',' << m.moving.median << ','
-          << (m.moving.slow ? 1 : 0) << ',' << m.unchanged.median << ',' << ratio << ','
-          << e.rmse << ',' << e.worst << ',' << m.mtpt.cpuStages << ',' << m.mtpt.composite << ',' << m.mtpt.bin
-          << ',' << m.mtpt.raster << ',' << m.mtpt.upload << ',' << m.mtpt.draw << ',' << m.mtpt.fragments << ','
-          << nsPerFragment << ',' << m.mtpt.sorted << ',' << m.mtpt.pixelCulled << ',' << threads << '\n';
+      PrintRow(scene, width, height, name, m, w, results, o, threads, csv);
     }
   }
+  PrintRatios(names, results);
   const MapperSettings& mtpt = o.common.mapper;
   if (mtpt.autoAdjust || mtpt.imageSampleDistance != 1.0f)
   {
     for (const std::string& name : names)
     {
-      const Measurement& m = results[name];
-      if (!m.mtpt.backend.empty())
+      const WindowMeasurements& m = results.at(name);
+      for (std::size_t w = 0; w < m.windows.size(); ++w)
       {
-        std::printf("%s: the median frame composited at image sample distance %.2f (%d x %d "
-                    "pixels)%s\n",
-          name.c_str(), m.mtpt.imageSampleDistance, m.mtpt.imageSize[0], m.mtpt.imageSize[1],
-          mtpt.autoAdjust ? ", adjusted to the window's desired update rate" : "");
+        const StageFigures& f = m.measurements[w].mtpt;
+        if (!f.backend.empty())
+        {
+          std::printf("%s, %s: the median frame composited at image sample distance %.2f (%d x "
+                      "%d pixels)%s\n",
+            name.c_str(), WindowName(m.windows[w]), f.imageSampleDistance, f.imageSize[0],
+            f.imageSize[1],
+            mtpt.autoAdjust ? ", adjusted to the window's desired update rate" : "");
+        }
       }
     }
   }
@@ -110,8 +200,9 @@ int main(int argc, char* argv[])
                 "the camera turning before every timed frame." };
   AddCommonOptions(app, o.common);
   AddImageSamplingOptions(app, o.common);
-  app.add_option("--meshes", o.meshes, "scenes (Harness.h: wavelet, grid:N, bluntfin, cubes, "
-                                       "blocks, comb, kiefer, ...)");
+  app.add_option("--meshes", o.meshes,
+    "scenes (Harness.h: wavelet, grid:N, bluntfin, cubes, "
+    "blocks, comb, kiefer, ...)");
   app.add_option("--sizes", o.sizes, "window sizes: 512 (square) or 1920x1080, comma-separated");
   app.add_option("--contenders", o.contenders, "mtpt-cpu, mtpt-gl, vtk-pt, raycast, zsweep");
   app.add_flag("--unchanged", o.unchanged, "also time frames whose view does not change");
@@ -147,8 +238,9 @@ int main(int argc, char* argv[])
     csv.open(o.csv, std::ios::app);
     if (header)
     {
-      csv << "mesh,tetrahedra,width,height,contender,shading,ms,slow,ms_unchanged,"
-             "vtkpt_over_this,rmse_vs_vtkpt,worst_vs_vtkpt,cpu_stages_ms,composite_ms,bin_ms,"
+      csv << "mesh,tetrahedra,width,height,contender,multisampling,shading,ms,slow,"
+             "ms_unchanged,vtkpt_over_this_same_window,vtkpt_over_this_each_faster,rmse_vs_vtkpt,"
+             "worst_vs_vtkpt,cpu_stages_ms,composite_ms,bin_ms,"
              "raster_ms,upload_ms,draw_ms,fragments,ns_per_fragment_core,sorted,pixel_culled,"
              "threads\n";
     }
@@ -166,19 +258,8 @@ int main(int argc, char* argv[])
     auto property = MakeProperty(scene);
     for (const auto& size : sizes)
     {
-      std::map<std::string, Measurement> results;
-      // VTK's PT first: the others' images are compared with it.
-      if (results.count("vtk-pt") == 0 && std::find(names.begin(), names.end(), "vtk-pt") != names.end())
-      {
-        results["vtk-pt"] = Measure(scene, property, "vtk-pt", size.first, size.second, o.common, o.unchanged);
-      }
-      for (const std::string& name : names)
-      {
-        if (!results.count(name))
-        {
-          results[name] = Measure(scene, property, name, size.first, size.second, o.common, o.unchanged);
-        }
-      }
+      const auto results =
+        MeasureContenders(scene, property, names, size.first, size.second, o.common, o.unchanged);
       PrintScene(scene, size.first, size.second, names, results, o, csv);
       std::fflush(stdout);
     }

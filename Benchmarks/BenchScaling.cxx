@@ -2,8 +2,11 @@
 // mtpt_bench_scaling: frame time against mesh size (generated jittered grids of 10 to 10M
 // tetrahedra, one window size) or against window size (one scene, 16x16 to 1920x1080),
 // for MTPT's backends and VTK's mappers, the camera turning before every timed frame
-// (Harness.h states the rules). Prints a Markdown table, writes a CSV and a log-log plot
-// (PNG, VTK's charts) to --out. Run under a display (Testing/xvfb-launch.sh without one).
+// (Harness.h states the rules), each in VTK's default window (multisampled) and
+// single-sampled (--multisampling). Prints a Markdown table with VTK's PT over MTPT's CPU
+// backend each in its faster window, writes a CSV and a log-log plot with one series per
+// contender and window (PNG, VTK's charts) to --out. Run under a display (Testing/xvfb-launch.sh
+// without one).
 #include "Harness.h"
 #include "Plot.h"
 
@@ -43,8 +46,36 @@ struct Point
   std::string scene;
   long long tetrahedra = 0;
   int width = 0, height = 0;
-  std::map<std::string, Measurement> results;
+  std::map<std::string, WindowMeasurements> results;
 };
+
+/// "vtk-pt (single-sampled)": a contender in one kind of window, as a column and a series.
+std::string Label(const std::string& name, bool multisampling)
+{
+  return name + " (" + WindowName(multisampling) + ")";
+}
+
+/// VTK PT over MTPT CPU, each at its faster window, and in each window; empty without both.
+std::string Ratios(const Point& p)
+{
+  const auto pt = p.results.find("vtk-pt"), cpu = p.results.find("mtpt-cpu");
+  if (pt == p.results.end() || cpu == p.results.end())
+  {
+    return " |";
+  }
+  char text[64];
+  std::snprintf(text, sizeof(text), " %.2fx |",
+    pt->second.Fastest().moving.median / cpu->second.Fastest().moving.median);
+  std::string ratios = text;
+  for (std::size_t w = 0; w < cpu->second.windows.size(); ++w)
+  {
+    const Measurement* same = pt->second.In(cpu->second.windows[w]);
+    std::snprintf(text, sizeof(text), " %.2fx |",
+      same ? same->moving.median / cpu->second.measurements[w].moving.median : 0.0);
+    ratios += text;
+  }
+  return ratios;
+}
 
 } // namespace
 
@@ -54,8 +85,10 @@ int main(int argc, char* argv[])
   CLI::App app{ "Frame time against mesh size or window size, for MTPT and VTK's mappers, "
                 "the camera turning before every timed frame." };
   AddCommonOptions(app, o.common);
-  app.add_option("--vary", o.vary, "what changes: the mesh (--meshes, one --size) or the "
-                                   "window (--sizes, one --scene)")
+  app
+    .add_option("--vary", o.vary,
+      "what changes: the mesh (--meshes, one --size) or the "
+      "window (--sizes, one --scene)")
     ->check(CLI::IsMember({ "mesh", "window" }));
   app.add_option("--meshes", o.meshes, "--vary mesh: the scenes, smallest first (Harness.h)");
   app.add_option("--size", o.size, "--vary mesh: the window, 512 or 1920x1080");
@@ -81,8 +114,9 @@ int main(int argc, char* argv[])
   if (scenes.empty() || windows.empty() || (byMesh && windows.size() != 1) ||
     (!byMesh && scenes.size() != 1))
   {
-    std::fprintf(stderr, "mtpt_bench_scaling: --vary mesh takes one --size and several "
-                         "--meshes; --vary window one --scene and several --sizes\n");
+    std::fprintf(stderr,
+      "mtpt_bench_scaling: --vary mesh takes one --size and several "
+      "--meshes; --vary window one --scene and several --sizes\n");
     return 2;
   }
   const std::vector<std::string> names = SplitList(o.contenders);
@@ -113,11 +147,7 @@ int main(int argc, char* argv[])
       p.tetrahedra = static_cast<long long>(scene.grid->GetNumberOfCells());
       p.width = window.first;
       p.height = window.second;
-      for (const std::string& name : names)
-      {
-        p.results[name] =
-          Measure(scene, property, name, p.width, p.height, o.common);
-      }
+      p.results = MeasureContenders(scene, property, names, p.width, p.height, o.common);
       std::fprintf(stderr, "measured %s at %dx%d\n", p.scene.c_str(), p.width, p.height);
       points.push_back(std::move(p));
     }
@@ -126,59 +156,69 @@ int main(int argc, char* argv[])
   // The table, the CSV and the plot.
   std::printf("Frame time (ms, median of %d, camera turning %.2f degrees per frame; * one "
               "frame slower than %.0f s), MTPT shading %s\n\n",
-    o.common.timing.repeat, o.common.timing.step, o.common.timing.slowLimit, o.common.mapper.shading.c_str());
+    o.common.timing.repeat, o.common.timing.step, o.common.timing.slowLimit,
+    o.common.mapper.shading.c_str());
+  const std::vector<bool>& kinds = o.common.windows;
   std::printf("| scene | tetrahedra | window |");
   for (const std::string& name : names)
   {
-    std::printf(" %s |", name.c_str());
+    for (bool multisampling : kinds)
+    {
+      std::printf(" %s |", Label(name, multisampling).c_str());
+    }
   }
-  std::printf(" VTK PT / MTPT CPU |\n|---|---:|---|");
-  for (std::size_t i = 0; i <= names.size(); ++i)
+  std::printf(" VTK PT / MTPT CPU, each in its faster window |");
+  for (bool multisampling : kinds)
+  {
+    std::printf(" VTK PT / MTPT CPU, %s |", WindowName(multisampling));
+  }
+  std::printf("\n|---|---:|---|");
+  for (std::size_t i = 0; i < names.size() * kinds.size() + 1 + kinds.size(); ++i)
   {
     std::printf("---:|");
   }
   std::printf("\n");
   const std::string stem = o.out + "/scaling_" + o.vary;
   std::ofstream csv(stem + ".csv");
-  csv << "scene,tetrahedra,width,height,contender,shading,ms,slow,cpu_stages_ms,composite_ms,"
-         "fragments,threads\n";
+  csv << "scene,tetrahedra,width,height,contender,multisampling,shading,ms,slow,cpu_stages_ms,"
+         "composite_ms,fragments,threads\n";
   vtkNew<vtkMultiThreadedProjectedTetrahedraMapper> probe;
   const int threads = probe->GetEffectiveNumberOfThreads();
-  std::vector<Series> series(names.size());
-  for (std::size_t k = 0; k < names.size(); ++k)
+  std::vector<Series> series;
+  for (const std::string& name : names)
   {
-    series[k].label = names[k];
+    for (bool multisampling : kinds)
+    {
+      series.push_back(Series{ Label(name, multisampling), {}, {} });
+    }
   }
   for (const Point& p : points)
   {
     std::printf("| %s | %lld | %dx%d |", p.scene.c_str(), p.tetrahedra, p.width, p.height);
     for (std::size_t k = 0; k < names.size(); ++k)
     {
-      const Measurement& m = p.results.at(names[k]);
-      std::printf(" %s |", FormatMs(m.moving).c_str());
-      csv << p.scene << ',' << p.tetrahedra << ',' << p.width << ',' << p.height << ','
-          << names[k] << ',' << o.common.mapper.shading << ',' << m.moving.median << ','
-          << (m.moving.slow ? 1 : 0) << ',' << m.mtpt.cpuStages << ',' << m.mtpt.composite << ','
-          << m.mtpt.fragments << ',' << threads << '\n';
-      series[k].x.push_back(
-        byMesh ? static_cast<double>(p.tetrahedra) : static_cast<double>(p.width) * p.height);
-      series[k].y.push_back(m.moving.median);
+      const WindowMeasurements& all = p.results.at(names[k]);
+      for (std::size_t w = 0; w < kinds.size(); ++w)
+      {
+        const Measurement& m = all.measurements[w];
+        std::printf(" %s |", FormatMs(m.moving).c_str());
+        csv << p.scene << ',' << p.tetrahedra << ',' << p.width << ',' << p.height << ','
+            << names[k] << ',' << (kinds[w] ? "on" : "off") << ',' << o.common.mapper.shading << ','
+            << m.moving.median << ',' << (m.moving.slow ? 1 : 0) << ',' << m.mtpt.cpuStages << ','
+            << m.mtpt.composite << ',' << m.mtpt.fragments << ',' << threads << '\n';
+        Series& s = series[k * kinds.size() + w];
+        s.x.push_back(
+          byMesh ? static_cast<double>(p.tetrahedra) : static_cast<double>(p.width) * p.height);
+        s.y.push_back(m.moving.median);
+      }
     }
-    const auto pt = p.results.find("vtk-pt"), cpu = p.results.find("mtpt-cpu");
-    if (pt != p.results.end() && cpu != p.results.end())
-    {
-      std::printf(" %.2fx |\n", pt->second.moving.median / cpu->second.moving.median);
-    }
-    else
-    {
-      std::printf(" |\n");
-    }
+    std::printf("%s\n", Ratios(p).c_str());
   }
   Chart chart;
-  chart.title = byMesh ? "Frame time against mesh size (" + o.size + " window, " +
-      std::to_string(threads) + " threads)"
-                       : "Frame time against window size (" + o.scene + ", " +
-      std::to_string(threads) + " threads)";
+  chart.title = byMesh
+    ? "Frame time against mesh size (" + o.size + " window, " + std::to_string(threads) +
+      " threads)"
+    : "Frame time against window size (" + o.scene + ", " + std::to_string(threads) + " threads)";
   chart.xTitle = byMesh ? "tetrahedra" : "pixels in the window";
   chart.yTitle = "ms per frame (camera moving)";
   std::string error;

@@ -5,9 +5,10 @@
 // with and without culling, and the reuse cases (unchanged view, small rotation, colour-only
 // and opacity changes), printing the CPU stages apart from the whole frame. Then it measures
 // peak memory in child processes (batched, unbatched, VTK's PT). Windows as the benchmark
-// harness makes them (Harness.h). The cases that keep the view unchanged measure reuse and
-// are labelled so; every other case turns the camera before each frame. Run under a display
-// (Testing/xvfb-launch.sh without one).
+// harness makes them (Harness.h), of the first kind --multisampling names (VTK's default,
+// multisampled, unless it says off): these figures compare MTPT with itself. The cases that keep
+// the view unchanged measure reuse and are labelled so; every other case turns the camera before
+// each frame. Run under a display (Testing/xvfb-launch.sh without one).
 #include "Harness.h"
 
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
@@ -46,6 +47,14 @@ struct Options
   std::string child;    ///< memory child: mtpt, mtpt-unbatched, vtkpt
   std::string self;
 };
+
+/// The benchmark's window: of the first kind --multisampling names.
+StageOptions Window(const Options& o)
+{
+  StageOptions look;
+  look.multisampling = o.common.windows.front();
+  return look;
+}
 
 /// Kilobytes from a /proc/self/status line ("VmRSS", "VmHWM").
 long StatusKiB(const char* field)
@@ -158,7 +167,7 @@ void Case(const char* scene, const char* name, Stage& s, Mapper* m, int repeat, 
     static_cast<long long>(m->GetNumberOfOpacityCulledCells()),
     static_cast<long long>(m->GetNumberOfFrustumCulledCells()),
     static_cast<long long>(m->GetNumberOfPixelCulledCells()),
-    (reuse & Mapper::REUSED_IMAGE)       ? "image reused"
+    (reuse & Mapper::REUSED_IMAGE)             ? "image reused"
       : (reuse & Mapper::REUSED_DECOMPOSITION) ? "decomposition reused"
       : (reuse & Mapper::REUSED_ORDER)         ? "order reused"
                                                : "-",
@@ -175,7 +184,7 @@ void Cases(const Options& o, const Scene& mesh)
       " tets, " + (hide ? "90% transparent" : "all visible") + ")";
     vtkNew<Mapper> mapper;
     TransferFunctions tf(mesh, hide ? hidden90 : -1e300);
-    Stage s(mesh, tf.property, mapper, o.size, o.size);
+    Stage s(mesh, tf.property, mapper, o.size, o.size, Window(o));
     s.Frame(); // warm-up
     const int repeat = o.common.timing.repeat;
     auto turn = [&](double degrees) { return [&, degrees](int) { s.Turn(degrees); }; };
@@ -219,7 +228,7 @@ int MemoryChild(const Options& o)
     mapper = ours.Get();
   }
   TransferFunctions tf(mesh, -1e300);
-  Stage s(mesh, tf.property, mapper, o.size, o.size);
+  Stage s(mesh, tf.property, mapper, o.size, o.size, Window(o));
   s.GetRenderer()->RemoveVolume(s.GetVolume());
   s.Frame(); // the context and the window's buffers: not the mapper's memory
   const long before = StatusKiB("VmRSS");
@@ -242,7 +251,7 @@ void Memory(const Options& o)
   {
     const std::string command = o.self + " --child-memory " + kind + " --tets " +
       std::to_string(o.tets) + " --size " + std::to_string(o.size) + " --data '" +
-      o.common.dataFolder + "'";
+      o.common.dataFolder + "' --multisampling " + (o.common.windows.front() ? "on" : "off");
     FILE* pipe = popen(command.c_str(), "r");
     char line[512];
     bool found = false;

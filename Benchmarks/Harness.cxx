@@ -51,7 +51,6 @@
 #error "MTPT_SOURCE_DIR must be defined"
 #endif
 
-
 namespace mtpt
 {
 namespace bench
@@ -430,10 +429,14 @@ Stage::Stage(const Scene& scene, vtkVolumeProperty* property,
       : static_cast<vtkDataObject*>(scene.grid));
   this->Volume->SetMapper(mapper);
   this->Volume->SetProperty(property);
-  this->Renderer->SetBackground(options.background[0], options.background[1],
-    options.background[2]);
+  this->Renderer->SetBackground(
+    options.background[0], options.background[1], options.background[2]);
   this->Renderer->AddVolume(this->Volume);
   this->Window->SetOffScreenRendering(options.onScreen ? 0 : 1);
+  if (!options.multisampling)
+  {
+    this->Window->SetMultiSamples(0);
+  }
   this->Window->SetSize(width, height);
   this->Window->AddRenderer(this->Renderer);
   if (options.desiredUpdateRate > 0)
@@ -499,8 +502,8 @@ vtkSmartPointer<vtkImageData> Stage::Image()
   return image;
 }
 
-FrameTiming TimeFrames(Stage& stage, const TimingOptions& options,
-  const std::function<void(std::size_t)>& afterFrame)
+FrameTiming TimeFrames(
+  Stage& stage, const TimingOptions& options, const std::function<void(std::size_t)>& afterFrame)
 {
   FrameTiming timing;
   stage.StartView();
@@ -600,8 +603,8 @@ Measurement Measure(const Scene& scene, vtkVolumeProperty* property, const std::
   }
   Stage stage(scene, property, mapper, width, height, look);
   std::vector<StageFigures> figures;
-  m.moving = TimeFrames(
-    stage, options.timing, [&](std::size_t) { figures.push_back(FiguresOf(mapper)); });
+  m.moving =
+    TimeFrames(stage, options.timing, [&](std::size_t) { figures.push_back(FiguresOf(mapper)); });
   m.image = stage.Image();
   if (!figures.empty())
   {
@@ -616,11 +619,96 @@ Measurement Measure(const Scene& scene, vtkVolumeProperty* property, const std::
   return m;
 }
 
+const char* WindowName(bool multisampling)
+{
+  return multisampling ? "multisampled" : "single-sampled";
+}
+
+std::size_t WindowMeasurements::Faster() const
+{
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < this->measurements.size(); ++i)
+  {
+    if (this->measurements[i].moving.median < this->measurements[best].moving.median)
+    {
+      best = i;
+    }
+  }
+  return best;
+}
+
+const Measurement* WindowMeasurements::In(bool multisampling) const
+{
+  for (std::size_t i = 0; i < this->windows.size(); ++i)
+  {
+    if (this->windows[i] == multisampling)
+    {
+      return &this->measurements[i];
+    }
+  }
+  return nullptr;
+}
+
+Measurement MedianRound(std::vector<Measurement> rounds)
+{
+  std::vector<double> medians;
+  for (const Measurement& m : rounds)
+  {
+    medians.push_back(m.moving.median);
+  }
+  return rounds.empty() ? Measurement{} : rounds[MedianIndex(medians)];
+}
+
+std::map<std::string, WindowMeasurements> MeasureContenders(const Scene& scene,
+  vtkVolumeProperty* property, const std::vector<std::string>& names, int width, int height,
+  const CommonOptions& options, bool unchanged, const StageOptions& stage)
+{
+  // rounds[name][window]: every round goes through every contender and window in turn.
+  std::map<std::string, std::vector<std::vector<Measurement>>> rounds;
+  for (int round = 0; round < std::max(1, options.rounds); ++round)
+  {
+    for (const std::string& name : names)
+    {
+      auto& byWindow = rounds[name];
+      byWindow.resize(options.windows.size());
+      for (std::size_t w = 0; w < options.windows.size(); ++w)
+      {
+        StageOptions look = stage;
+        look.multisampling = options.windows[w];
+        byWindow[w].push_back(
+          Measure(scene, property, name, width, height, options, unchanged, look));
+      }
+    }
+  }
+  std::map<std::string, WindowMeasurements> results;
+  for (auto& entry : rounds)
+  {
+    WindowMeasurements& m = results[entry.first];
+    m.windows = options.windows;
+    for (auto& byRound : entry.second)
+    {
+      m.measurements.push_back(MedianRound(std::move(byRound)));
+    }
+  }
+  return results;
+}
+
+std::string FormatWindows(const WindowMeasurements& m)
+{
+  std::string text;
+  for (std::size_t i = 0; i < m.measurements.size(); ++i)
+  {
+    const std::string ms = FormatMs(m.measurements[i].moving);
+    text += i == 0 ? ms : (i == 1 ? " (" : ", ") + std::string(WindowName(m.windows[i])) + " " + ms;
+  }
+  return m.measurements.size() > 1 ? text + ")" : text;
+}
+
 std::string FormatMs(const FrameTiming& t)
 {
   char text[32];
-  std::snprintf(text, sizeof(text), t.median < 100 ? "%.1f%s" : "%.0f%s", t.median,
-    t.slow ? "*" : "");
+  std::snprintf(
+    text, sizeof(text), t.median < 100 ? "%.1f%s" : "%.0f%s", t.median, t.slow ? "*" : "");
   return text;
 }
 
@@ -650,10 +738,43 @@ void AddCommonOptions(CLI::App& app, CommonOptions& options)
 {
   app.add_option("--repeat", options.timing.repeat, "timed frames per measurement (median)")
     ->check(CLI::PositiveNumber);
+  app
+    .add_option("--rounds", options.rounds,
+      "frames and scaling: measure everything this many times, contenders and windows "
+      "alternating; each result is its median round")
+    ->check(CLI::PositiveNumber);
+  app
+    .add_option_function<std::string>(
+      "--multisampling",
+      [&options](const std::string& list)
+      {
+        options.windows.clear();
+        for (const std::string& item : SplitList(list))
+        {
+          options.windows.push_back(item == "on");
+        }
+      },
+      "the windows every contender is timed in: on (VTK's default, multisampled), off "
+      "(SetMultiSamples(0)), or on,off (default: both; ratios take each mapper at its faster)")
+    ->check(
+      [](const std::string& list)
+      {
+        const auto items = SplitList(list);
+        for (const std::string& item : items)
+        {
+          if (item != "on" && item != "off")
+          {
+            return std::string("--multisampling takes on, off or on,off");
+          }
+        }
+        return items.empty() ? std::string("--multisampling takes on, off or on,off")
+                             : std::string();
+      });
   app.add_option("--step", options.timing.step,
     "degrees the camera turns before every timed frame (0: an unchanged view)");
-  app.add_option("--slow-limit", options.timing.slowLimit,
-    "seconds: a slower warm-up frame is the measurement (one frame)")
+  app
+    .add_option("--slow-limit", options.timing.slowLimit,
+      "seconds: a slower warm-up frame is the measurement (one frame)")
     ->check(CLI::PositiveNumber);
   app.add_option("--threads", options.mapper.threads, "MTPT's threads (0: the default)")
     ->check(CLI::NonNegativeNumber);
@@ -669,15 +790,18 @@ void AddCommonOptions(CLI::App& app, CommonOptions& options)
 
 void AddImageSamplingOptions(CLI::App& app, CommonOptions& options)
 {
-  app.add_option("--image-sample-distance", options.mapper.imageSampleDistance,
-    "MTPT composites one sample per D x D pixels, stretched over the window (default 1)")
+  app
+    .add_option("--image-sample-distance", options.mapper.imageSampleDistance,
+      "MTPT composites one sample per D x D pixels, stretched over the window (default 1)")
     ->check(CLI::Range(0.1, 100.0));
-  app.add_option("--desired-update-rate", options.desiredUpdateRate,
-    "the window asks for this many frames a second, as an interactor does while the user "
-    "drags, and MTPT adjusts its image sample distance to it (AutoAdjustSampleDistances)")
+  app
+    .add_option("--desired-update-rate", options.desiredUpdateRate,
+      "the window asks for this many frames a second, as an interactor does while the user "
+      "drags, and MTPT adjusts its image sample distance to it (AutoAdjustSampleDistances)")
     ->check(CLI::PositiveNumber);
-  app.add_option("--warm-up", options.timing.warmUp,
-    "untimed frames before the timed ones (default 1; 10 with --desired-update-rate)")
+  app
+    .add_option("--warm-up", options.timing.warmUp,
+      "untimed frames before the timed ones (default 1; 10 with --desired-update-rate)")
     ->check(CLI::PositiveNumber);
 }
 

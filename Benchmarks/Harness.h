@@ -6,7 +6,12 @@
  * correct medians, image errors, and command-line options (CLI11).
  *
  * The rules every figure follows:
- * - Windows are as VTK makes them by default (multisampled; off-screen), for every mapper.
+ * - Windows are as VTK makes them by default (multisampled; off-screen), for every mapper,
+ *   and, where a benchmark asks for it, also with multisampling off
+ *   (vtkRenderWindow::SetMultiSamples(0)): a mapper's time depends on it (on Mesa llvmpipe
+ *   VTK's PT takes about twice as long multisampled), so every contender is timed in both
+ *   kinds of window and a ratio between two mappers takes each at its faster one
+ *   (FasterWindow).
  * - Timed frames move the camera: before every frame (the warm-up frame included) it turns
  *   by a small azimuth step (FrameTiming::step, 1 degree unless an option says otherwise),
  *   so that no mapper re-uses a previous frame's result. Frames with an unchanged view are
@@ -28,11 +33,12 @@
 #include "Statistics.h"
 
 #include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
-#include "vtkImageData.h" // Measurement holds images
+#include "vtkImageData.h"            // Measurement holds images
 #include "vtkNew.h"
 #include "vtkSmartPointer.h"
 
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -80,8 +86,8 @@ struct Scene
  * "pulley", "fire_ug", "ironProt"; see `SharedDataSets`). Returns false with `error` set
  * when the name is unknown or its file cannot be read.
  */
-bool LoadScene(const std::string& name, const std::string& dataFolder, Scene& scene,
-  std::string& error);
+bool LoadScene(
+  const std::string& name, const std::string& dataFolder, Scene& scene, std::string& error);
 
 /**
  * A scene from a VTK file (.vtu, or legacy .vtk of any data set), split into tetrahedra
@@ -92,8 +98,8 @@ bool LoadScene(const std::string& name, const std::string& dataFolder, Scene& sc
  * cells and made active in every block. Returns false with `error` set when the file cannot
  * be read, holds no cells or no such array.
  */
-bool LoadSceneFile(const std::string& path, const std::string& array, Scene& scene,
-  std::string& error);
+bool LoadSceneFile(
+  const std::string& path, const std::string& array, Scene& scene, std::string& error);
 
 /// The benchmark's transfer functions: a cool-warm colour map and opacity rising linearly
 /// over `range`, unit distance a fiftieth of the grid's diagonal.
@@ -102,9 +108,9 @@ vtkSmartPointer<vtkVolumeProperty> MakeProperty(const Scene& scene);
 /// How MTPT's contenders are set up.
 struct MapperSettings
 {
-  int threads = 0;             ///< 0: the default
-  std::string shading = "vtk"; ///< "vtk" or "pre-integrated"
-  std::string order = "radix"; ///< "radix" or "partition"
+  int threads = 0;               ///< 0: the default
+  std::string shading = "vtk";   ///< "vtk" or "pre-integrated"
+  std::string order = "radix";   ///< "radix" or "partition"
   float imageSampleDistance = 1; ///< fixed, unless autoAdjust
   bool autoAdjust = false;       ///< AutoAdjustSampleDistances (off: every pixel drawn)
 };
@@ -140,7 +146,13 @@ struct StageOptions
   /// Frames a second the window asks for (vtkRenderWindow::SetDesiredUpdateRate, what an
   /// interactor sets while the user drags); 0: VTK's default (a still frame).
   double desiredUpdateRate = 0;
+  /// VTK's default window (multisampled) if true; false: vtkRenderWindow::SetMultiSamples(0).
+  bool multisampling = true;
 };
+
+/// How a window's kind is named in tables: "multisampled" (VTK's default) or
+/// "single-sampled".
+const char* WindowName(bool multisampling);
 
 /// A volume in a renderer in a window as VTK makes it by default. Its input is the scene's
 /// blocks for the mappers that take a composite data set, else its grid.
@@ -203,9 +215,13 @@ FrameTiming TimeFrames(Stage& stage, const TimingOptions& options,
 struct CommonOptions
 {
   TimingOptions timing;
-  MapperSettings mapper;  ///< MTPT's threads, shading, order and image sample distance
-  std::string dataFolder; ///< real meshes beyond the repository's (optional)
+  MapperSettings mapper;        ///< MTPT's threads, shading, order and image sample distance
+  std::string dataFolder;       ///< real meshes beyond the repository's (optional)
   double desiredUpdateRate = 0; ///< StageOptions::desiredUpdateRate of every measurement
+  /// The kinds of window every contender is timed in (StageOptions::multisampling), in
+  /// order: VTK's default (multisampled) and single-sampled unless --multisampling says.
+  std::vector<bool> windows = { true, false };
+  int rounds = 1; ///< times every measurement is repeated, contenders alternating
 };
 
 /// MTPT's timers and counters of one frame, milliseconds and counts (zero for VTK's
@@ -218,7 +234,7 @@ struct StageFigures
   long long sorted = 0, pixelCulled = 0;
   double imageSampleDistance = 1; ///< the distance the frame was composited at
   int imageSize[2] = { 0, 0 };    ///< the composited image's size
-  std::string backend; ///< "CPU" or "OpenGL": the backend that drew
+  std::string backend;            ///< "CPU" or "OpenGL": the backend that drew
 };
 
 /// The figures of the last frame `mapper` drew.
@@ -227,10 +243,10 @@ StageFigures FiguresOf(vtkUnstructuredGridVolumeMapper* mapper);
 /// What one contender measured on one scene and window size.
 struct Measurement
 {
-  FrameTiming moving;    ///< the camera turning before every frame
-  FrameTiming unchanged; ///< the same view every frame (when asked for)
+  FrameTiming moving;                  ///< the camera turning before every frame
+  FrameTiming unchanged;               ///< the same view every frame (when asked for)
   vtkSmartPointer<vtkImageData> image; ///< at the end of the moving frames
-  StageFigures mtpt;     ///< MTPT's figures of the median moving frame
+  StageFigures mtpt;                   ///< MTPT's figures of the median moving frame
 };
 
 /**
@@ -244,6 +260,36 @@ Measurement Measure(const Scene& scene, vtkVolumeProperty* property, const std::
 /// A median as a table shows it ("12.3", "456", with "*" when one slow frame).
 std::string FormatMs(const FrameTiming& t);
 
+/// One contender's measurements in each kind of window (CommonOptions::windows), and which
+/// of them was the faster: ratios between mappers take each at its faster window.
+struct WindowMeasurements
+{
+  std::vector<bool> windows;             ///< multisampling of each entry
+  std::vector<Measurement> measurements; ///< one per window
+  /// The index of the faster window (smaller median moving frame); 0 when there is one.
+  std::size_t Faster() const;
+  const Measurement& Fastest() const { return this->measurements[this->Faster()]; }
+  /// The measurement in the window of this kind, or null when it was not measured.
+  const Measurement* In(bool multisampling) const;
+};
+
+/**
+ * Times every contender of `names` (Measure) in every kind of window of options.windows,
+ * options.rounds times: each round measures every contender in every window in turn, so
+ * that other load on the machine falls on all of them alike. Each (contender, window)
+ * result is its median round: the round whose median moving frame is the median of its
+ * rounds (the lower middle one for an even count).
+ */
+std::map<std::string, WindowMeasurements> MeasureContenders(const Scene& scene,
+  vtkVolumeProperty* property, const std::vector<std::string>& names, int width, int height,
+  const CommonOptions& options, bool unchanged = false, const StageOptions& stage = {});
+
+/// The median round of `rounds` (see MeasureContenders).
+Measurement MedianRound(std::vector<Measurement> rounds);
+
+/// "2218 (single-sampled 1006)": the median in the first window kind and in the others.
+std::string FormatWindows(const WindowMeasurements& m);
+
 /// A window size "512" (square) or "1920x1080"; false for anything else.
 bool ParseSize(const std::string& text, int& width, int& height);
 
@@ -254,7 +300,8 @@ struct ImageError
 };
 ImageError CompareImages(vtkImageData* a, vtkImageData* b);
 
-/// Adds --repeat, --step, --slow-limit, --threads, --shading, --order and --data to `app`.
+/// Adds --repeat, --rounds, --step, --slow-limit, --threads, --shading, --order, --data
+/// and --multisampling to `app`.
 void AddCommonOptions(CLI::App& app, CommonOptions& options);
 
 /// Adds --image-sample-distance, --desired-update-rate and --warm-up to `app` (the frame
@@ -264,7 +311,6 @@ void AddImageSamplingOptions(CLI::App& app, CommonOptions& options);
 /// After parsing: a desired update rate turns MTPT's automatic adjustment on (starting from
 /// the distance given, 1 by default) with 10 warm-up frames unless --warm-up was given.
 void ApplyImageSamplingOptions(CLI::App& app, CommonOptions& options);
-
 
 /// A comma-separated list as its items ("a,b" -> {"a", "b"}).
 std::vector<std::string> SplitList(const std::string& list);

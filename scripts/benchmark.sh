@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds and runs one of the benchmark programs (each prints Markdown tables; every frame
-# benchmark follows the rules of Benchmarks/Harness.h: default windows, the camera turning
-# before every timed frame, medians, stages apart from the frame).
+# benchmark follows the rules of Benchmarks/Harness.h: every contender in VTK's default
+# window (multisampled) and single-sampled, ratios taking each mapper in its faster window,
+# the camera turning before every timed frame, medians, stages apart from the frame).
 #
 # Usage: scripts/benchmark.sh PROGRAM [arguments...]
 #   core      mtpt_bench_core: the core's CPU stages, visibility orders against library sorts
@@ -18,7 +19,7 @@ program="${1:-}"
 case "$program" in
   core | frames | scaling | accuracy | work) shift ;;
   *)
-    sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//' >&2
+    sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//' >&2
     exit 2
     ;;
 esac

@@ -3,8 +3,9 @@
 # the downstream example against the install (find_package(MTPT)), and renders the
 # embedded data set (Data/bluntfin_tets.vtu) to build/mtpt_default.png, with VTK's
 # vtkProjectedTetrahedraMapper beside it (build/mtpt_default-side-by-side.png). Both are
-# timed with the camera turning before every frame, MTPT's stages apart from the whole frame,
-# and frames of an unchanged view apart from those.
+# timed with the camera turning before every frame, in VTK's default window (multisampled)
+# and single-sampled, the ratio taking each in its faster window; MTPT's stages apart from
+# the whole frame, and frames of an unchanged view apart from those.
 # Arguments go to mtpt_render instead of the defaults (see: scripts/render.sh --help).
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"

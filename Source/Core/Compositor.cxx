@@ -19,6 +19,12 @@ namespace
 {
 
 constexpr std::size_t TilePixels = static_cast<std::size_t>(TileSize) * TileSize;
+/// Fans a rasterizing thread gathers from a tile's list at a time (64 KiB: in cache while
+/// they are drawn).
+constexpr std::size_t FansPerChunk = 512;
+/// How far ahead in a tile's list the gathering thread asks for fans (their indices grow,
+/// with gaps the hardware's prefetchers do not follow).
+constexpr std::size_t PrefetchDistance = 16;
 
 /**
  * The rows [y0, y1] and columns [x0, x1] whose pixel centres the fan's vertices span; false
@@ -76,6 +82,92 @@ bool Usable(const CompositeSettings& s)
       s.preIntegration->integrals.size() >= 4 * static_cast<std::size_t>(s.transferFunction.size));
 }
 
+/// Tile `tile` of an image of tilesX tiles across as the rasterizer draws it: its pixels
+/// `rgba`, and the opaque depth of its pixels copied into `depth` (TileSize^2 floats).
+detail::TileTarget TargetOf(
+  int tile, int tilesX, const CompositeSettings& s, float* rgba, std::vector<float>& depth)
+{
+  detail::TileTarget target;
+  target.x0 = (tile % tilesX) * TileSize;
+  target.y0 = (tile / tilesX) * TileSize;
+  target.width = std::min(TileSize, s.width - target.x0);
+  target.height = std::min(TileSize, s.height - target.y0);
+  target.rgba = rgba;
+  if (s.opaqueDepth)
+  {
+    for (int j = 0; j < target.height; ++j)
+    {
+      const float* row = s.opaqueDepth + static_cast<std::size_t>(target.y0 + j) * s.width;
+      std::copy(row + target.x0, row + target.x0 + target.width, depth.data() + j * TileSize);
+    }
+    target.depth = depth.data();
+  }
+  return target;
+}
+
+/**
+ * Depth peeling: copies the near and far window depths of tile `tile`'s pixels into `range`
+ * (2 TileSize^2 floats). Returns whether any pixel asks for a range (near <= far).
+ */
+bool CopyRanges(int tile, int tilesX, const CompositeSettings& s, std::vector<float>& range)
+{
+  const int x0 = (tile % tilesX) * TileSize, y0 = (tile / tilesX) * TileSize;
+  const int width = std::min(TileSize, s.width - x0), height = std::min(TileSize, s.height - y0);
+  bool asked = false;
+  for (int j = 0; j < height; ++j)
+  {
+    const float* row = s.depthRange + 2 * (static_cast<std::size_t>(y0 + j) * s.width + x0);
+    std::copy(row, row + 2 * width, range.data() + 2 * j * TileSize);
+    for (int i = 0; i < width && !asked; ++i)
+    {
+      asked = row[2 * i] <= row[2 * i + 1];
+    }
+  }
+  return asked;
+}
+
+/**
+ * Draws the fans listed in `list` (count of them, in visibility order: back to front) into
+ * `target` front to back: gathered from the list's end, a chunk at a time.
+ */
+void DrawFrontToBack(const Fan* fans, const std::uint32_t* list, std::size_t count,
+  const detail::RasterFrame& frame, const detail::TileTarget& target, std::vector<Fan>& chunk,
+  detail::RasterCounts& counts)
+{
+  for (std::size_t left = count; left > 0;)
+  {
+    const std::size_t n = std::min(FansPerChunk, left);
+    left -= n;
+    for (std::size_t k = 0; k < n; ++k)
+    {
+      const std::size_t at = left + n - 1 - k;
+      if (at >= PrefetchDistance)
+      {
+        const char* ahead = reinterpret_cast<const char*>(fans + list[at - PrefetchDistance]);
+        __builtin_prefetch(ahead);
+        __builtin_prefetch(ahead + 64);
+      }
+      chunk[k] = fans[list[at]];
+    }
+    detail::RasterizeTile(frame, target, chunk.data(), n, counts);
+  }
+}
+
+/// Composites the tile image `front` (premultiplied colour and coverage alpha planes) over
+/// `back`: back = front + (1 - front alpha) back.
+void Over(const float* front, float* back)
+{
+  const float* alpha = front + 3 * TilePixels;
+  for (std::size_t c = 0; c < 4; ++c)
+  {
+    for (std::size_t i = 0; i < TilePixels; ++i)
+    {
+      back[c * TilePixels + i] =
+        front[c * TilePixels + i] + (1.0f - alpha[i]) * back[c * TilePixels + i];
+    }
+  }
+}
+
 } // namespace
 
 void Compositor::Begin(const CompositeSettings& settings)
@@ -116,7 +208,7 @@ void Compositor::Composite(const Fan* fans, std::size_t count, int threads)
   this->Bin(fans, count, threads);
   this->Statistics.binSeconds += detail::SecondsSince(start);
   start = Clock::now();
-  this->Rasterize(threads);
+  this->Rasterize(fans, threads);
   this->Statistics.rasterSeconds += detail::SecondsSince(start);
 }
 
@@ -124,13 +216,15 @@ void Compositor::Bin(const Fan* fans, std::size_t count, int threads)
 {
   // A counting sort of (fan, tile) pairs by tile: block b of the fans (contiguous in
   // visibility order) counts its pairs per tile, the counts become each (tile, block)'s
-  // place in one array, tile by tile and block by block within a tile, and each block copies
-  // its fans there. A tile's fans are then contiguous and in visibility order, whatever the
-  // thread count, and rasterization reads them sequentially.
+  // place in one array, tile by tile and block by block within a tile, and each block writes
+  // its fans' indices there. A tile's fans are then listed contiguously and in visibility
+  // order, whatever the thread count; rasterization gathers them a chunk at a time. (Copying
+  // the 128-byte fans themselves into the lists moved the whole frame's fans through memory
+  // twice more.)
   const int blocks = ThreadsForWork(count, detail::FansPerThread, threads);
   this->CountPairs(fans, count, blocks);
   const std::size_t total = this->PlaceEntries(blocks);
-  this->CopyEntries(fans, count, blocks);
+  this->ListEntries(count, blocks);
   this->Statistics.binEntries += total;
   this->Statistics.tiles += this->Tiles.size();
 }
@@ -219,7 +313,7 @@ std::size_t Compositor::PlaceEntries(int blocks)
   return total;
 }
 
-void Compositor::CopyEntries(const Fan* fans, std::size_t count, int blocks)
+void Compositor::ListEntries(std::size_t count, int blocks)
 {
   const std::size_t tiles = static_cast<std::size_t>(this->TilesX) * this->TilesY;
 #pragma omp parallel num_threads(blocks)
@@ -234,17 +328,15 @@ void Compositor::CopyEntries(const Fan* fans, std::size_t count, int blocks)
         {
           for (int tx = range.x0; tx <= range.x1; ++tx)
           {
-            detail::StoreFan(
-              fans[i], this->Entries.data() + cursor[ty * this->TilesX + tx]++, true);
+            this->Entries[cursor[ty * this->TilesX + tx]++] = static_cast<std::uint32_t>(i);
           }
         }
       }
     }
-    detail::FinishStores(); // the copies are visible before the region ends
   }
 }
 
-void Compositor::Rasterize(int threads)
+void Compositor::Rasterize(const Fan* fans, int threads)
 {
   const CompositeSettings& s = this->Settings;
   detail::RasterFrame frame;
@@ -259,63 +351,51 @@ void Compositor::Rasterize(int threads)
   frame.clipToRange = s.depthRange != nullptr;
   frame.clipping = s.clipping;
   const auto jobs = static_cast<std::int64_t>(this->Tiles.size());
-  std::size_t triangles = 0, fragments = 0;
+  std::size_t triangles = 0, fragments = 0, hidden = 0;
   // Threads take tiles: no more threads than tiles, nor than the binned fans are worth.
   const std::size_t entries = this->TileStart.empty() ? 0 : this->TileStart.back();
   const int team = std::min(ThreadsForWork(this->Tiles.size(), 1, threads),
     ThreadsForWork(entries, detail::FansPerThread, threads));
-#pragma omp parallel num_threads(team) reduction(+ : triangles, fragments)
+#pragma omp parallel num_threads(team) reduction(+ : triangles, fragments, hidden)
   {
-    std::vector<float> depth(s.opaqueDepth ? TilePixels : 0);
+    std::vector<float> depth(s.opaqueDepth ? TilePixels : 0), batch;
     std::vector<float> range(s.depthRange ? 2 * TilePixels : 0);
+    std::vector<Fan> chunk(FansPerChunk);
 #pragma omp for schedule(dynamic, 1)
     for (std::int64_t job = 0; job < jobs; ++job)
     {
       const int tile = this->Tiles[job];
-      detail::TileTarget target;
-      target.x0 = (tile % this->TilesX) * TileSize;
-      target.y0 = (tile / this->TilesX) * TileSize;
-      target.width = std::min(TileSize, s.width - target.x0);
-      target.height = std::min(TileSize, s.height - target.y0);
-      if (s.depthRange)
+      if (s.depthRange && !CopyRanges(tile, this->TilesX, s, range))
       {
-        // Depth peeling: a tile where no pixel has a range to composite is left untouched.
-        bool asked = false;
-        for (int j = 0; j < target.height; ++j)
-        {
-          const float* row =
-            s.depthRange + 2 * (static_cast<std::size_t>(target.y0 + j) * s.width + target.x0);
-          std::copy(row, row + 2 * target.width, range.data() + 2 * j * TileSize);
-          for (int i = 0; i < target.width && !asked; ++i)
-          {
-            asked = row[2 * i] <= row[2 * i + 1];
-          }
-        }
-        if (!asked)
-        {
-          continue;
-        }
-        target.range = range.data();
+        continue; // depth peeling: no pixel of the tile has a range to composite
       }
-      target.rgba = this->Tile(tile);
-      if (s.opaqueDepth)
+      // A tile drawn by an earlier Composite holds what lies behind these fans: they are
+      // drawn into a transparent image of their own, composited over it afterwards.
+      const bool behind = this->Cleared[tile] != 0;
+      float* pixels = this->Tile(tile);
+      if (behind)
       {
-        for (int j = 0; j < target.height; ++j)
-        {
-          const float* row = s.opaqueDepth + static_cast<std::size_t>(target.y0 + j) * s.width;
-          std::copy(row + target.x0, row + target.x0 + target.width, depth.data() + j * TileSize);
-        }
-        target.depth = depth.data();
+        batch.assign(4 * TilePixels, 0.0f);
       }
+      detail::TileTarget target =
+        TargetOf(tile, this->TilesX, s, behind ? batch.data() : pixels, depth);
+      target.range = s.depthRange ? range.data() : nullptr;
       detail::RasterCounts counts;
-      const std::size_t first = this->TileStart[tile], end = this->TileStart[tile + 1];
-      detail::RasterizeTile(frame, target, this->Entries.data() + first, end - first, counts);
+      const std::size_t first = this->TileStart[tile];
+      DrawFrontToBack(fans, this->Entries.data() + first, this->TileStart[tile + 1] - first, frame,
+        target, chunk, counts);
+      if (behind)
+      {
+        Over(batch.data(), pixels);
+      }
       triangles += counts.triangles;
       fragments += counts.fragments;
+      hidden += counts.hidden;
     }
   }
   this->Statistics.triangles += triangles;
   this->Statistics.fragments += fragments;
+  this->Statistics.hiddenFans += hidden;
 }
 
 const char* Compositor::InstructionSet()

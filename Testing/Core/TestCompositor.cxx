@@ -171,6 +171,68 @@ TEST_P(CompositorSimd, BlendsBackToFrontInSlotOrder)
   EXPECT_NEAR(rgba[3], a + (1 - a) * a, 1e-6);
 }
 
+TEST_P(CompositorSimd, PixelsGoneOpaqueSkipOnlyWhatCannotShow)
+{
+  // Fans are drawn front to back, and a pixel whose alpha reached OpaqueAlpha (1 - 2^-11)
+  // skips the fragments behind it. Sixteen layers over the whole window, red and green in
+  // turn, each of opacity 1 - exp(-0.6): the front thirteen make the pixels opaque, the three
+  // behind must change them by no more than 2^-11. Against the layers composited back to front in
+  // double precision; and composited in two batches (the front one drawn on its own and composited
+  // over the back one), the same.
+  const int w = 8, h = 8, layers = 16;
+  std::vector<float> table = { 1, 0, 0, 1, 0, 1, 0, 1 }; // scalar 0 red, 1 green
+  std::vector<TetVertex> v(5 * layers);
+  std::vector<std::uint32_t> idx(12 * layers);
+  double expected[4] = { 0, 0, 0, 0 };
+  const double a = 1.0 - std::exp(-0.6);
+  for (int k = 0; k < layers; ++k) // back to front
+  {
+    SquareSlot(-1, -1, 9, 9, w, h, 0.6f, v.data() + 5 * k, idx.data() + 12 * k, 5 * k);
+    for (int i = 0; i < 5; ++i)
+    {
+      v[5 * k + i].scalarFront = v[5 * k + i].scalarBack = static_cast<float>(k % 2);
+    }
+    const double colour[4] = { k % 2 ? 0.0 : 1.0, k % 2 ? 1.0 : 0.0, 0.0, 1.0 };
+    for (int c = 0; c < 4; ++c)
+    {
+      expected[c] = a * colour[c] + (1 - a) * expected[c];
+    }
+  }
+  mtpt::Compositor compositor;
+  std::vector<float> rgba;
+  compositor.Composite(v.data(), idx.data(), layers, Settings(w, h, table), rgba, 2);
+  for (int c = 0; c < 4; ++c)
+  {
+    EXPECT_NEAR(rgba[c], expected[c], 1.0 / 2048 + 1e-6) << "channel " << c;
+  }
+  EXPECT_GT(rgba[3], 1.0f - 1.0f / 2048) << "opaque";
+  // Two batches: the back 6 layers, then the front 10 over them.
+  mtpt::Compositor batches;
+  batches.Begin(Settings(w, h, table));
+  std::vector<mtpt::Fan> fans;
+  for (int k = 0; k < layers; ++k)
+  {
+    for (int t = 0; t < 2; ++t)
+    {
+      const std::uint32_t* tri = idx.data() + 12 * k + 3 * t;
+      mtpt::Fan fan{};
+      fan.boundary[0] = v[tri[0]];
+      fan.boundary[1] = v[tri[1]];
+      fan.centre = v[tri[2]];
+      fan.count = 2;
+      fans.push_back(fan);
+    }
+  }
+  batches.Composite(fans.data(), 12, 2);
+  batches.Composite(fans.data() + 12, fans.size() - 12, 2);
+  std::vector<float> split(4 * w * h);
+  batches.Resolve({ 0, 0, w, h }, nullptr, split.data(), 2);
+  for (int c = 0; c < 4; ++c)
+  {
+    EXPECT_NEAR(split[c], expected[c], 1.0 / 2048 + 1e-6) << "channel " << c << ", batches";
+  }
+}
+
 TEST_P(CompositorSimd, OpaqueDepthOccludesFragmentsBehindIt)
 {
   const int w = 8, h = 8;
@@ -511,10 +573,11 @@ TEST_P(CompositorSimd, TrianglesBeyondTheFixedPointRangeAreClippedNotDropped)
 
 TEST_P(CompositorSimd, FragmentOpacityApproximationIsWithinFourUlpOfTheExactExponential)
 {
-  // The SIMD fragment loop computes 1 - exp(-density) with Highway's polynomial Expm1. Its
-  // error, over densities from the thinnest segments (1e-30) to saturation (1e4), must stay
-  // within 4 units in the last place of the float result (relative 4 * 2^-24), so that thin
-  // segments keep their tiny opacities and thick ones reach 1.
+  // The SIMD fragment loop computes 1 - exp(-density) with its own reduction and polynomial
+  // (OpacityOfDensity). Its error, over densities from the thinnest segments (1e-30) to
+  // saturation (1e4), must stay within 4 units in the last place of the float result
+  // (relative 4 * 2^-24), so that thin segments keep their tiny opacities and thick ones
+  // reach 1.
   std::vector<float> density;
   for (double e = -30; e <= 4; e += 0.001)
   {
@@ -594,6 +657,212 @@ TEST_P(CompositorSimd, PreIntegratedSegmentsMatchTheScalarIntegration)
   }
   EXPECT_LE(worst, 1e-6) << mtpt::detail::RasterTargetName();
   EXPECT_GT(opaque, 400) << "thick segments reach high opacity";
+}
+
+namespace
+{
+
+/// Every tile of a width x height image drawn by detail::RasterizeTile from all of `fans`, in
+/// visibility order (each tile clips them; drawn front to back, as the compositor draws
+/// them), tile after tile, with an opaque depth image.
+std::vector<float> DrawTiles(const mtpt::detail::RasterFrame& frame,
+  const std::vector<mtpt::Fan>& fans, const std::vector<float>& depth,
+  mtpt::detail::RasterCounts& counts)
+{
+  constexpr int T = mtpt::TileSize;
+  std::vector<float> tiles;
+  for (int y0 = 0; y0 < frame.height; y0 += T)
+  {
+    for (int x0 = 0; x0 < frame.width; x0 += T)
+    {
+      std::vector<float> rgba(4 * T * T, 0.0f), tileDepth(T * T, 1.0f);
+      mtpt::detail::TileTarget tile;
+      tile.x0 = x0;
+      tile.y0 = y0;
+      tile.width = std::min(T, frame.width - x0);
+      tile.height = std::min(T, frame.height - y0);
+      for (int j = 0; j < tile.height; ++j)
+      {
+        for (int i = 0; i < tile.width; ++i)
+        {
+          tileDepth[j * T + i] = depth[(y0 + j) * frame.width + x0 + i];
+        }
+      }
+      tile.rgba = rgba.data();
+      tile.depth = tileDepth.data();
+      const std::vector<mtpt::Fan> frontToBack(fans.rbegin(), fans.rend());
+      mtpt::detail::RasterizeTile(frame, tile, frontToBack.data(), frontToBack.size(), counts);
+      tiles.insert(tiles.end(), rgba.begin(), rgba.end());
+    }
+  }
+  return tiles;
+}
+
+} // namespace
+
+namespace
+{
+
+/// Draws `fans` (visibility order) with the fan path and with the triangle path alone, and
+/// returns the largest channel difference; the counts of each in `byFans`, `byTriangles`.
+double FanAgainstTrianglePath(mtpt::detail::RasterFrame frame, const std::vector<mtpt::Fan>& fans,
+  mtpt::detail::RasterCounts& byFans, mtpt::detail::RasterCounts& byTriangles, std::size_t& drawn)
+{
+  std::vector<float> depth(static_cast<std::size_t>(frame.width) * frame.height);
+  for (int y = 0; y < frame.height; ++y)
+  {
+    for (int x = 0; x < frame.width; ++x)
+    {
+      depth[y * frame.width + x] = 0.55f + 0.5f * static_cast<float>(x) / frame.width;
+    }
+  }
+  frame.fanPath = true;
+  const std::vector<float> fanImage = DrawTiles(frame, fans, depth, byFans);
+  frame.fanPath = false;
+  const std::vector<float> triangleImage = DrawTiles(frame, fans, depth, byTriangles);
+  double worst = fanImage.size() == triangleImage.size() ? 0.0 : 1.0;
+  drawn = 0;
+  for (std::size_t i = 0; i < std::min(fanImage.size(), triangleImage.size()); ++i)
+  {
+    worst = std::max(worst, static_cast<double>(std::fabs(fanImage[i] - triangleImage[i])));
+    drawn += fanImage[i] != 0.0f ? 1 : 0;
+  }
+  return worst;
+}
+
+} // namespace
+
+TEST_P(CompositorSimd, FanPathDrawsTheTrianglesImage)
+{
+  // VTK-compatible fans are drawn whole (FanRaster-inl.h): coverage by the silhouette's edges,
+  // each pixel's triangle chosen by the spokes, the triangles' planes set up together. That
+  // must be the image of drawing the triangles one by one: the same pixels exactly (the same
+  // fragment count), each with its own triangle's values up to the rounding of the set-up
+  // (a pixel given a neighbouring triangle's planes would be off by far more). A jittered
+  // grid seen in perspective from near (fans from under a pixel to over a tile, spanning
+  // tile borders), at two image sizes, behind an opaque surface cutting through the volume.
+  // Faint, nothing becomes opaque; dense, most pixels do, and the fan path skips fans wholly
+  // behind opaque pixels (both skip the fragments there): then the images may differ by what
+  // a pixel at the threshold of opacity skips (OpaqueAlpha, 2^-11).
+  const mtpt::test::TetMesh mesh = mtpt::test::JitteredGrid(9, 5);
+  mtpt::FrameInput input;
+  input.points = mesh.Points();
+  input.cells = mesh.Cells();
+  input.scalars = { mesh.scalars.data(), mtpt::ScalarsView::Association::Points };
+  input.modelView = mtpt::test::LookAt({ 0.7, 1.1, 2.6 }, { 0.1, 0, 0 }, { 0, 1, 0 });
+  input.projection = mtpt::test::Perspective(50, 1.3, 0.5, 10);
+  input.perspective = true;
+  mtpt::FramePipeline pipeline;
+  ASSERT_TRUE(pipeline.Run(input, 2));
+  pipeline.DecomposeFans(0, pipeline.TetrahedronCount(), 2);
+  for (const float density : { 0.3f, 30.0f })
+  {
+    std::vector<float> table;
+    for (int i = 0; i < 48; ++i)
+    {
+      const float t = i / 47.0f;
+      table.insert(table.end(), { t, 0.8f - 0.5f * t, 0.3f + 0.6f * t, density * t });
+    }
+    for (const auto& size : { std::make_pair(150, 115), std::make_pair(611, 470) })
+    {
+      mtpt::detail::RasterFrame frame;
+      frame.width = size.first;
+      frame.height = size.second;
+      frame.transferFunction = { table.data(), 48, -2.0, 3.0 };
+      frame.inverseUnit = 1.0f / 0.3f;
+      mtpt::detail::RasterCounts byFans, byTriangles;
+      std::size_t drawn = 0;
+      const double worst =
+        FanAgainstTrianglePath(frame, pipeline.Fans(), byFans, byTriangles, drawn);
+      const bool faint = density < 1;
+      EXPECT_LE(worst, faint ? 2e-6 : 1.0 / 2048 + 2e-6)
+        << size.first << "x" << size.second << ", " << mtpt::detail::RasterTargetName();
+      EXPECT_GT(drawn, 4 * static_cast<std::size_t>(frame.width) * frame.height / 10)
+        << "a substantial part of the image is drawn";
+      if (faint)
+      {
+        EXPECT_EQ(byFans.fragments, byTriangles.fragments);
+        EXPECT_EQ(byFans.hidden, 0u);
+      }
+      else if (GetParam() != HWY_SCALAR) // one lane: every fan takes the triangle path
+      {
+        EXPECT_GT(byFans.hidden, byFans.triangles / 20) << "fans behind opaque pixels skipped";
+        EXPECT_LT(byFans.fragments, byTriangles.fragments);
+      }
+    }
+  }
+}
+
+TEST_P(CompositorSimd, FanPathCoversEdgesThroughPixelCentresByTheTopLeftRule)
+{
+  // Fans whose every corner and edge lies on pixel centres: squares of 6 x 6 pixels sharing
+  // their edges (horizontal and vertical edges through centres), each a fan of 4 triangles
+  // around its centre, alternately clockwise and counter-clockwise, and diamonds (diagonal
+  // edges through centres) beside them. The fan path must cover every pixel of the squares'
+  // union exactly once by the top-left rule (the left and top edges own their centres), and
+  // cover what the triangle path covers, pixel for pixel.
+  const int w = 40, h = 20;
+  mtpt::detail::RasterFrame frame;
+  frame.width = w;
+  frame.height = h;
+  const std::vector<float> table = ConstantTable(1.0f, 0.5f, 0.25f, 1.0f);
+  frame.transferFunction = { table.data(), 2, 0.0, 1.0 };
+  auto vertex = [&](double x, double y) {
+    return TetVertex{ Ndc(x, w), Ndc(y, h), 0.0f, 0.5f, 0.5f, 0.3f };
+  };
+  std::vector<mtpt::Fan> fans;
+  for (int i = 0; i < 3; ++i)
+  {
+    for (int j = 0; j < 2; ++j)
+    {
+      const double x0 = 2.5 + 6 * i, y0 = 3.5 + 6 * j;
+      mtpt::Fan fan{};
+      const double xs[4] = { x0, x0 + 6, x0 + 6, x0 }, ys[4] = { y0, y0, y0 + 6, y0 + 6 };
+      for (int k = 0; k < 4; ++k)
+      {
+        const int c = (i + j) % 2 ? 3 - k : k; // clockwise or counter-clockwise
+        fan.boundary[k] = vertex(xs[c], ys[c]);
+      }
+      fan.centre = vertex(x0 + 3, y0 + 3);
+      fan.count = 4;
+      fan.closed = 1;
+      fans.push_back(fan);
+    }
+  }
+  for (const double cx : { 26.5, 33.5 }) // diamonds: corners 3 pixels from their centres
+  {
+    mtpt::Fan fan{};
+    fan.boundary[0] = vertex(cx + 3, 10.5);
+    fan.boundary[1] = vertex(cx, 13.5);
+    fan.boundary[2] = vertex(cx - 3, 10.5);
+    fan.boundary[3] = vertex(cx, 7.5);
+    fan.centre = vertex(cx, 10.5);
+    fan.count = 4;
+    fan.closed = 1;
+    fans.push_back(fan);
+  }
+  const std::vector<float> depth(w * h, 1.0f);
+  mtpt::detail::RasterCounts byFans, byTriangles;
+  const std::vector<float> fanImage = DrawTiles(frame, fans, depth, byFans);
+  frame.fanPath = false;
+  const std::vector<float> triangleImage = DrawTiles(frame, fans, depth, byTriangles);
+  const float once = 1.0f - std::exp(-0.3f);
+  constexpr int T = mtpt::TileSize;
+  for (int y = 0; y < h; ++y)
+  {
+    for (int x = 0; x < w; ++x)
+    {
+      const std::size_t alpha = 3 * T * T + static_cast<std::size_t>(y) * T + x;
+      ASSERT_EQ(fanImage[alpha], triangleImage[alpha]) << x << "," << y;
+      const bool square = x >= 2 && x <= 19 && y >= 4 && y <= 15;
+      if (x <= 20)
+      {
+        ASSERT_NEAR(fanImage[alpha], square ? once : 0.0f, 1e-6) << x << "," << y;
+      }
+    }
+  }
+  EXPECT_EQ(byFans.fragments, byTriangles.fragments);
+  EXPECT_GT(byFans.fragments, 18u * 12u);
 }
 
 INSTANTIATE_TEST_SUITE_P(InstructionSets, CompositorSimd,

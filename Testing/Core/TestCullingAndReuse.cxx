@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <random>
@@ -399,7 +400,7 @@ TEST(FramePipeline, AMeshOfPartsGivesTheFrameOfTheMergedMesh)
     std::vector<std::int32_t> ids32, offsets32{ 0 };
   };
   std::vector<PartData> data(4);
-  std::vector<float> scalars; // point scalars in the parts' point order
+  std::vector<float> scalars;        // point scalars in the parts' point order
   std::vector<std::int64_t> pointOf; // merged point id of each part point, part after part
   for (int k = 0; k < 3; ++k)
   {
@@ -502,10 +503,10 @@ TEST(FramePipeline, AMeshOfPartsGivesTheFrameOfTheMergedMesh)
     settings.opacity = { { -2.0, 0.0 }, { 3.0, 1.0 } };
     settings.unitDistance = 0.3;
     std::vector<double> referenceWhole, referenceSplit;
-    ASSERT_TRUE(mtpt::RenderReference(
-      whole.points, whole.cells, whole.scalars, settings, referenceWhole, 2));
-    ASSERT_TRUE(mtpt::RenderReference(
-      split.points, split.cells, split.scalars, settings, referenceSplit, 2));
+    ASSERT_TRUE(
+      mtpt::RenderReference(whole.points, whole.cells, whole.scalars, settings, referenceWhole, 2));
+    ASSERT_TRUE(
+      mtpt::RenderReference(split.points, split.cells, split.scalars, settings, referenceSplit, 2));
     EXPECT_EQ(referenceWhole, referenceSplit);
   }
 }
@@ -527,7 +528,18 @@ TEST(FramePipeline, BatchesReproduceTheWholeFrame)
   {
     mtpt::FramePipeline pipeline;
     ASSERT_TRUE(pipeline.Prepare(input, 3));
-    EXPECT_TRUE(SameImage(reference, Composite(pipeline, input, table, batch))) << batch;
+    // The compositor draws each batch front to back on its own and composites it over the
+    // batches behind it: the image is the whole frame's up to rounding, and up to the
+    // fragments a batch skips behind its own opaque pixels (OpaqueAlpha: 2^-11).
+    const std::vector<float> image = Composite(pipeline, input, table, batch);
+    ASSERT_EQ(image.size(), reference.size());
+    double worst = 0;
+    for (std::size_t i = 0; i < image.size(); ++i)
+    {
+      worst = std::max(worst, static_cast<double>(std::fabs(image[i] - reference[i])));
+    }
+    EXPECT_LE(worst, 1.0 / 2048 + 1e-6) << batch;
+    std::printf("batches of %zu: worst channel difference %.3g\n", batch, worst);
     EXPECT_GE(pipeline.Stats().batches, whole.SortedCount() / batch);
     // Each batch's buffers are the whole frame's slice, indices renumbered from 0.
     for (std::size_t first = 0; first < pipeline.SortedCount(); first += batch)

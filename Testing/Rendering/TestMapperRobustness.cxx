@@ -289,7 +289,8 @@ TEST_F(MapperRobustness, OutOfRangeConnectivityIsReportedAndTheRestDrawn)
 }
 
 /// The same grid with its cells in another of vtkCellArray's storages.
-vtkSmartPointer<vtkUnstructuredGrid> WithCellStorage(vtkUnstructuredGrid* grid, const std::string& kind)
+vtkSmartPointer<vtkUnstructuredGrid> WithCellStorage(
+  vtkUnstructuredGrid* grid, const std::string& kind)
 {
   auto copy = vtkSmartPointer<vtkUnstructuredGrid>::New();
   copy->ShallowCopy(grid);
@@ -537,6 +538,15 @@ TEST_F(MapperRobustness, SeveralRenderersInOneWindowAndOneMapperInTwoWindows)
 }
 
 /// Records the mapper's progress; optionally aborts the render when a value is reached.
+/// How far a frame drawn in batches may be from one drawn whole, per channel: exactly the
+/// same with OpenGL (blended back to front); one 8-bit level with the CPU compositor, which
+/// draws each batch front to back on its own and composites it over the batches behind it
+/// (rounding, and the fragments each skips behind its own opaque pixels: Compositor.h).
+double BatchRounding(int backend)
+{
+  return backend == vtkMultiThreadedProjectedTetrahedraMapper::CPU_BACKEND ? 1.0 / 255 : 0.0;
+}
+
 class ProgressRecorder : public vtkCommand
 {
 public:
@@ -580,7 +590,9 @@ TEST_F(MapperRobustness, ProgressIsReportedThroughTheStagesAndBatches)
       EXPECT_NEAR(progress->values[first + i], expected[i], 1e-12) << "event " << i;
     }
     EXPECT_FALSE(mapper->GetLastFrameStopped());
-    EXPECT_EQ(Compare(image, this->FreshFrame(backend)).worst, 0.0)
+    // The same image; the CPU compositor's batches (each drawn front to back, composited over
+    // those behind it) may round a pixel to the next 8-bit level.
+    EXPECT_LE(Compare(image, this->FreshFrame(backend)).worst, BatchRounding(backend))
       << "observed frames draw the same";
   }
 }
@@ -619,7 +631,8 @@ TEST_F(MapperRobustness, AnAbortStopsTheFrameAndTheNextFrameIsWhole)
       progress->window = nullptr;
       stage.window->Render();
       EXPECT_FALSE(mapper->GetLastFrameStopped());
-      EXPECT_EQ(Compare(Grab(stage.window, false), this->FreshFrame(backend)).worst, 0.0)
+      EXPECT_LE(
+        Compare(Grab(stage.window, false), this->FreshFrame(backend)).worst, BatchRounding(backend))
         << "backend " << backend << ", abort at " << abortAt;
       mapper->ReleaseGraphicsResources(stage.window);
     }

@@ -29,6 +29,9 @@ struct RasterFrame
   DepthClipping clipping;
   PerspectiveInterpolation interpolation;
   float inverseUnit = 1.0f; ///< 1 / ScalarOpacityUnitDistance
+  /// VTK-compatible fans drawn whole where they can be (FanRaster-inl.h), which gives the
+  /// image of drawing them triangle by triangle bit for bit; false (tests) draws them so.
+  bool fanPath = true;
 };
 
 /// One tile: its pixels, its image and opaque depth (TileSize x TileSize each, row-major,
@@ -46,11 +49,14 @@ struct TileTarget
 struct RasterCounts
 {
   std::size_t triangles = 0; ///< triangles that covered a pixel of the tile (set up)
-  std::size_t fragments = 0; ///< pixels covered and shaded
+  /// Pixels covered by the fans drawn (shaded, or skipped behind opaque pixels).
+  std::size_t fragments = 0;
+  std::size_t hidden = 0; ///< fans skipped whole: every pixel of their box opaque already
 };
 
 /**
- * Draws fans[0, count), in that order, into the tile.
+ * Draws fans[0, count), in that order, front to back (the first nearest), under what the
+ * tile holds; pixels already opaque skip the fragments behind them (OpaqueAlpha).
  * Thread safety: writes only the tile's image and `counts`.
  */
 void RasterizeTile(const RasterFrame& frame, const TileTarget& tile, const Fan* fans,

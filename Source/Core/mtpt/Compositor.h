@@ -30,7 +30,10 @@
  *   transfer-function features between the vertex scalars are not missed.
  * - Blending, as glBlendFuncSeparate(SRC_ALPHA, ONE_MINUS_SRC_ALPHA, ONE,
  *   ONE_MINUS_SRC_ALPHA) starting from a transparent image: the image holds premultiplied
- *   colour and coverage alpha; Resolve composites it over what lies below.
+ *   colour and coverage alpha; Resolve composites it over what lies below. It is computed
+ *   front to back (C += (1 - A) a c, A += (1 - A) a: the same image up to rounding), and a
+ *   pixel whose alpha reached 1 - 2^-11 skips the fragments behind it, which could change it
+ *   by at most 2^-11 (an eighth of an 8-bit step).
  * - Depth: with an opaque depth image, a fragment is kept if its depth is <= the opaque
  *   depth at that pixel (GL_LEQUAL, no depth writes); fragments outside the near and far
  *   planes are dropped.
@@ -40,10 +43,13 @@
  *    appends each fan that covers a pixel centre of a tile to its own list for that tile
  *    (TileSize x TileSize pixels). Concatenated in thread order, a tile's lists are in
  *    visibility order, whatever the thread count.
- * 2. Rasterization: threads take tiles; a tile's fans are set up and drawn, triangle by
- *    triangle, span by span (exact row spans, no per-pixel coverage test), a span's pixels
- *    SIMD lanes wide (Google Highway, the widest instruction set the processor has, chosen
- *    at run time). A tile's pixels stay in its own cache-sized buffer.
+ * 2. Rasterization: threads take tiles; a tile's fans are drawn front to back, a fan of
+ *    VTK-compatible shading as a whole (its silhouette's edges tested a vector of a row at
+ *    a time, each pixel shaded with its triangle's planes), others triangle by triangle,
+ *    span by span (exact row spans), SIMD lanes wide (Google Highway, the widest instruction
+ *    set the processor has, chosen at run time). A fan whose box is all opaque already is
+ *    skipped. A tile's pixels stay in its own cache-sized buffer; a tile drawn by an earlier
+ *    Composite gets the new fans drawn apart and composited over it.
  * The image is therefore bit-identical for any thread count.
  */
 #ifndef mtpt_Compositor_h
@@ -107,7 +113,10 @@ struct CompositorStats
   std::size_t fans = 0;       ///< fans given that touch the image
   std::size_t binEntries = 0; ///< (fan, tile) pairs
   std::size_t triangles = 0;  ///< (triangle, tile) pairs that covered a pixel (set up)
-  std::size_t fragments = 0;  ///< pixels covered by a triangle and shaded
+  /// Pixels covered by a triangle of the fans drawn: shaded, or skipped behind pixels already
+  /// opaque (fans are drawn front to back; Compositor.h, "Rasterization").
+  std::size_t fragments = 0;
+  std::size_t hiddenFans = 0; ///< (fan, tile) pairs skipped whole behind opaque pixels
   std::size_t tiles = 0;      ///< tiles that had fans
   double binSeconds = 0;      ///< binning
   double rasterSeconds = 0;   ///< set-up and fragments
@@ -176,13 +185,13 @@ public:
 private:
   void Bin(const Fan* fans, std::size_t count, int threads);
   /// Binning's three steps: count each block's (fan, tile) pairs and the touched region;
-  /// turn the counts into places (returns the pairs); copy the fans to their places.
+  /// turn the counts into places (returns the pairs); list the fans' indices in their places.
   void CountPairs(const Fan* fans, std::size_t count, int blocks);
   std::size_t PlaceEntries(int blocks);
-  void CopyEntries(const Fan* fans, std::size_t count, int blocks);
+  void ListEntries(std::size_t count, int blocks);
   template <typename T>
   void ResolveInto(const PixelRegion& region, const T* below, T* rgba, int threads);
-  void Rasterize(int threads);
+  void Rasterize(const Fan* fans, int threads);
   float* Tile(int tile);
 
   /// Tiles a fan touches (inclusive; empty when x0 > x1).
@@ -199,7 +208,7 @@ private:
   std::vector<TileRange> Ranges;      ///< per fan of the last Composite
   std::vector<std::uint32_t> Counts;  ///< per (block, tile): pairs, then the block's cursor
   std::vector<std::size_t> TileStart; ///< per tile: its first entry (tiles + 1 values)
-  std::vector<Fan> Entries;           ///< the fans, tile by tile, in visibility order
+  std::vector<std::uint32_t> Entries; ///< fans of the last Composite, tile by tile, in order
   std::vector<int> Tiles;             ///< tiles with fans in the last Composite
   PixelRegion Touched;
   std::vector<Fan> SlotFans; ///< the slot entry point's fans

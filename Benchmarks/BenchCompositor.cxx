@@ -1,0 +1,234 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * mtpt_bench_compositor: the CPU backend's frame without VTK or a window: the core's CPU
+ * stages, the fans (DecomposeFans) and the CPU compositor (binning, rasterization, resolve),
+ * on a generated grid of about the wavelet's size (1.08M tetrahedra by default), in a
+ * perspective view that turns before every frame, with the frame benchmark's transfer
+ * functions (cool-warm colours, opacity rising linearly over the scalars, unit distance a
+ * fiftieth of the diagonal) and an opaque depth of 1 everywhere, as the CPU backend reads it
+ * back from an empty window. Prints a Markdown table of medians per image size: stage times,
+ * fragments, nanoseconds per covered fragment and core (every fragment the fans cover,
+ * counted in a frame of the same view whose table makes nothing opaque: the compositor skips
+ * fans and fragments behind opaque pixels, and counts only the fans it draws), tetrahedra
+ * per second of the CPU stages.
+ *
+ * Without VTK and X it runs the same under a profiler (valgrind --tool=callgrind, perf) as
+ * alone; the frame benchmark (BenchFrames.cxx) measures whole frames against VTK's mappers.
+ */
+#include "Camera.h"
+#include "Statistics.h"
+#include "TetrahedralGrid.h"
+
+#include "mtpt/Compositor.h"
+#include "mtpt/FramePipeline.h"
+#include "mtpt/Threads.h"
+#include "mtpt/Timing.h"
+
+#include <CLI/CLI.hpp>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace
+{
+
+using mtpt::Matrix4;
+using mtpt::bench::Median;
+using mtpt::bench::LookAt;
+using mtpt::bench::Perspective;
+using mtpt::bench::Vec3;
+
+struct Options
+{
+  long long tetrahedra = 1080000;
+  std::vector<int> sizes = { 512, 1024 };
+  int frames = 5;
+  int threads = 0;
+  double step = 1.0;
+  std::string shading = "vtk";
+  double attenuation = 1.0; ///< the table's attenuations times this
+};
+
+/// The view of frame `frame`: the grid (within [-1, 1]^3) filling a 30 degree view from an
+/// oblique direction (azimuth 30, elevation 20, as the frame benchmark starts), turned by
+/// `step` degrees of azimuth per frame.
+void SetView(mtpt::FrameInput& input, int frame, double step)
+{
+  const double pi = 3.14159265358979323846;
+  const double azimuth = (30.0 + step * frame) * pi / 180, elevation = 20.0 * pi / 180;
+  const double distance = std::sqrt(3.0) / std::sin(15.0 * pi / 180);
+  const Vec3 eye = { distance * std::cos(elevation) * std::sin(azimuth),
+    distance * std::sin(elevation), distance * std::cos(elevation) * std::cos(azimuth) };
+  input.modelView = LookAt(eye, { 0, 0, 0 }, { 0, 1, 0 });
+  input.projection = Perspective(30, 1, distance - 2, distance + 2);
+  input.perspective = true;
+}
+
+/// The frame benchmark's transfer functions (Harness.cxx, MakeProperty) as a table over
+/// the scalars' range [0, 1]: cool-warm colours, opacity 0 -> `opacity`.
+std::vector<float> Table(int entries, double opacity)
+{
+  std::vector<float> table;
+  for (int i = 0; i < entries; ++i)
+  {
+    const float t = i / (entries - 1.0f), u = t < 0.5f ? 2 * t : 2 * t - 1;
+    const float low[3] = { 0.23f, 0.30f, 0.75f }, mid[3] = { 0.87f, 0.87f, 0.87f },
+                high[3] = { 0.71f, 0.02f, 0.15f };
+    for (int c = 0; c < 3; ++c)
+    {
+      table.push_back(t < 0.5f ? low[c] + u * (mid[c] - low[c]) : mid[c] + u * (high[c] - mid[c]));
+    }
+    table.push_back(static_cast<float>(t * opacity));
+  }
+  return table;
+}
+
+struct FrameFigures
+{
+  double stages = 0, decompose = 0, bin = 0, raster = 0, resolve = 0, total = 0;
+  double fragments = 0, hidden = 0;
+};
+
+FrameFigures Frame(mtpt::FramePipeline& pipeline, mtpt::Compositor& compositor,
+  mtpt::FrameInput& input, const mtpt::CompositeSettings& settings, std::vector<float>& image,
+  int threads)
+{
+  FrameFigures f;
+  const auto start = mtpt::Clock::now();
+  pipeline.Prepare(input, threads);
+  pipeline.DecomposeFans(0, pipeline.SortedCount(), threads);
+  const mtpt::StageTimes& times = pipeline.Times();
+  f.stages = 1e3 * times.Total();
+  f.decompose = 1e3 * times.decompose;
+  compositor.Begin(settings);
+  compositor.Composite(pipeline.Fans().data(), pipeline.FanCount(), threads);
+  const mtpt::PixelRegion region{ 0, 0, settings.width, settings.height };
+  compositor.Resolve(region, nullptr, image.data(), threads);
+  f.total = 1e3 * mtpt::SecondsSince(start);
+  const mtpt::CompositorStats& stats = compositor.Stats();
+  f.bin = 1e3 * stats.binSeconds;
+  f.raster = 1e3 * stats.rasterSeconds;
+  f.resolve = 1e3 * stats.resolveSeconds;
+  f.fragments = static_cast<double>(stats.fragments);
+  f.hidden = static_cast<double>(stats.hiddenFans);
+  return f;
+}
+
+/// `table` with its attenuations divided by 10^6: no pixel becomes opaque, so the compositor
+/// counts every covered fragment (and culling, by zero opacity, keeps the same cells).
+std::vector<float> Faint(std::vector<float> table)
+{
+  for (std::size_t i = 3; i < table.size(); i += 4)
+  {
+    table[i] *= 1e-6f;
+  }
+  return table;
+}
+
+} // namespace
+
+int main(int argc, char* argv[])
+{
+  Options o;
+  CLI::App app{ "The CPU backend's frame without VTK: CPU stages, fans and the CPU compositor "
+                "on a generated grid, the view turning before every frame." };
+  app.add_option("--tets", o.tetrahedra, "tetrahedra of the generated grid, at least")
+    ->check(CLI::PositiveNumber);
+  app.add_option("--sizes", o.sizes, "square image sizes, comma-separated")
+    ->delimiter(',')
+    ->check(CLI::Range(1, 16384));
+  app.add_option("--frames", o.frames, "timed frames per size (median), after one warm-up")
+    ->check(CLI::PositiveNumber);
+  app.add_option("--threads", o.threads, "threads (0: the default)")->check(CLI::NonNegativeNumber);
+  app.add_option("--step", o.step, "degrees the view turns before every frame");
+  app.add_option("--shading", o.shading, "vtk or pre-integrated")
+    ->check(CLI::IsMember({ "vtk", "pre-integrated" }));
+  app
+    .add_option("--attenuation", o.attenuation,
+      "the opacity ramp's top (1: opaque pixels behind most of the image; 0.01: nearly none)")
+    ->check(CLI::PositiveNumber);
+  CLI11_PARSE(app, argc, argv);
+
+  mtpt::bench::GridOptions grid;
+  grid.cells = mtpt::bench::GridCellsForTetrahedra(
+    static_cast<std::size_t>(o.tetrahedra), mtpt::bench::HexSplit::Five);
+  grid.jitter = 0.3 * mtpt::bench::MaxJitter(grid.split);
+  const mtpt::bench::TetMesh mesh = mtpt::bench::GenerateTetrahedralGrid(grid);
+  const int threads = mtpt::ResolveThreadCount(o.threads);
+  const std::vector<float> table = Table(256, o.attenuation);
+  mtpt::FrameInput input;
+  input.points = mesh.Points();
+  input.cells = mesh.Cells();
+  input.scalars = mesh.Scalars();
+  input.opacity = { table.data(), 256, 0.0, 1.0 };
+  std::printf("Generated grid, %zu tetrahedra, %d threads, %s shading, opacity 0 -> %g, the view "
+              "turning %.1f degrees before each frame; median of %d frames (ms)\n\n",
+    mesh.CellCount(), threads, o.shading.c_str(), o.attenuation, o.step, o.frames);
+  std::printf("| image | CPU stages | of which decompose | Mtets/s (CPU stages) | bin | raster | "
+              "resolve | frame | fragments covered | of the fans drawn | fans skipped behind "
+              "opaque pixels | ns per covered fragment x core |\n"
+              "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  const std::vector<float> faint = Faint(table);
+  for (int size : o.sizes)
+  {
+    mtpt::CompositeSettings settings;
+    settings.width = settings.height = size;
+    settings.transferFunction = input.opacity;
+    settings.unitDistance = 2 * std::sqrt(3.0) / 50;
+    mtpt::PreIntegrationTable integrals;
+    if (o.shading == "pre-integrated")
+    {
+      integrals.Build(settings.transferFunction);
+      settings.UsePreIntegration(
+        integrals, mtpt::PerspectiveInterpolation::FromProjection(input.projection));
+    }
+    const std::vector<float> depth(static_cast<std::size_t>(size) * size, 1.0f);
+    settings.opaqueDepth = depth.data();
+    std::vector<float> image(4 * static_cast<std::size_t>(size) * size);
+    input.viewportWidth = input.viewportHeight = size;
+    mtpt::FramePipeline pipeline;
+    pipeline.SetReuse(true);
+    mtpt::Compositor compositor;
+    std::vector<FrameFigures> figures;
+    for (int frame = 0; frame <= o.frames; ++frame)
+    {
+      SetView(input, frame, o.step);
+      if (o.shading == "pre-integrated")
+      {
+        settings.interpolation = mtpt::PerspectiveInterpolation::FromProjection(input.projection);
+      }
+      const FrameFigures f = Frame(pipeline, compositor, input, settings, image, threads);
+      if (frame > 0)
+      {
+        figures.push_back(f);
+      }
+    }
+    auto median = [&](double FrameFigures::*field)
+    {
+      std::vector<double> values;
+      for (const FrameFigures& f : figures)
+      {
+        values.push_back(f.*field);
+      }
+      return Median(values);
+    };
+    // Every covered fragment, counted at the first timed frame's view with nothing opaque.
+    mtpt::CompositeSettings faintSettings = settings;
+    faintSettings.transferFunction.table = faint.data();
+    SetView(input, 1, o.step);
+    const double covered =
+      Frame(pipeline, compositor, input, faintSettings, image, threads).fragments;
+    const double raster = median(&FrameFigures::raster), stages = median(&FrameFigures::stages);
+    std::printf(
+      "| %dx%d | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.0f | %.0f | %.0f | %.1f |\n",
+      size, size, stages, median(&FrameFigures::decompose), 1e-3 * mesh.CellCount() / stages,
+      median(&FrameFigures::bin), raster, median(&FrameFigures::resolve),
+      median(&FrameFigures::total), covered, median(&FrameFigures::fragments),
+      median(&FrameFigures::hidden), covered > 0 ? 1e6 * raster * threads / covered : 0);
+    std::fflush(stdout);
+  }
+  return 0;
+}
