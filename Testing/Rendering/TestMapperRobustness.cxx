@@ -537,7 +537,6 @@ TEST_F(MapperRobustness, SeveralRenderersInOneWindowAndOneMapperInTwoWindows)
   EXPECT_TRUE(this->Observer->errors.empty());
 }
 
-/// Records the mapper's progress; optionally aborts the render when a value is reached.
 /// How far a frame drawn in batches may be from one drawn whole, per channel: exactly the
 /// same with OpenGL (blended back to front); one 8-bit level with the CPU compositor, which
 /// draws each batch front to back on its own and composites it over the batches behind it
@@ -547,6 +546,7 @@ double BatchRounding(int backend)
   return backend == vtkMultiThreadedProjectedTetrahedraMapper::CPU_BACKEND ? 1.0 / 255 : 0.0;
 }
 
+/// Records the mapper's progress; optionally aborts the render when a value is reached.
 class ProgressRecorder : public vtkCommand
 {
 public:
