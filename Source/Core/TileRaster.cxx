@@ -1177,8 +1177,11 @@ void RasterizeTileImpl(const RasterFrame& f, const TileTarget& tile, const Fan* 
     {
       continue;
     }
+    // Last triangle first: drawn under what the pixel holds, that is the slot's triangles
+    // blended over one another in index order, as OpenGL draws them. (They overlap only
+    // where a degenerate projection puts the centre outside the silhouette.)
     const int triangles = fan.closed ? n : n - 1;
-    for (int k = 0; k < triangles; ++k)
+    for (int k = triangles - 1; k >= 0; --k)
     {
       Corner* v[3] = { &corners[k], &corners[(k + 1) % n], &corners[n] };
       DrawTriangle(f, tile, mode, v, waiting, counts);

@@ -171,6 +171,58 @@ TEST_P(CompositorSimd, BlendsBackToFrontInSlotOrder)
   EXPECT_NEAR(rgba[3], a + (1 - a) * a, 1e-6);
 }
 
+TEST_P(CompositorSimd, OverlappingTrianglesOfAFanBlendInSlotOrder)
+{
+  // A degenerate projection can put a fan's centre outside its silhouette: its triangles
+  // (boundary[i], boundary[i + 1], centre) then overlap. OpenGL blends a slot's triangles over
+  // one another in index order; the CPU compositor, compositing front to back, must give
+  // that image, for the fan and for the slot's triangles drawn as fans of one. Here the
+  // centre C lies above B2, inside triangle (B0, B1, C): the other two lie on top of it.
+  const int w = 10, h = 10;
+  const std::vector<float> table = { 1, 0, 0, 1, 0, 0, 1, 1 }; // scalar 0 red, 1 blue
+  const double xs[4] = { 1, 9, 5, 5 }, ys[4] = { 1, 1, 4, 9 }; // B0, B1, B2, C (pixels)
+  const float scalars[4] = { 0.0f, 1.0f, 1.0f, 0.5f };
+  TetVertex corner[4];
+  for (int i = 0; i < 4; ++i)
+  {
+    corner[i] =
+      TetVertex{ Ndc(xs[i], w), Ndc(ys[i], h), 0.0f, scalars[i], scalars[i], 0.7f };
+  }
+  mtpt::Fan fan{};
+  fan.boundary[0] = corner[0];
+  fan.boundary[1] = corner[1];
+  fan.boundary[2] = corner[2];
+  fan.centre = corner[3];
+  fan.count = 3;
+  fan.closed = 1;
+  const mtpt::CompositeSettings settings = Settings(w, h, table);
+  mtpt::Compositor compositor;
+  compositor.Begin(settings);
+  compositor.Composite(&fan, 1, 2);
+  std::vector<float> fanImage(4 * w * h);
+  compositor.Resolve({ 0, 0, w, h }, nullptr, fanImage.data(), 2);
+
+  const TetVertex slot[5] = { corner[0], corner[1], corner[2], corner[2], corner[3] };
+  const std::uint32_t inOrder[12] = { 0, 1, 4, 1, 2, 4, 2, 0, 4, 4, 4, 4 };
+  const std::uint32_t reversed[12] = { 2, 0, 4, 1, 2, 4, 0, 1, 4, 4, 4, 4 };
+  std::vector<float> slotImage, reversedImage;
+  compositor.Composite(slot, inOrder, 1, settings, slotImage, 2);
+  compositor.Composite(slot, reversed, 1, settings, reversedImage, 2);
+  ASSERT_EQ(slotImage.size(), fanImage.size());
+  double worst = 0, orderMatters = 0;
+  for (std::size_t i = 0; i < fanImage.size(); ++i)
+  {
+    worst = std::max(worst, static_cast<double>(std::fabs(fanImage[i] - slotImage[i])));
+    orderMatters =
+      std::max(orderMatters, static_cast<double>(std::fabs(slotImage[i] - reversedImage[i])));
+  }
+  EXPECT_LE(worst, 1e-6) << mtpt::detail::RasterTargetName();
+  EXPECT_GT(orderMatters, 0.05) << "the triangles overlap with different colours";
+  // Over one another in index order: at B2's pixel triangle 0 first, then 1 and 2 over it.
+  const std::size_t p = 4 * (4 * w + 5);
+  EXPECT_GT(slotImage[p + 3], 1.0f - std::exp(-0.7f) + 0.05f) << "two layers or more";
+}
+
 TEST_P(CompositorSimd, PixelsGoneOpaqueSkipOnlyWhatCannotShow)
 {
   // Fans are drawn front to back, and a pixel whose alpha reached OpaqueAlpha (1 - 2^-11)

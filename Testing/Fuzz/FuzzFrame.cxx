@@ -789,8 +789,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   FUZZ_CHECK(imageA == imageB, "compositor: %d and %d threads differ", threadsA, threadsB);
 
   // The CPU backend's path: the order decomposed into fans, batch after batch, binned into
-  // tiles and rasterized there. The same triangles in the same order as the slots: the same
-  // image, bit for bit, whatever the batch size and thread count.
+  // tiles and rasterized there. The same triangles in the same order as the slots. In one
+  // batch: the same image up to the fan path's set-up rounding (VTK-compatible fans drawn
+  // whole, within 2e-6 of their triangles). In several: each batch is drawn front to back on
+  // its own and composited over those behind it, so a batch's own opaque pixels skip only
+  // what adds at most 2^-11 (OpaqueAlpha), plus the rounding of the extra compositing.
   const std::size_t batch = in.PickValueInArray<std::size_t>({ 1, 3, 7, 1u << 20 });
   std::vector<float> fanImage(imageA.size());
   mtpt::Compositor tiles;
@@ -815,7 +818,19 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     touched.y1, width, height);
   tiles.Resolve({ 0, 0, width, height }, nullptr, fanImage.data(), threadsB);
   CheckImage(fanImage, width, height);
-  FUZZ_CHECK(fanImage == imageA, "fans in batches of %zu differ from the slots", batch);
+  const bool batched = batch < b.SortedCount();
+  const float fanBound = (batched ? 1.0f / 2048 : 0.0f) + 1e-5f;
+  float fanWorst = 0;
+  for (std::size_t i = 0; i < fanImage.size(); ++i)
+  {
+    fanWorst = std::max(fanWorst, std::fabs(fanImage[i] - imageA[i]));
+  }
+  if (std::getenv("MTPT_FUZZ_VERBOSE"))
+  {
+    std::printf("fans in batches of %zu: worst difference from the slots %g\n", batch, fanWorst);
+  }
+  FUZZ_CHECK(fanWorst <= fanBound, "fans in batches of %zu differ from the slots by %g (bound %g)",
+    batch, fanWorst, fanBound);
   for (int y = 0; y < height; ++y) // nothing drawn outside the touched region
   {
     for (int x = 0; x < width; ++x)
