@@ -46,6 +46,7 @@
  * 2. Rasterization: threads take tiles; a tile's fans are drawn front to back, a fan of
  *    VTK-compatible shading as a whole (its silhouette's edges tested a vector of a row at
  *    a time, each pixel shaded with its triangle's planes), others triangle by triangle,
+ *    last first (triangles that overlap blend as OpenGL blends a slot's, in index order),
  *    span by span (exact row spans), SIMD lanes wide (Google Highway, the widest instruction
  *    set the processor has, chosen at run time). A fan whose box is all opaque already is
  *    skipped. A tile's pixels stay in its own cache-sized buffer; a tile drawn by an earlier
