@@ -15,7 +15,7 @@ import math
 from vtkmodules.vtkCommonCore import vtkFloatArray, vtkUnsignedCharArray
 from vtkmodules.vtkCommonDataModel import vtkUnstructuredGrid
 from vtkmodules.vtkFiltersCore import vtkImageAppend
-from vtkmodules.vtkRenderingCore import vtkRenderer, vtkRenderWindow, vtkVolume
+from vtkmodules.vtkRenderingCore import vtkRenderWindow
 from vtkmodules.vtkRenderingVolume import vtkProjectedTetrahedraMapper
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 (factory overrides)
 import vtkmodules.vtkRenderingVolumeOpenGL2  # noqa: F401
@@ -67,13 +67,7 @@ def dependent_property():
 
 def render(grid, mapper, view, multisamples=None):
     """The image (RGB doubles, the window's bytes / 255), the renderer and volume."""
-    mapper.SetInputData(grid)
-    volume = vtkVolume()
-    volume.SetMapper(mapper)
-    volume.SetProperty(dependent_property())
-    renderer = vtkRenderer()
-    renderer.SetBackground(*BACKGROUND)
-    renderer.AddVolume(volume)
+    renderer, volume = figures.volume_scene(grid, mapper, dependent_property(), BACKGROUND)
     window = vtkRenderWindow()
     window.SetOffScreenRendering(1)
     if multisamples is not None:

@@ -20,8 +20,7 @@ import statistics
 import time
 
 from vtkmodules.vtkFiltersSources import vtkSphereSource
-from vtkmodules.vtkRenderingCore import (vtkActor, vtkPolyDataMapper, vtkRenderer,
-                                         vtkRenderWindow, vtkVolume)
+from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper, vtkRenderWindow
 from vtkmodules.vtkRenderingVolume import vtkGPUVolumeRayCastMapper, vtkProjectedTetrahedraMapper
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 (factory overrides)
 import vtkmodules.vtkRenderingVolumeOpenGL2  # noqa: F401
@@ -50,13 +49,7 @@ def volume_property():
 
 
 def scene(data, mapper, spheres=1):
-    mapper.SetInputData(data)
-    volume = vtkVolume()
-    volume.SetMapper(mapper)
-    volume.SetProperty(volume_property())
-    renderer = vtkRenderer()
-    renderer.SetBackground(*BACKGROUND)
-    renderer.AddVolume(volume)
+    renderer, volume = figures.volume_scene(data, mapper, volume_property(), BACKGROUND)
     for k in range(spheres):
         sphere = vtkSphereSource()
         sphere.SetCenter(1.5, 1.0, 0.5)

@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: BSD-3-Clause
 """Shared parts of the figure scripts (dependent-components.py, depth-peeling.py): the
-tetrahedralized wavelet, a window's image, the exact reference as an image, and the
+tetrahedralized wavelet, a volume in a renderer, a window's image, the exact reference as an image, and the
 covered-pixel difference of two images. Debian's python3 (python3-vtk9) with the build's
 `mtpt` package on PYTHONPATH."""
 import math
@@ -11,8 +11,8 @@ from vtkmodules.vtkFiltersGeneral import vtkDataSetTriangleFilter
 from vtkmodules.vtkFiltersCore import vtkImageAppend
 from vtkmodules.vtkImagingCore import vtkRTAnalyticSource
 from vtkmodules.vtkIOImage import vtkPNGWriter
-from vtkmodules.vtkRenderingCore import (vtkColorTransferFunction, vtkVolumeProperty,
-                                         vtkWindowToImageFilter)
+from vtkmodules.vtkRenderingCore import (vtkColorTransferFunction, vtkRenderer, vtkVolume,
+                                         vtkVolumeProperty, vtkWindowToImageFilter)
 
 from mtpt import vtkMTPTReferenceRenderer
 
@@ -45,6 +45,19 @@ def volume_property(colours, opacities, unit_distance):
     prop.SetScalarOpacity(opacity)
     prop.SetScalarOpacityUnitDistance(unit_distance)
     return prop
+
+
+def volume_scene(data, mapper, prop, background):
+    """A renderer of the given background holding `data` drawn by `mapper` with `prop`; returns
+    the renderer and the volume."""
+    mapper.SetInputData(data)
+    volume = vtkVolume()
+    volume.SetMapper(mapper)
+    volume.SetProperty(prop)
+    renderer = vtkRenderer()
+    renderer.SetBackground(*background)
+    renderer.AddVolume(volume)
+    return renderer, volume
 
 
 def grab(window):
