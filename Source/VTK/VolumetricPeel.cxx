@@ -249,7 +249,9 @@ bool VolumetricPeel::ReadRanges(vtkOpenGLRenderWindow* window, std::vector<float
   {
     std::vector<float>& ranges = which == 0 ? front : back;
     this->RangeTarget->ActivateReadBuffer(which == 0 ? 1 : 0);
-    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    // Through VTK's state cache, as BlendTarget::Read: a change behind its back leaves VTK's
+    // cached alignment stale for its own next read. (Float RGBA rows are 4-byte aligned.)
+    state->vtkglPixelStorei(GL_PACK_ALIGNMENT, 4);
     glReadPixels(0, 0, this->Size[0], this->Size[1], GL_RGBA, GL_FLOAT, recorded.data());
     ranges.resize(2 * pixels);
     for (std::size_t i = 0; i < pixels; ++i)
