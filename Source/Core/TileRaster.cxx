@@ -454,6 +454,17 @@ HWY_INLINE void BlendUnder(
   hn::StoreU(hn::IfThenElse(keep, hn::Add(alpha, weight), alpha), d, row.a + x);
 }
 
+/// BlendUnder for one pixel: a fragment of opacity a and colour (r, g, b) under what pixel x
+/// of `row` holds.
+inline void BlendUnderPixel(const TileRow& row, int x, float a, float r, float g, float b)
+{
+  const float weight = (1.0f - row.a[x]) * a;
+  row.r[x] += weight * r;
+  row.g[x] += weight * g;
+  row.b[x] += weight * b;
+  row.a[x] += weight;
+}
+
 /// VTK-compatible shading of the lanes `keep` of the vector at tile column x of `row`, with
 /// the OpenGL path's fragment math. start[k]: plane k at the row's column 0.
 template <class D>
@@ -891,14 +902,7 @@ void ShadeWaiting(const RasterFrame& f, const TileTarget& tile, WaitingFragments
     {
       continue;
     }
-    // Under what the pixel holds (BlendUnder).
-    const TileRow row = RowOf(tile, w.y[l]);
-    const int x = w.x[l];
-    const float weight = (1.0f - row.a[x]) * opacity;
-    row.r[x] += weight * rgba[0][l];
-    row.g[x] += weight * rgba[1][l];
-    row.b[x] += weight * rgba[2][l];
-    row.a[x] += weight;
+    BlendUnderPixel(RowOf(tile, w.y[l]), w.x[l], opacity, rgba[0][l], rgba[1][l], rgba[2][l]);
   }
   w.count = 0;
 }
@@ -1040,12 +1044,7 @@ void ShadeClipped(const RasterFrame& f, const TileTarget& tile, Mode mode, const
     {
       continue;
     }
-    // Under what the pixel holds, as BlendUnder.
-    const float weight = (1.0f - row.a[x]) * opacity;
-    row.r[x] += weight * value(0);
-    row.g[x] += weight * value(1);
-    row.b[x] += weight * value(2);
-    row.a[x] += weight;
+    BlendUnderPixel(row, x, opacity, value(0), value(1), value(2));
   }
 }
 
