@@ -25,7 +25,8 @@ LAYERS = {
     "mtpt/ImageSampling.h": 3,
 }
 # Sources whose header is not named after them.
-SOURCE_HEADERS = {"TileRaster.cxx": "detail/TileRaster.h"}
+SOURCE_HEADERS = {"TileRaster.cxx": "detail/TileRaster.h",
+                  "DecomposeBatch.cxx": "detail/DecomposeBatch.h"}
 
 
 def layer(header):

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "mtpt/Decompose.h"
 
+#include "detail/DecomposeBatch.h"
 #include "detail/MeshAccess.h"
 #include "detail/Parallel.h"
 #include "detail/PixelCoverage.h"
@@ -121,13 +122,13 @@ ProjectionClass InnerVertex(const ProjectionAreas& a, int& thick)
 
 } // namespace
 
-Projection ClassifyProjection(const double x[4], const double y[4])
+namespace
 {
-  ProjectionAreas a;
-  if (!SignedAreas(x, y, a))
-  {
-    return Projection{};
-  }
+
+/// The class, the corners' parts and the barycentric weights from the signed areas
+/// (ClassifyProjection after its first test).
+Projection Classify(const ProjectionAreas& a)
+{
   if (a.positives == 2 && a.negatives == 2)
   {
     return Quadrilateral(a);
@@ -160,6 +161,57 @@ Projection ClassifyProjection(const double x[4], const double y[4])
     w *= inverseSum;
   }
   return result;
+}
+
+/// The class and the corners' parts of every sign pattern (detail/DecomposeBatch.h), from
+/// Classify itself: the batched decomposition cannot assign parts differently.
+struct PatternTable
+{
+  detail::RoleTable roles;
+  ProjectionClass kind[detail::SignPatterns];
+
+  PatternTable()
+  {
+    this->roles.tolerance = ClassificationTolerance;
+    for (int pattern = 0; pattern < detail::SignPatterns; ++pattern)
+    {
+      ProjectionAreas a;
+      for (int i = 0; i < 4; ++i)
+      {
+        const bool positive = (pattern >> i) & 1, negative = (pattern >> (4 + i)) & 1;
+        a.sign[i] = positive ? 1 : (negative ? -1 : 0);
+        a.magnitude[i] = a.sign[i] != 0 ? 1.0 : 0.0;
+        a.positives += a.sign[i] > 0;
+        a.negatives += a.sign[i] < 0;
+      }
+      const bool contradictory = (pattern & (pattern >> 4) & 15) != 0;
+      const Projection p = contradictory ? Projection{} : Classify(a);
+      this->kind[pattern] = p.kind;
+      for (int r = 0; r < 4; ++r)
+      {
+        this->roles.role[r][pattern] = p.vertex[r];
+      }
+      this->roles.quadrilateral[pattern] = p.kind == ProjectionClass::Quadrilateral;
+    }
+  }
+};
+
+const PatternTable& Patterns()
+{
+  static const PatternTable table;
+  return table;
+}
+
+} // namespace
+
+Projection ClassifyProjection(const double x[4], const double y[4])
+{
+  ProjectionAreas a;
+  if (!SignedAreas(x, y, a))
+  {
+    return Projection{};
+  }
+  return Classify(a);
 }
 
 namespace
@@ -216,6 +268,31 @@ struct FanGeometry
   double weights[4] = { 0, 0, 0, 0 };
 };
 
+/// The silhouette of a drawable projection: its corners in cyclic order around the thick
+/// vertex, and the slot vertex the thick vertex takes.
+inline void Silhouette(const Projection& p, FanGeometry& g)
+{
+  if (p.kind == ProjectionClass::Quadrilateral)
+  {
+    // The quadrilateral's boundary runs a, d0, b, d1; the thick vertex is a fifth vertex.
+    g.thickSlot = 4;
+    g.count = 4;
+    g.boundary[0] = p.vertex[0];
+    g.boundary[1] = p.vertex[2];
+    g.boundary[2] = p.vertex[1];
+    g.boundary[3] = p.vertex[3];
+  }
+  else
+  {
+    // The outer triangle; the thick vertex is the inner corner.
+    g.thickSlot = p.vertex[3];
+    g.count = 3;
+    g.boundary[0] = p.vertex[0];
+    g.boundary[1] = p.vertex[1];
+    g.boundary[2] = p.vertex[2];
+  }
+}
+
 /// False (with projection NotDrawable) when the tetrahedron cannot be drawn.
 inline bool ComputeFanGeometry(const ProjectedPoint* const c[4], const float scalars[4],
   const double x[4], const double y[4], FanGeometry& g)
@@ -225,6 +302,7 @@ inline bool ComputeFanGeometry(const ProjectedPoint* const c[4], const float sca
   {
     return false;
   }
+  Silhouette(p, g);
   double first[3], second[3], firstZ, secondZ, firstScalar, secondScalar, thickX, thickY;
   if (p.kind == ProjectionClass::Quadrilateral)
   {
@@ -249,13 +327,6 @@ inline bool ComputeFanGeometry(const ProjectedPoint* const c[4], const float sca
     g.weights[b] = 0.5 * tab;
     g.weights[d0] = 0.5 * (1.0 - tcd);
     g.weights[d1] = 0.5 * tcd;
-    g.thickSlot = 4;
-    // The quadrilateral's boundary runs a, d0, b, d1.
-    g.count = 4;
-    g.boundary[0] = a;
-    g.boundary[1] = d0;
-    g.boundary[2] = b;
-    g.boundary[3] = d1;
   }
   else
   {
@@ -282,11 +353,6 @@ inline bool ComputeFanGeometry(const ProjectedPoint* const c[4], const float sca
     g.weights[j0] = 0.5 * u0;
     g.weights[j1] = 0.5 * u1;
     g.weights[j2] = 0.5 * u2;
-    g.thickSlot = t;
-    g.count = 3;
-    g.boundary[0] = j0;
-    g.boundary[1] = j1;
-    g.boundary[2] = j2;
   }
   const double dx = first[0] - second[0], dy = first[1] - second[1], dz = first[2] - second[2];
   const bool firstInFront = firstZ <= secondZ;
@@ -330,22 +396,21 @@ inline bool Corners(
   return Drawable(c, scalars);
 }
 
-/// The decomposition of one tetrahedron into a slot whose indices start at `base`.
-inline Projection Decompose(const ProjectedPoint* const c[4], const float scalars[4],
-  const float* const* colours, TetVertex out[VerticesPerTetrahedron],
+/// A corner's record: its projection and scalar (front = back, no length).
+inline TetVertex CornerRecord(const ProjectedPoint* corner, float scalar)
+{
+  return TetVertex{ static_cast<float>(corner->x), static_cast<float>(corner->y),
+    static_cast<float>(corner->z), scalar, scalar, 0.0f };
+}
+
+/// The slot of a drawable tetrahedron of geometry `g`, indices starting at `base`.
+inline void FillSlot(const ProjectedPoint* const c[4], const float scalars[4],
+  const float* const* colours, FanGeometry& g, TetVertex out[VerticesPerTetrahedron],
   std::uint32_t indices[IndicesPerTetrahedron], std::uint32_t base)
 {
-  double x[4], y[4];
-  FanGeometry g;
-  if (!Corners(c, scalars, x, y) || !ComputeFanGeometry(c, scalars, x, y, g))
-  {
-    WriteDegenerateSlot(out, indices, base);
-    return g.projection;
-  }
   for (int i = 0; i < 4; ++i)
   {
-    out[i] = TetVertex{ static_cast<float>(x[i]), static_cast<float>(y[i]),
-      static_cast<float>(c[i]->z), scalars[i], scalars[i], 0.0f };
+    out[i] = CornerRecord(c[i], scalars[i]);
     if (colours)
     {
       ColourCorner(colours, i, out[i]);
@@ -371,7 +436,47 @@ inline Projection Decompose(const ProjectedPoint* const c[4], const float scalar
       base + (real ? static_cast<std::uint32_t>(g.boundary[(i + 1) % g.count]) : thick);
     indices[3 * i + 2] = base + thick;
   }
+}
+
+/// The decomposition of one tetrahedron into a slot whose indices start at `base`.
+inline Projection Decompose(const ProjectedPoint* const c[4], const float scalars[4],
+  const float* const* colours, TetVertex out[VerticesPerTetrahedron],
+  std::uint32_t indices[IndicesPerTetrahedron], std::uint32_t base)
+{
+  double x[4], y[4];
+  FanGeometry g;
+  if (!Corners(c, scalars, x, y) || !ComputeFanGeometry(c, scalars, x, y, g))
+  {
+    WriteDegenerateSlot(out, indices, base);
+    return g.projection;
+  }
+  FillSlot(c, scalars, colours, g, out, indices, base);
   return g.projection;
+}
+
+/// The fan of a drawable tetrahedron of geometry `g`.
+inline void FillFan(const ProjectedPoint* const c[4], const float scalars[4],
+  const float* const* colours, FanGeometry& g, Fan& fan)
+{
+  if (colours)
+  {
+    ColourThick(colours, g, g.thick);
+  }
+  // Every byte is written once: clearing the whole record first (a rep stos per cell) was
+  // one of the decomposition loop's hot spots in a profile.
+  fan.centre = g.thick;
+  for (int i = 0; i < 4; ++i)
+  {
+    const int k = g.boundary[i];
+    fan.boundary[i] = i < g.count ? CornerRecord(c[k], scalars[k]) : TetVertex{};
+    if (colours && i < g.count)
+    {
+      ColourCorner(colours, k, fan.boundary[i]);
+    }
+  }
+  fan.count = static_cast<std::uint8_t>(g.count);
+  fan.closed = 1;
+  std::memset(fan.padding, 0, sizeof(fan.padding));
 }
 
 /// The decomposition of one tetrahedron into a fan (Decompose.h).
@@ -385,27 +490,7 @@ inline Projection DecomposeToFan(
     fan = Fan{};
     return g.projection;
   }
-  if (colours)
-  {
-    ColourThick(colours, g, g.thick);
-  }
-  // Every byte is written once: clearing the whole record first (a rep stos per cell) was
-  // one of the decomposition loop's hot spots in a profile.
-  fan.centre = g.thick;
-  for (int i = 0; i < 4; ++i)
-  {
-    const int k = g.boundary[i];
-    fan.boundary[i] = i < g.count ? TetVertex{ static_cast<float>(x[k]), static_cast<float>(y[k]),
-                                      static_cast<float>(c[k]->z), scalars[k], scalars[k], 0.0f }
-                                  : TetVertex{};
-    if (colours && i < g.count)
-    {
-      ColourCorner(colours, k, fan.boundary[i]);
-    }
-  }
-  fan.count = static_cast<std::uint8_t>(g.count);
-  fan.closed = 1;
-  std::memset(fan.padding, 0, sizeof(fan.padding));
+  FillFan(c, scalars, colours, g, fan);
   return g.projection;
 }
 
@@ -444,6 +529,18 @@ struct SlotWriter
       indices + IndicesPerTetrahedron * k, streaming);
     return kind;
   }
+  /// Slot k of a drawable tetrahedron whose geometry the batch computed.
+  void Write(const ProjectedPoint* const corners[4], const float scalars[4], FanGeometry& g,
+    std::int64_t k) const
+  {
+    TetVertex slotVertices[VerticesPerTetrahedron];
+    std::uint32_t slotIndices[IndicesPerTetrahedron];
+    FillSlot(corners, scalars, nullptr, g, slotVertices, slotIndices,
+      static_cast<std::uint32_t>(VerticesPerTetrahedron * k));
+    detail::StoreSlot(slotVertices, slotIndices, vertices + VerticesPerTetrahedron * k,
+      indices + IndicesPerTetrahedron * k, streaming);
+  }
+  /// Slot k drawing nothing (not drawable, or culled).
   void NotDrawable(std::int64_t k) const
   {
     TetVertex slotVertices[VerticesPerTetrahedron];
@@ -484,6 +581,15 @@ struct FanWriter
     detail::StoreFan(fan, fans + k, streaming);
     return kind;
   }
+  /// Fan k of a drawable tetrahedron whose geometry the batch computed.
+  void Write(const ProjectedPoint* const corners[4], const float scalars[4], FanGeometry& g,
+    std::int64_t k) const
+  {
+    Fan fan;
+    FillFan(corners, scalars, nullptr, g, fan);
+    detail::StoreFan(fan, fans + k, streaming);
+  }
+  /// Fan k drawing nothing (not drawable, or culled).
   void NotDrawable(std::int64_t k) const { detail::StoreFan(Fan{}, fans + k, streaming); }
 };
 
@@ -556,6 +662,156 @@ void DecomposeAll(const Access& cells, const DecomposeInput& input, const SortKe
     { DecomposeCell(cells, input, cellScalars, CellOfKey(order[k]), k, writer, classes); });
 }
 
+/**
+ * Tetrahedra gathered for DecomposeBatch (detail/DecomposeBatch.h) and written out when the
+ * batch is full: the decomposition of cells without vertex colours. Cells that are not
+ * tetrahedra, have an unusable corner or scalar, or are culled never enter a batch.
+ */
+template <typename Writer>
+class Batch
+{
+public:
+  Batch(const DecomposeInput& input, const Writer& writer, ProjectionClass* classes)
+    : Input(input)
+    , Out(writer)
+    , Classes(classes)
+    , Table(Patterns())
+  {
+  }
+  Batch(const Batch&) = delete;
+  Batch& operator=(const Batch&) = delete;
+
+  /// Slot (or fan) k: the tetrahedron of points `ids` with `scalars`.
+  void Add(const std::int64_t ids[4], const float scalars[4], std::int64_t k)
+  {
+    const ProjectedPoint* const corners[4] = { this->Input.points + ids[0],
+      this->Input.points + ids[1], this->Input.points + ids[2], this->Input.points + ids[3] };
+    // As DecomposeCorners: culled when it covers no pixel centre, then drawable or not.
+    if (this->Input.viewportWidth > 0 && this->Input.viewportHeight > 0 && AllUsable(corners) &&
+      !detail::CoversPixelCentre(corners, this->Input.viewportWidth, this->Input.viewportHeight))
+    {
+      this->Skip(k, ProjectionClass::CoversNoPixel);
+      return;
+    }
+    if (!Drawable(corners, scalars))
+    {
+      this->Skip(k, ProjectionClass::NotDrawable);
+      return;
+    }
+    for (int i = 0; i < 4; ++i)
+    {
+      this->Cells.point[i][this->Count] = ids[i];
+      this->Cells.scalar[i][this->Count] = scalars[i];
+    }
+    this->Position[this->Count] = k;
+    if (++this->Count == detail::BatchSize)
+    {
+      this->Flush();
+    }
+  }
+
+  /// Slot k draws nothing, for `reason`.
+  void Skip(std::int64_t k, ProjectionClass reason) const
+  {
+    this->Out.NotDrawable(k);
+    if (this->Classes)
+    {
+      this->Classes[k] = reason;
+    }
+  }
+
+  /// Decomposes the tetrahedra gathered and writes their slots (or fans).
+  void Flush()
+  {
+    if (this->Count == 0)
+    {
+      return;
+    }
+    // Lanes past the last tetrahedron repeat the first: every lane reads valid points.
+    for (int l = this->Count; l < detail::BatchSize; ++l)
+    {
+      for (int i = 0; i < 4; ++i)
+      {
+        this->Cells.point[i][l] = this->Cells.point[i][0];
+        this->Cells.scalar[i][l] = this->Cells.scalar[i][0];
+      }
+    }
+    detail::DecomposeBatch(this->Input.points, this->Cells, this->Count, this->Table.roles,
+      this->Result);
+    for (int l = 0; l < this->Count; ++l)
+    {
+      const std::int64_t pattern = this->Result.pattern[l];
+      const ProjectionClass kind =
+        this->Result.hasArea[l] ? this->Table.kind[pattern] : ProjectionClass::NotDrawable;
+      if (kind == ProjectionClass::NotDrawable)
+      {
+        this->Skip(this->Position[l], kind);
+        continue;
+      }
+      FanGeometry g;
+      g.projection.kind = kind;
+      for (int r = 0; r < 4; ++r)
+      {
+        g.projection.vertex[r] = static_cast<int>(this->Table.roles.role[r][pattern]);
+      }
+      Silhouette(g.projection, g);
+      const auto& t = this->Result.thick;
+      g.thick = TetVertex{ t[0][l], t[1][l], t[2][l], t[3][l], t[4][l], t[5][l] };
+      const ProjectedPoint* const corners[4] = { this->Input.points + this->Cells.point[0][l],
+        this->Input.points + this->Cells.point[1][l], this->Input.points + this->Cells.point[2][l],
+        this->Input.points + this->Cells.point[3][l] };
+      const float scalars[4] = { this->Cells.scalar[0][l], this->Cells.scalar[1][l],
+        this->Cells.scalar[2][l], this->Cells.scalar[3][l] };
+      this->Out.Write(corners, scalars, g, this->Position[l]);
+      if (this->Classes)
+      {
+        this->Classes[this->Position[l]] = kind;
+      }
+    }
+    this->Count = 0;
+  }
+
+private:
+  const DecomposeInput& Input;
+  const Writer& Out;
+  ProjectionClass* Classes;
+  const PatternTable& Table;
+  detail::TetBatch Cells;
+  detail::TetBatchResult Result;
+  std::int64_t Position[detail::BatchSize]; ///< the slot (or fan) of each tetrahedron
+  int Count = 0;
+};
+
+/// Cells [begin, end) whose ranks fall in [firstRank, firstRank + count), in batches.
+template <typename Access, typename Writer>
+void DecomposeBlock(const Access& cells, const DecomposeInput& input, const float* cellScalars,
+  const std::uint32_t* rank, std::size_t firstRank, std::size_t count, std::int64_t begin,
+  std::int64_t end, const Writer& writer, ProjectionClass* classes)
+{
+  Batch<Writer> batch(input, writer, classes);
+  for (std::int64_t c = begin; c < end; ++c)
+  {
+    const std::uint64_t k = static_cast<std::uint64_t>(rank[c]) - firstRank;
+    if (rank[c] == NotInOrder || k >= count)
+    {
+      continue;
+    }
+    std::int64_t ids[4];
+    if (!cells.TetrahedronPoints(static_cast<std::size_t>(c), ids))
+    {
+      batch.Skip(static_cast<std::int64_t>(k), ProjectionClass::NotDrawable);
+      continue;
+    }
+    float scalars[4];
+    for (int i = 0; i < 4; ++i)
+    {
+      scalars[i] = cellScalars ? cellScalars[c] : input.points[ids[i]].scalar;
+    }
+    batch.Add(ids, scalars, static_cast<std::int64_t>(k));
+  }
+  batch.Flush();
+}
+
 template <typename Access, typename Writer>
 void DecomposeAllByRank(const Access& cells, const DecomposeInput& input, const std::uint32_t* rank,
   std::size_t firstRank, std::size_t count, const Writer& writer, ProjectionClass* classes,
@@ -568,17 +824,30 @@ void DecomposeAllByRank(const Access& cells, const DecomposeInput& input, const 
   {
     cellInput.viewportWidth = cellInput.viewportHeight = 0;
   }
-  ParallelSlots(static_cast<std::int64_t>(input.cells.cellCount), threads,
-    [&](std::int64_t c)
-    {
-      // One unsigned comparison: NotInOrder and ranks outside the window both fail.
-      const std::uint64_t k = static_cast<std::uint64_t>(rank[c]) - firstRank;
-      if (rank[c] != NotInOrder && k < count)
+  const auto n = static_cast<std::int64_t>(input.cells.cellCount);
+  if (input.colours)
+  {
+    // Dependent colours mix the corners' colours with the scalar code's weights.
+    ParallelSlots(n, threads,
+      [&](std::int64_t c)
       {
-        DecomposeCell(cells, cellInput, cellScalars, static_cast<std::uint32_t>(c),
-          static_cast<std::int64_t>(k), writer, classes);
-      }
-    });
+        // One unsigned comparison: NotInOrder and ranks outside the window both fail.
+        const std::uint64_t k = static_cast<std::uint64_t>(rank[c]) - firstRank;
+        if (rank[c] != NotInOrder && k < count)
+        {
+          DecomposeCell(cells, cellInput, cellScalars, static_cast<std::uint32_t>(c),
+            static_cast<std::int64_t>(k), writer, classes);
+        }
+      });
+    return;
+  }
+#pragma omp parallel num_threads(threads)
+  {
+    const std::int64_t t = omp_get_thread_num(), team = omp_get_num_threads();
+    DecomposeBlock(cells, cellInput, cellScalars, rank, firstRank, count, n * t / team,
+      n * (t + 1) / team, writer, classes);
+    detail::FinishStores();
+  }
 }
 
 } // namespace

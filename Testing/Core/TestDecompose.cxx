@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Decomposition: exact thickness and scalars at the thick vertex, exact coverage of the
-// projection, fixed-stride buffers identical for any thread count and order method, and
+// projection, fixed-stride buffers identical for any thread count and order method, the
+// batched (SIMD) decomposition identical to the scalar one with every instruction set, and
 // finite, in-range buffers for degenerate input.
 #include "TestHelpers.h"
 
@@ -9,12 +10,18 @@
 #include "mtpt/VisibilityOrder.h"
 #include "mtpt/NearPlane.h"
 
+#include "detail/DecomposeBatch.h"
+
 #include <gtest/gtest.h>
+#include <hwy/targets.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <map>
+#include <sstream>
+#include <string>
 #include <random>
 #include <vector>
 
@@ -326,6 +333,177 @@ TEST(Decompose, GatherAndRankEntryPointsAgreeOnFullAndPartialOrders)
     }
   }
 }
+
+/// Records as text, every float to the last bit.
+std::string Describe(const TetVertex* records, int count)
+{
+  std::ostringstream text;
+  text.precision(9);
+  for (int i = 0; i < count; ++i)
+  {
+    const TetVertex& r = records[i];
+    text << "(" << r.x << " " << r.y << " " << r.z << " " << r.scalarFront << " " << r.scalarBack
+         << " " << r.thickness << ") ";
+  }
+  return text.str();
+}
+
+/// Random tetrahedra whose corners are drawn from a small lattice (projected by an axis-aligned
+/// view, its points coincide and line up: every class and every zero-band case occurs) and
+/// from random points, some of them unusable.
+TetMesh LatticeTetrahedra(std::size_t cells, unsigned seed)
+{
+  TetMesh mesh;
+  for (int i = 0; i < 27; ++i)
+  {
+    mesh.points.insert(mesh.points.end(),
+      { float(i % 3 - 1), float(i / 3 % 3 - 1), float(i / 9 - 1) });
+  }
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<float> coordinate(-1.5f, 1.5f);
+  for (int i = 0; i < 40; ++i)
+  {
+    mesh.points.insert(mesh.points.end(), { coordinate(random), coordinate(random),
+      i % 10 == 0 ? 1e-7f * coordinate(random) : coordinate(random) });
+  }
+  mesh.points.insert(mesh.points.end(), { NAN, 0.0f, 0.0f }); // unusable
+  const auto points = static_cast<std::int64_t>(mesh.points.size() / 3);
+  for (std::int64_t p = 0; p < points; ++p)
+  {
+    mesh.scalars.push_back(p == 5 ? NAN : 0.1f * static_cast<float>(p % 17));
+  }
+  std::uniform_int_distribution<std::int64_t> lattice(0, 26), any(0, points - 1);
+  for (std::size_t c = 0; c < cells; ++c)
+  {
+    std::int64_t ids[4];
+    for (auto& id : ids)
+    {
+      id = c % 4 == 0 ? any(random) : lattice(random);
+    }
+    mesh.AddTetrahedron(ids[0], ids[1], ids[2], ids[3]);
+  }
+  return mesh;
+}
+
+/// The batched decomposition's tests, run with each instruction set in turn.
+class DecomposeSimd : public ::testing::TestWithParam<std::int64_t>
+{
+protected:
+  void SetUp() override { hwy::SetSupportedTargetsForTest(this->GetParam()); }
+  void TearDown() override { hwy::SetSupportedTargetsForTest(0); }
+};
+
+// The by-rank decompositions (batched, one tetrahedron per SIMD lane) against the scalar
+// decomposition of one tetrahedron, slot by slot and fan by fan, byte for byte.
+TEST_P(DecomposeSimd, BatchedDecompositionIsTheScalarOneBitForBit)
+{
+  ASSERT_STREQ(mtpt::detail::DecomposeTargetName(), hwy::TargetName(this->GetParam()));
+  const TetMesh mesh = LatticeTetrahedra(4000, 7);
+  const std::size_t n = mesh.CellCount(), points = mesh.points.size() / 3;
+  std::vector<float> cellScalars(n);
+  for (std::size_t c = 0; c < n; ++c)
+  {
+    cellScalars[c] = c % 97 == 0 ? INFINITY : 0.01f * static_cast<float>(c % 101);
+  }
+  const View axisAligned{ LookAt({ 0, 0, 6 }, { 0, 0, 0 }, { 0, 1, 0 }),
+    Ortho(-2, 2, -2, 2, 0.5, 12), false };
+  std::map<ProjectionClass, int> seen;
+  for (const View& view : { axisAligned, PerspectiveView() })
+  {
+    for (const bool perCell : { false, true })
+    {
+      for (const int viewport : { 0, 23 })
+      {
+        SCOPED_TRACE(::testing::Message() << "perspective " << view.perspective << ", cell scalars "
+                                          << perCell << ", viewport " << viewport);
+        const mtpt::ScalarsView scalars = perCell
+          ? mtpt::ScalarsView{ cellScalars.data(), mtpt::ScalarsView::Association::Cells }
+          : mtpt::ScalarsView{ mesh.scalars.data(), mtpt::ScalarsView::Association::Points };
+        std::vector<mtpt::ProjectedPoint> projected(points);
+        mtpt::ProjectPoints(mesh.Points(), perCell ? mtpt::ScalarsView{} : scalars,
+          view.modelView, view.projection, projected.data(), 2);
+        mtpt::DecomposeInput input;
+        input.points = projected.data();
+        input.pointCount = points;
+        input.cells = mesh.Cells();
+        input.scalars = scalars;
+        input.viewportWidth = input.viewportHeight = viewport;
+        // A rank per cell, shuffled; a window of them, not a multiple of any batch.
+        std::vector<std::uint32_t> rank(n);
+        for (std::size_t c = 0; c < n; ++c)
+        {
+          rank[c] = static_cast<std::uint32_t>(c);
+        }
+        std::shuffle(rank.begin(), rank.end(), std::mt19937(11));
+        const std::size_t first = 101, count = n - 333;
+        // A cell not in the order (culled before the sort): one whose rank is before the window.
+        *std::find(rank.begin(), rank.end(), 7u) = mtpt::NotInOrder;
+        std::vector<TetVertex> expectedVertices(5 * count), vertices(5 * count);
+        std::vector<std::uint32_t> expectedIndices(12 * count), indices(12 * count);
+        std::vector<mtpt::Fan> expectedFans(count), fans(count);
+        std::vector<ProjectionClass> expectedClasses(count), slotClasses(count), fanClasses(count);
+        for (std::size_t c = 0; c < n; ++c)
+        {
+          const std::size_t k = rank[c] - first;
+          if (rank[c] == mtpt::NotInOrder || rank[c] < first || k >= count)
+          {
+            continue;
+          }
+          const auto* ids = &mesh.connectivity[4 * c];
+          const mtpt::ProjectedPoint* corners[4];
+          float cornerScalars[4];
+          for (int i = 0; i < 4; ++i)
+          {
+            corners[i] = &projected[static_cast<std::size_t>(ids[i])];
+            cornerScalars[i] = perCell ? cellScalars[c] : corners[i]->scalar;
+          }
+          expectedClasses[k] = mtpt::DecomposeIntoSlot(
+            input, corners, cornerScalars, k, expectedVertices.data(), expectedIndices.data());
+          ASSERT_EQ(mtpt::DecomposeIntoFan(input, corners, cornerScalars, expectedFans[k]),
+            expectedClasses[k]);
+          ++seen[expectedClasses[k]];
+        }
+        for (const int threads : { 1, 2, 3 })
+        {
+          SCOPED_TRACE(::testing::Message() << threads << " threads");
+          std::fill(vertices.begin(), vertices.end(), TetVertex{ NAN, NAN, NAN, NAN, NAN, NAN });
+          std::fill(indices.begin(), indices.end(), 0xffffffffu);
+          std::memset(fans.data(), 0xff, fans.size() * sizeof(mtpt::Fan));
+          mtpt::DecomposeTetrahedraByRank(input, rank.data(), first, count, vertices.data(),
+            indices.data(), slotClasses.data(), threads);
+          mtpt::DecomposeFansByRank(
+            input, rank.data(), first, count, fans.data(), fanClasses.data(), threads);
+          ASSERT_EQ(slotClasses, expectedClasses);
+          ASSERT_EQ(fanClasses, expectedClasses);
+          for (std::size_t k = 0; k < count; ++k)
+          {
+            ASSERT_EQ(0, std::memcmp(&vertices[5 * k], &expectedVertices[5 * k], 5 * sizeof(TetVertex)))
+              << "slot " << k << " of class " << static_cast<int>(expectedClasses[k]) << ": "
+              << Describe(&vertices[5 * k], 5) << " instead of "
+              << Describe(&expectedVertices[5 * k], 5);
+            ASSERT_EQ(0, std::memcmp(&fans[k], &expectedFans[k], sizeof(mtpt::Fan)))
+              << "fan " << k << ": " << Describe(&fans[k].centre, 5) << " instead of "
+              << Describe(&expectedFans[k].centre, 5);
+          }
+          ASSERT_EQ(indices, expectedIndices);
+        }
+      }
+    }
+  }
+  // Every class occurred, the degenerate ones included.
+  for (const ProjectionClass kind :
+    { ProjectionClass::Triangle, ProjectionClass::Quadrilateral, ProjectionClass::VertexOnEdge,
+      ProjectionClass::CoincidentVertices, ProjectionClass::NotDrawable,
+      ProjectionClass::CoversNoPixel })
+  {
+    EXPECT_GT(seen[kind], 20) << static_cast<int>(kind);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(InstructionSets, DecomposeSimd,
+  ::testing::ValuesIn(hwy::SupportedAndGeneratedTargets()),
+  [](const ::testing::TestParamInfo<std::int64_t>& info)
+  { return std::string(hwy::TargetName(info.param)); });
 
 TEST(Decompose, DegenerateInputGivesFiniteBuffersAndValidIndices)
 {
