@@ -437,10 +437,12 @@ HWY_INLINE hn::Mask<D> Transparent(D d, const TileRow& row, int x)
  * Blends fragments of opacity a and colour c under what the lanes `keep` of the vector at
  * tile column x of `row` hold (premultiplied colour C, coverage alpha A), front to back:
  * C += (1 - A) a c, A += (1 - A) a. Back to front with OpenGL's blending (VTK's PT's, over)
- * gives the same image up to rounding.
+ * gives the same image up to rounding. Returns the lanes' alpha after the blend: a caller that
+ * reads it again gets it from a register, not from the store just made (a masked store, which
+ * the processor cannot forward to a load).
  */
 template <class D>
-HWY_INLINE void BlendUnder(
+HWY_INLINE hn::Vec<D> BlendUnder(
   D d, const TileRow& row, int x, hn::Vec<D> opacity, const hn::Vec<D> colour[3], hn::Mask<D> keep)
 {
   const auto alpha = hn::LoadU(d, row.a + x);
@@ -451,7 +453,9 @@ HWY_INLINE void BlendUnder(
     const auto in = hn::LoadU(d, planes[k] + x);
     hn::StoreU(hn::IfThenElse(keep, hn::MulAdd(weight, colour[k], in), in), d, planes[k] + x);
   }
-  hn::StoreU(hn::IfThenElse(keep, hn::Add(alpha, weight), alpha), d, row.a + x);
+  const auto blended = hn::IfThenElse(keep, hn::Add(alpha, weight), alpha);
+  hn::StoreU(blended, d, row.a + x);
+  return blended;
 }
 
 /// BlendUnder for one pixel: a fragment of opacity a and colour (r, g, b) under what pixel x

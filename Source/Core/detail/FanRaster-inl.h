@@ -417,8 +417,9 @@ struct FanPlanes
 };
 
 /// ShadeVector's fragment math on values given per lane: r, g, b, attenuation, length, z.
+/// Returns the lanes' alpha after it (BlendUnder).
 template <class D>
-HWY_INLINE void ShadeLanes(
+HWY_INLINE hn::Vec<D> ShadeLanes(
   D d, const RasterFrame& f, const TileRow& row, int x, const hn::Vec<D> value[6], hn::Mask<D> keep)
 {
   const auto one = hn::Set(d, 1.0f);
@@ -432,7 +433,7 @@ HWY_INLINE void ShadeLanes(
   const auto opacity =
     OpacityOfDensity(d, hn::Mul(hn::Mul(value[3], value[4]), hn::Set(d, f.inverseUnit)));
   keep = hn::And(keep, hn::Gt(opacity, hn::Zero(d)));
-  BlendUnder(d, row, x, opacity, value, keep);
+  return BlendUnder(d, row, x, opacity, value, keep);
 }
 
 /// The triangle each lane lies in (of the lanes inside the silhouette): triangle k when the
@@ -459,8 +460,9 @@ HWY_INLINE hn::Vec<hn::RebindToSigned<D>> TriangleOfLanes(
 
 /// Shades the lanes `keep` of the vector at tile column x of row `row`, `offset` columns
 /// right of the row's first vector: each lane with the values of its triangle's planes.
+/// Returns the lanes' alpha after it.
 template <class D>
-HWY_INLINE void ShadeFanLanes(D d, const RasterFrame& f, const TileRow& row, const FanPlanes& p,
+HWY_INLINE hn::Vec<D> ShadeFanLanes(D d, const RasterFrame& f, const TileRow& row, const FanPlanes& p,
   const EdgeLanes<D>* spokes, int x, int offset, hn::Mask<D> keep)
 {
   const auto i = hn::Iota(d, static_cast<float>(x));
@@ -472,7 +474,7 @@ HWY_INLINE void ShadeFanLanes(D d, const RasterFrame& f, const TileRow& row, con
     const auto start = hn::TableLookupLanes(hn::Load(d, p.start[a]), which);
     value[a] = hn::MulAdd(dx, i, start);
   }
-  ShadeLanes(d, f, row, x, value, keep);
+  return ShadeLanes(d, f, row, x, value, keep);
 }
 
 /**
@@ -494,7 +496,7 @@ public:
       this->Opaque[j] = 0;
       for (int x = 0; x < T; x += static_cast<int>(hn::Lanes(FragmentTag())))
       {
-        this->MarkOpaque(j, x);
+        this->MarkOpaque(j, x, hn::LoadU(FragmentTag(), this->Tile.rgba + 3 * T * T + j * T + x));
       }
     }
   }
@@ -583,8 +585,8 @@ private:
           this->Planes.Row(d, y - tile.y0);
           rowReady = true;
         }
-        ShadeFanLanes(d, this->Frame, row, this->Planes, spokes, x, x - start, keep);
-        this->MarkOpaque(y - tile.y0, x);
+        this->MarkOpaque(y - tile.y0, x,
+          ShadeFanLanes(d, this->Frame, row, this->Planes, spokes, x, x - start, keep));
       }
       for (int k = 0; k < g.triangles; ++k)
       {
@@ -594,12 +596,11 @@ private:
     }
   }
 
-  /// Marks the opaque pixels among the vector's at tile row j, column x.
-  HWY_INLINE void MarkOpaque(int j, int x)
+  /// Marks the opaque pixels among the vector's at tile row j, column x, whose alpha is `alpha`.
+  HWY_INLINE void MarkOpaque(int j, int x, hn::Vec<FragmentTag> alpha)
   {
     const FragmentTag d;
-    const float* alpha = this->Tile.rgba + 3 * T * T + j * T + x;
-    const auto opaque = hn::Ge(hn::LoadU(d, alpha), hn::Set(d, OpaqueAlpha));
+    const auto opaque = hn::Ge(alpha, hn::Set(d, OpaqueAlpha));
     if (!hn::AllFalse(d, opaque)) // mostly none, in a scene that is not opaque anywhere
     {
       std::uint8_t bits[(MaxLanes + 7) / 8] = {};
