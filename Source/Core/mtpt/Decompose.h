@@ -188,6 +188,10 @@ void DecomposeFansByRank(const DecomposeInput& input, const std::uint32_t* rank,
  * 0): a frame drawn in batches decomposes one window at a time into the same buffers.
  * The whole order is firstRank 0 and count = the number of ranked cells.
  *
+ * Without dependent colours the cells are decomposed several at a time, one per SIMD lane
+ * (Documentation/algorithm.md, "Several tetrahedra at once"), with the result of the scalar
+ * decomposition (DecomposeIntoSlot) bit for bit.
+ *
  * Thread safety and determinism: as DecomposeTetrahedra; each slot has exactly one writer.
  */
 void DecomposeTetrahedraByRank(const DecomposeInput& input, const std::uint32_t* rank,
