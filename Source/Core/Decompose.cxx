@@ -585,12 +585,52 @@ struct FanWriter
   void Write(const ProjectedPoint* const corners[4], const float scalars[4], FanGeometry& g,
     std::int64_t k) const
   {
+#if defined(__x86_64__) || defined(_M_X64)
+    if (streaming)
+    {
+      // FillFan's bytes, assembled in registers: a record assembled on the stack and loaded
+      // back 16 bytes at a time waits for its 4-byte stores to retire.
+      float b[4][4]; // x, y, z, scalar of the boundary corners; zero past count
+      for (int i = 0; i < 4; ++i)
+      {
+        const int c = g.boundary[i];
+        const bool real = i < g.count;
+        b[i][0] = real ? static_cast<float>(corners[c]->x) : 0.0f;
+        b[i][1] = real ? static_cast<float>(corners[c]->y) : 0.0f;
+        b[i][2] = real ? static_cast<float>(corners[c]->z) : 0.0f;
+        b[i][3] = real ? scalars[c] : 0.0f;
+      }
+      const TetVertex& t = g.thick;
+      const std::uint32_t tail = static_cast<std::uint32_t>(g.count) | (1u << 8); // closed
+      float tailBits;
+      std::memcpy(&tailBits, &tail, sizeof(tailBits));
+      auto* out = reinterpret_cast<__m128*>(fans + k);
+      _mm_stream_ps(reinterpret_cast<float*>(out + 0), _mm_setr_ps(t.x, t.y, t.z, t.scalarFront));
+      _mm_stream_ps(reinterpret_cast<float*>(out + 1),
+        _mm_setr_ps(t.scalarBack, t.thickness, b[0][0], b[0][1]));
+      _mm_stream_ps(
+        reinterpret_cast<float*>(out + 2), _mm_setr_ps(b[0][2], b[0][3], b[0][3], 0.0f));
+      _mm_stream_ps(
+        reinterpret_cast<float*>(out + 3), _mm_setr_ps(b[1][0], b[1][1], b[1][2], b[1][3]));
+      _mm_stream_ps(
+        reinterpret_cast<float*>(out + 4), _mm_setr_ps(b[1][3], 0.0f, b[2][0], b[2][1]));
+      _mm_stream_ps(
+        reinterpret_cast<float*>(out + 5), _mm_setr_ps(b[2][2], b[2][3], b[2][3], 0.0f));
+      _mm_stream_ps(
+        reinterpret_cast<float*>(out + 6), _mm_setr_ps(b[3][0], b[3][1], b[3][2], b[3][3]));
+      _mm_stream_ps(reinterpret_cast<float*>(out + 7), _mm_setr_ps(b[3][3], 0.0f, tailBits, 0.0f));
+      return;
+    }
+#endif
     Fan fan;
     FillFan(corners, scalars, nullptr, g, fan);
     detail::StoreFan(fan, fans + k, streaming);
   }
   /// Fan k drawing nothing (not drawable, or culled).
-  void NotDrawable(std::int64_t k) const { detail::StoreFan(Fan{}, fans + k, streaming); }
+  void NotDrawable(std::int64_t k) const
+  {
+    detail::StoreFan(Fan{}, fans + k, streaming);
+  }
 };
 
 /// Slot (or fan) k, holding `cell`.
@@ -736,8 +776,8 @@ public:
         this->Cells.scalar[i][l] = this->Cells.scalar[i][0];
       }
     }
-    detail::DecomposeBatch(this->Input.points, this->Cells, this->Count, this->Table.roles,
-      this->Result);
+    detail::DecomposeBatch(
+      this->Input.points, this->Cells, this->Count, this->Table.roles, this->Result);
     for (int l = 0; l < this->Count; ++l)
     {
       const std::int64_t pattern = this->Result.pattern[l];

@@ -91,8 +91,8 @@ HWY_INLINE V Lerp(V a, V b, V t)
 }
 
 /// Class 2 (ComputeFanGeometry's first branch): the diagonals' crossing, parts (a, b, d0, d1).
-HWY_INLINE void QuadrilateralEnds(D d, const Corners& c, const V magnitude[4],
-  const RoleSelect& select, SegmentEnds& e)
+HWY_INLINE void QuadrilateralEnds(
+  D d, const Corners& c, const V magnitude[4], const RoleSelect& select, SegmentEnds& e)
 {
   const V magA = select(0, magnitude), magB = select(1, magnitude);
   const V magD0 = select(2, magnitude), magD1 = select(3, magnitude);
@@ -172,9 +172,8 @@ HWY_INLINE M SignedAreas(D d, const Corners& c, double tolerance, V magnitude[4]
     extent = hn::Max(extent, hn::Abs(hn::Sub(c.x[i], c.x[0])));
     extent = hn::Max(extent, hn::Abs(hn::Sub(c.y[i], c.y[0])));
   }
-  const M hasArea =
-    hn::And(hn::Gt(sumAbs, hn::Mul(hn::Mul(hn::Set(d, 1e-12), extent), extent)),
-      hn::IsFinite(sumAbs));
+  const M hasArea = hn::And(
+    hn::Gt(sumAbs, hn::Mul(hn::Mul(hn::Set(d, 1e-12), extent), extent)), hn::IsFinite(sumAbs));
   const V zeroBand = hn::Mul(hn::Set(d, tolerance), sumAbs);
   const DI di;
   pattern = hn::Zero(di);
@@ -183,7 +182,8 @@ HWY_INLINE M SignedAreas(D d, const Corners& c, double tolerance, V magnitude[4]
     const M nonZero = hn::Gt(magnitude[i], zeroBand);
     const M positive = hn::And(nonZero, hn::Gt(area2[i], hn::Zero(d)));
     const M negative = hn::AndNot(positive, nonZero);
-    pattern = hn::Or(pattern, hn::IfThenElseZero(hn::RebindMask(di, positive), hn::Set(di, 1 << i)));
+    pattern =
+      hn::Or(pattern, hn::IfThenElseZero(hn::RebindMask(di, positive), hn::Set(di, 1 << i)));
     pattern =
       hn::Or(pattern, hn::IfThenElseZero(hn::RebindMask(di, negative), hn::Set(di, 16 << i)));
     // ClassifyProjection's weights: a zero-band area weighs nothing.
@@ -193,8 +193,8 @@ HWY_INLINE M SignedAreas(D d, const Corners& c, double tolerance, V magnitude[4]
 }
 
 /// Lanes [base, base + Lanes(d)) of the batch.
-HWY_INLINE void DecomposeLanes(const ProjectedPoint* points, const TetBatch& batch, std::size_t base,
-  const RoleTable& roles, TetBatchResult& result)
+HWY_INLINE void DecomposeLanes(const ProjectedPoint* points, const TetBatch& batch,
+  std::size_t base, const RoleTable& roles, TetBatchResult& result)
 {
   const D d;
   const DI di;
@@ -230,7 +230,8 @@ HWY_INLINE void DecomposeLanes(const ProjectedPoint* points, const TetBatch& bat
   SegmentEnds quad, tri;
   QuadrilateralEnds(d, c, magnitude, select, quad);
   TriangleEnds(d, c, magnitude, select, tri);
-  auto pick = [&](V SegmentEnds::*field) { return hn::IfThenElse(quadrilateral, quad.*field, tri.*field); };
+  auto pick = [&](V SegmentEnds::*field)
+  { return hn::IfThenElse(quadrilateral, quad.*field, tri.*field); };
   V dSquared = hn::Zero(d);
   for (int k = 0; k < 3; ++k)
   {
@@ -252,8 +253,8 @@ HWY_INLINE void DecomposeLanes(const ProjectedPoint* points, const TetBatch& bat
     hn::StoreU(hn::DemoteTo(df, thick[f]), df, result.thick[f] + base);
   }
   hn::StoreU(pattern, di, result.pattern + base);
-  hn::StoreU(hn::IfThenElseZero(hn::RebindMask(di, hasArea), hn::Set(di, 1)), di,
-    result.hasArea + base);
+  hn::StoreU(
+    hn::IfThenElseZero(hn::RebindMask(di, hasArea), hn::Set(di, 1)), di, result.hasArea + base);
 }
 
 void DecomposeBatchImpl(const ProjectedPoint* points, const TetBatch& batch, int count,

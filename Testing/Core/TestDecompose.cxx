@@ -356,15 +356,16 @@ TetMesh LatticeTetrahedra(std::size_t cells, unsigned seed)
   TetMesh mesh;
   for (int i = 0; i < 27; ++i)
   {
-    mesh.points.insert(mesh.points.end(),
-      { float(i % 3 - 1), float(i / 3 % 3 - 1), float(i / 9 - 1) });
+    mesh.points.insert(
+      mesh.points.end(), { float(i % 3 - 1), float(i / 3 % 3 - 1), float(i / 9 - 1) });
   }
   std::mt19937 random(seed);
   std::uniform_real_distribution<float> coordinate(-1.5f, 1.5f);
   for (int i = 0; i < 40; ++i)
   {
-    mesh.points.insert(mesh.points.end(), { coordinate(random), coordinate(random),
-      i % 10 == 0 ? 1e-7f * coordinate(random) : coordinate(random) });
+    mesh.points.insert(mesh.points.end(),
+      { coordinate(random), coordinate(random),
+        i % 10 == 0 ? 1e-7f * coordinate(random) : coordinate(random) });
   }
   mesh.points.insert(mesh.points.end(), { NAN, 0.0f, 0.0f }); // unusable
   const auto points = static_cast<std::int64_t>(mesh.points.size() / 3);
@@ -420,8 +421,8 @@ TEST_P(DecomposeSimd, BatchedDecompositionIsTheScalarOneBitForBit)
           ? mtpt::ScalarsView{ cellScalars.data(), mtpt::ScalarsView::Association::Cells }
           : mtpt::ScalarsView{ mesh.scalars.data(), mtpt::ScalarsView::Association::Points };
         std::vector<mtpt::ProjectedPoint> projected(points);
-        mtpt::ProjectPoints(mesh.Points(), perCell ? mtpt::ScalarsView{} : scalars,
-          view.modelView, view.projection, projected.data(), 2);
+        mtpt::ProjectPoints(mesh.Points(), perCell ? mtpt::ScalarsView{} : scalars, view.modelView,
+          view.projection, projected.data(), 2);
         mtpt::DecomposeInput input;
         input.points = projected.data();
         input.pointCount = points;
@@ -477,7 +478,8 @@ TEST_P(DecomposeSimd, BatchedDecompositionIsTheScalarOneBitForBit)
           ASSERT_EQ(fanClasses, expectedClasses);
           for (std::size_t k = 0; k < count; ++k)
           {
-            ASSERT_EQ(0, std::memcmp(&vertices[5 * k], &expectedVertices[5 * k], 5 * sizeof(TetVertex)))
+            ASSERT_EQ(
+              0, std::memcmp(&vertices[5 * k], &expectedVertices[5 * k], 5 * sizeof(TetVertex)))
               << "slot " << k << " of class " << static_cast<int>(expectedClasses[k]) << ": "
               << Describe(&vertices[5 * k], 5) << " instead of "
               << Describe(&expectedVertices[5 * k], 5);
@@ -491,10 +493,9 @@ TEST_P(DecomposeSimd, BatchedDecompositionIsTheScalarOneBitForBit)
     }
   }
   // Every class occurred, the degenerate ones included.
-  for (const ProjectionClass kind :
-    { ProjectionClass::Triangle, ProjectionClass::Quadrilateral, ProjectionClass::VertexOnEdge,
-      ProjectionClass::CoincidentVertices, ProjectionClass::NotDrawable,
-      ProjectionClass::CoversNoPixel })
+  for (const ProjectionClass kind : { ProjectionClass::Triangle, ProjectionClass::Quadrilateral,
+         ProjectionClass::VertexOnEdge, ProjectionClass::CoincidentVertices,
+         ProjectionClass::NotDrawable, ProjectionClass::CoversNoPixel })
   {
     EXPECT_GT(seen[kind], 20) << static_cast<int>(kind);
   }

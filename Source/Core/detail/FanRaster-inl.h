@@ -462,8 +462,8 @@ HWY_INLINE hn::Vec<hn::RebindToSigned<D>> TriangleOfLanes(
 /// right of the row's first vector: each lane with the values of its triangle's planes.
 /// Returns the lanes' alpha after it.
 template <class D>
-HWY_INLINE hn::Vec<D> ShadeFanLanes(D d, const RasterFrame& f, const TileRow& row, const FanPlanes& p,
-  const EdgeLanes<D>* spokes, int x, int offset, hn::Mask<D> keep)
+HWY_INLINE hn::Vec<D> ShadeFanLanes(D d, const RasterFrame& f, const TileRow& row,
+  const FanPlanes& p, const EdgeLanes<D>* spokes, int x, int offset, hn::Mask<D> keep)
 {
   const auto i = hn::Iota(d, static_cast<float>(x));
   const auto which = hn::IndicesFromVec(d, TriangleOfLanes(d, spokes, p.triangles, offset));
@@ -488,7 +488,8 @@ public:
     : Frame(f)
     , Tile(tile)
     , Lookup(f.transferFunction)
-    , Applies(f.fanPath && !f.vertexColours && !f.clipToRange && hn::Lanes(FragmentTag()) >= MaxFanTriangles)
+    , Applies(f.fanPath && !f.vertexColours && !f.clipToRange &&
+        hn::Lanes(FragmentTag()) >= MaxFanTriangles)
   {
     this->Planes.Clear();
     for (int j = 0; j < T && this->Applies; ++j)
