@@ -26,7 +26,8 @@ LAYERS = {
 }
 # Sources whose header is not named after them.
 SOURCE_HEADERS = {"TileRaster.cxx": "detail/TileRaster.h",
-                  "DecomposeBatch.cxx": "detail/DecomposeBatch.h"}
+                  "DecomposeBatch.cxx": "detail/DecomposeBatch.h",
+                  "KeyBatch.cxx": "detail/KeyBatch.h"}
 
 
 def layer(header):

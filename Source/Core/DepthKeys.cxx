@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "mtpt/DepthKeys.h"
 
+#include "detail/KeyBatch.h"
 #include "detail/MeshAccess.h"
 #include "detail/Parallel.h"
-#include "detail/PixelCoverage.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -31,25 +32,10 @@ std::uint32_t EncodeDepth(float depth)
 namespace
 {
 
-/// Bits of the clip planes a usable projected point lies beyond (0: inside the frustum).
-inline unsigned OutCode(const ProjectedPoint& p)
-{
-  return (p.x < -1.0 ? 1u : 0u) | (p.x > 1.0 ? 2u : 0u) | (p.y < -1.0 ? 4u : 0u) |
-    (p.y > 1.0 ? 8u : 0u) | (p.z < -1.0 ? 16u : 0u) | (p.z > 1.0 ? 32u : 0u);
-}
-
-/// Why a cell was left out of the keys.
-enum class Verdict
-{
-  Kept,
-  OutsideFrustum,
-  CoversNoPixel
-};
-
-/// The key of `cell`, or why it is culled (see KeyCulling; null `culling`: none).
+/// The key of `cell`: its centroid depth, +infinity when it is not a tetrahedron.
 template <typename Access>
-inline Verdict CellKey(const Access& cells, const ProjectedPoint* points, std::uint32_t cell,
-  bool perspective, const KeyCulling* culling, SortKey& key)
+inline SortKey CellKey(
+  const Access& cells, const ProjectedPoint* points, std::uint32_t cell, bool perspective)
 {
   std::int64_t ids[4];
   float depth = std::numeric_limits<float>::infinity();
@@ -57,29 +43,74 @@ inline Verdict CellKey(const Access& cells, const ProjectedPoint* points, std::u
   {
     const ProjectedPoint* corners[4] = { points + ids[0], points + ids[1], points + ids[2],
       points + ids[3] };
-    unsigned outside = ~0u;
-    int usable = 0;
-    for (const ProjectedPoint* p : corners)
-    {
-      outside &= OutCode(*p);
-      usable += p->usable;
-    }
-    if (culling && usable == 4)
-    {
-      if (culling->frustum && outside != 0)
-      {
-        return Verdict::OutsideFrustum;
-      }
-      if (culling->viewportWidth > 0 && culling->viewportHeight > 0 &&
-        !detail::CoversPixelCentre(corners, culling->viewportWidth, culling->viewportHeight))
-      {
-        return Verdict::CoversNoPixel;
-      }
-    }
     depth = CentroidDepth(corners, perspective);
   }
-  key = MakeSortKey(depth, cell);
-  return Verdict::Kept;
+  return MakeSortKey(depth, cell);
+}
+
+/**
+ * The keys of the cells list[begin, end) (null list: the cell ids themselves) that `rules`
+ * keep, several cells at a time (detail/KeyBatch.h: the frustum and pixel-centre culling of
+ * KeyCulling, then CellKey's depth), written to out[0..) in list order. Returns their
+ * number; `pixelCulled` counts the cells covering no pixel centre.
+ */
+template <typename Access>
+std::size_t KeysInBatches(const Access& cells, const ProjectedPoint* points,
+  const std::uint32_t* list, std::size_t begin, std::size_t end, const detail::KeyRules& rules,
+  SortKey* out, std::size_t& pixelCulled)
+{
+  std::size_t written = 0;
+  detail::KeyBatch batch;
+  detail::KeyBatchResult result;
+  std::uint32_t ids[detail::BatchSize];
+  bool tetrahedron[detail::BatchSize];
+  for (std::size_t first = begin; first < end; first += detail::BatchSize)
+  {
+    const int count = static_cast<int>(std::min<std::size_t>(detail::BatchSize, end - first));
+    int valid = -1; // a lane with valid point ids, to pad the others with
+    for (int l = 0; l < count; ++l)
+    {
+      ids[l] = list ? list[first + l] : static_cast<std::uint32_t>(first + l);
+      std::int64_t corners[4];
+      tetrahedron[l] = cells.TetrahedronPoints(ids[l], corners);
+      if (tetrahedron[l])
+      {
+        valid = l;
+        for (int i = 0; i < 4; ++i)
+        {
+          batch.point[i][l] = corners[i];
+        }
+      }
+    }
+    if (valid >= 0)
+    {
+      for (int l = 0; l < detail::BatchSize; ++l)
+      {
+        if (l >= count || !tetrahedron[l])
+        {
+          for (int i = 0; i < 4; ++i)
+          {
+            batch.point[i][l] = batch.point[i][valid];
+          }
+        }
+      }
+      detail::ComputeKeyBatch(points, batch, count, rules, result);
+    }
+    for (int l = 0; l < count; ++l)
+    {
+      if (!tetrahedron[l])
+      {
+        out[written++] = MakeSortKey(std::numeric_limits<float>::infinity(), ids[l]);
+        continue;
+      }
+      pixelCulled += result.verdict[l] == detail::KeyCoversNoPixel;
+      if (result.verdict[l] == detail::KeyKept)
+      {
+        out[written++] = MakeSortKey(static_cast<float>(result.depth[l]), ids[l]);
+      }
+    }
+  }
+  return written;
 }
 
 } // namespace
@@ -95,7 +126,7 @@ void ComputeDepthKeys(const ProjectedPoint* points, std::size_t pointCount, cons
 #pragma omp parallel for num_threads(nthreads) schedule(static)
       for (std::int64_t c = 0; c < count; ++c)
       {
-        CellKey(access, points, static_cast<std::uint32_t>(c), perspective, nullptr, keys[c]);
+        keys[c] = CellKey(access, points, static_cast<std::uint32_t>(c), perspective);
       }
     });
 }
@@ -110,18 +141,14 @@ KeyCounts ComputeVisibleDepthKeys(const ProjectedPoint* points, std::size_t poin
   detail::DispatchCells(cells, pointCount,
     [&](const auto& access)
     {
+      const detail::KeyRules rules{ perspective, culling.frustum, culling.viewportWidth,
+        culling.viewportHeight };
       counts.kept = detail::CompactInOrder(n, detail::ResolveThreads(threads), keys,
         [&](std::size_t begin, std::size_t end, SortKey* out)
         {
-          std::size_t written = 0, noPixel = 0;
-          for (std::size_t i = begin; i < end; ++i)
-          {
-            const auto cell = list ? list[i] : static_cast<std::uint32_t>(i);
-            const Verdict verdict =
-              CellKey(access, points, cell, perspective, &culling, out[written]);
-            written += verdict == Verdict::Kept ? 1 : 0;
-            noPixel += verdict == Verdict::CoversNoPixel ? 1 : 0;
-          }
+          std::size_t noPixel = 0;
+          const std::size_t written =
+            KeysInBatches(access, points, list, begin, end, rules, out, noPixel);
 #pragma omp atomic
           pixelCulled += noPixel;
           return written;

@@ -348,44 +348,6 @@ std::string Describe(const TetVertex* records, int count)
   return text.str();
 }
 
-/// Random tetrahedra whose corners are drawn from a small lattice (projected by an axis-aligned
-/// view, its points coincide and line up: every class and every zero-band case occurs) and
-/// from random points, some of them unusable.
-TetMesh LatticeTetrahedra(std::size_t cells, unsigned seed)
-{
-  TetMesh mesh;
-  for (int i = 0; i < 27; ++i)
-  {
-    mesh.points.insert(
-      mesh.points.end(), { float(i % 3 - 1), float(i / 3 % 3 - 1), float(i / 9 - 1) });
-  }
-  std::mt19937 random(seed);
-  std::uniform_real_distribution<float> coordinate(-1.5f, 1.5f);
-  for (int i = 0; i < 40; ++i)
-  {
-    mesh.points.insert(mesh.points.end(),
-      { coordinate(random), coordinate(random),
-        i % 10 == 0 ? 1e-7f * coordinate(random) : coordinate(random) });
-  }
-  mesh.points.insert(mesh.points.end(), { NAN, 0.0f, 0.0f }); // unusable
-  const auto points = static_cast<std::int64_t>(mesh.points.size() / 3);
-  for (std::int64_t p = 0; p < points; ++p)
-  {
-    mesh.scalars.push_back(p == 5 ? NAN : 0.1f * static_cast<float>(p % 17));
-  }
-  std::uniform_int_distribution<std::int64_t> lattice(0, 26), any(0, points - 1);
-  for (std::size_t c = 0; c < cells; ++c)
-  {
-    std::int64_t ids[4];
-    for (auto& id : ids)
-    {
-      id = c % 4 == 0 ? any(random) : lattice(random);
-    }
-    mesh.AddTetrahedron(ids[0], ids[1], ids[2], ids[3]);
-  }
-  return mesh;
-}
-
 /// The batched decomposition's tests, run with each instruction set in turn.
 class DecomposeSimd : public ::testing::TestWithParam<std::int64_t>
 {

@@ -2,7 +2,9 @@
 #include "TestHelpers.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
+#include <random>
 
 namespace mtpt
 {
@@ -28,6 +30,41 @@ Matrix4 Inverse(const Matrix4& m)
     (m[12] * s4 - m[13] * s2 + m[15] * s0) * k, (-m[8] * s4 + m[9] * s2 - m[11] * s0) * k,
     (-m[4] * c3 + m[5] * c1 - m[6] * c0) * k, (m[0] * c3 - m[1] * c1 + m[2] * c0) * k,
     (-m[12] * s3 + m[13] * s1 - m[14] * s0) * k, (m[8] * s3 - m[9] * s1 + m[10] * s0) * k };
+}
+
+TetMesh LatticeTetrahedra(std::size_t cells, unsigned seed)
+{
+  TetMesh mesh;
+  for (int i = 0; i < 27; ++i)
+  {
+    mesh.points.insert(
+      mesh.points.end(), { float(i % 3 - 1), float(i / 3 % 3 - 1), float(i / 9 - 1) });
+  }
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<float> coordinate(-1.5f, 1.5f);
+  for (int i = 0; i < 40; ++i)
+  {
+    mesh.points.insert(mesh.points.end(),
+      { coordinate(random), coordinate(random),
+        i % 10 == 0 ? 1e-7f * coordinate(random) : coordinate(random) });
+  }
+  mesh.points.insert(mesh.points.end(), { NAN, 0.0f, 0.0f }); // unusable
+  const auto points = static_cast<std::int64_t>(mesh.points.size() / 3);
+  for (std::int64_t p = 0; p < points; ++p)
+  {
+    mesh.scalars.push_back(p == 5 ? NAN : 0.1f * static_cast<float>(p % 17));
+  }
+  std::uniform_int_distribution<std::int64_t> lattice(0, 26), any(0, points - 1);
+  for (std::size_t c = 0; c < cells; ++c)
+  {
+    std::int64_t ids[4];
+    for (auto& id : ids)
+    {
+      id = c % 4 == 0 ? any(random) : lattice(random);
+    }
+    mesh.AddTetrahedron(ids[0], ids[1], ids[2], ids[3]);
+  }
+  return mesh;
 }
 
 TetMesh JitteredGrid(int n, unsigned seed)

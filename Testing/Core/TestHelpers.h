@@ -167,6 +167,12 @@ void AddKuhnTetrahedra(const int n[3], std::int64_t base,
 /// a smooth scalar field. Deterministic for a given seed.
 TetMesh JitteredGrid(int n, unsigned seed);
 
+/// Random tetrahedra whose corners are drawn from a 3x3x3 lattice in [-1, 1]^3 (projected by
+/// an axis-aligned view, its points coincide and line up: every projection class and every
+/// zero-band case occurs) and, for every fourth cell, from 40 random points (some nearly
+/// coplanar) and one unusable (NaN) point. Point 5 has a NaN scalar. Deterministic per seed.
+TetMesh LatticeTetrahedra(std::size_t cells, unsigned seed);
+
 /// Length of the intersection of the line origin + t * direction (all t) with the
 /// tetrahedron p[0..3]; 0 if it misses. Ground truth computed in double by clipping the
 /// line against the four face planes.

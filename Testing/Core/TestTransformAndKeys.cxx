@@ -1,17 +1,24 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Transform to NDC and depth keys: against double-precision references, for every
-// storage type VTK uses, and identical for any thread count.
+// storage type VTK uses, identical for any thread count, and the batched (SIMD) culling
+// keys identical to the scalar rule with every instruction set.
 #include "TestHelpers.h"
 
 #include "mtpt/DepthKeys.h"
 #include "mtpt/Transform.h"
 
+#include "detail/KeyBatch.h"
+#include "detail/PixelCoverage.h"
+
 #include <gtest/gtest.h>
+#include <hwy/targets.h>
 
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <random>
+#include <string>
 #include <vector>
 
 namespace
@@ -192,5 +199,128 @@ TEST(DepthKeys, InvalidCellsGoFirstWithInfiniteDepth)
     EXPECT_EQ(keys[c], mtpt::MakeSortKey(inf, c));
   }
 }
+
+/// The batched depth keys' tests, run with each instruction set in turn.
+class KeySimd : public ::testing::TestWithParam<std::int64_t>
+{
+protected:
+  void SetUp() override { hwy::SetSupportedTargetsForTest(this->GetParam()); }
+  void TearDown() override { hwy::SetSupportedTargetsForTest(0); }
+};
+
+// ComputeVisibleDepthKeys (batched, one cell per SIMD lane) against the rule it implements,
+// computed here from the scalar keys: a cell of four usable corners all beyond one clip plane
+// is left out with the frustum test, one whose box holds no pixel centre with the viewport's;
+// every other cell keeps ComputeDepthKeys' key, in list order, bit for bit.
+TEST_P(KeySimd, VisibleKeysAreTheScalarKeysOfTheCellsKept)
+{
+  TetMesh mesh = LatticeTetrahedra(3000, 5);
+  // Cells that are not tetrahedra: an id out of range, and five points.
+  mesh.AddTetrahedron(0, 1, 2, 1000);
+  mesh.connectivity.insert(mesh.connectivity.end(), { 0, 1, 2, 3, 4 });
+  mesh.offsets.push_back(static_cast<std::int64_t>(mesh.connectivity.size()));
+  mesh.AddTetrahedron(3, 4, 5, 6);
+  const std::size_t cells = mesh.CellCount(), points = mesh.points.size() / 3;
+  // Every cell, and every third one (a culling list).
+  std::vector<std::uint32_t> everyThird;
+  for (std::uint32_t c = 0; c < cells; c += 3)
+  {
+    everyThird.push_back(c);
+  }
+  struct KeyView
+  {
+    mtpt::Matrix4 modelView, projection;
+    bool perspective;
+  };
+  const KeyView views[] = { { LookAt({ 0, 0, 6 }, { 0, 0, 0 }, { 0, 1, 0 }),
+                              Ortho(-0.8, 0.8, -0.8, 0.8, 5.5, 12), false },
+    { LookAt({ 0.3, 0.2, 2.5 }, { 0, 0, 0 }, { 0, 1, 0 }), Perspective(50, 1.2, 1.2, 4), true } };
+  std::size_t culledByFrustum = 0, culledByPixels = 0;
+  for (const KeyView& view : views)
+  {
+    std::vector<mtpt::ProjectedPoint> projected(points);
+    mtpt::ProjectPoints(mesh.Points(), {}, view.modelView, view.projection, projected.data(), 2);
+    std::vector<mtpt::SortKey> all(cells);
+    mtpt::ComputeDepthKeys(projected.data(), points, mesh.Cells(), view.perspective, all.data(), 1);
+    for (const mtpt::KeyCulling culling : { mtpt::KeyCulling{}, mtpt::KeyCulling{ true, 0, 0 },
+           mtpt::KeyCulling{ true, 7, 5 }, mtpt::KeyCulling{ false, 300, 200 } })
+    {
+      const std::vector<std::uint32_t>* lists[] = { nullptr, &everyThird };
+      for (const std::vector<std::uint32_t>* list : lists)
+      {
+        SCOPED_TRACE(::testing::Message()
+          << "perspective " << view.perspective << ", frustum " << culling.frustum << ", viewport "
+          << culling.viewportWidth << "x" << culling.viewportHeight << ", list "
+          << (list != nullptr));
+        std::vector<mtpt::SortKey> expected;
+        mtpt::KeyCounts expectedCounts;
+        const std::size_t n = list ? list->size() : cells;
+        for (std::size_t i = 0; i < n; ++i)
+        {
+          const std::uint32_t c = list ? (*list)[i] : static_cast<std::uint32_t>(i);
+          const auto begin = mesh.offsets[c], end = mesh.offsets[c + 1];
+          bool tetrahedron = end - begin == 4, usable = tetrahedron;
+          const mtpt::ProjectedPoint* corners[4] = {};
+          for (int k = 0; tetrahedron && k < 4; ++k)
+          {
+            const auto id = mesh.connectivity[begin + k];
+            tetrahedron = id >= 0 && static_cast<std::size_t>(id) < points;
+            corners[k] = tetrahedron ? &projected[static_cast<std::size_t>(id)] : nullptr;
+            usable = tetrahedron && usable && corners[k]->usable;
+          }
+          if (usable)
+          {
+            auto all4 = [&](auto beyond)
+            {
+              return beyond(*corners[0]) && beyond(*corners[1]) && beyond(*corners[2]) &&
+                beyond(*corners[3]);
+            };
+            const bool outside = all4([](const mtpt::ProjectedPoint& p) { return p.x < -1; }) ||
+              all4([](const mtpt::ProjectedPoint& p) { return p.x > 1; }) ||
+              all4([](const mtpt::ProjectedPoint& p) { return p.y < -1; }) ||
+              all4([](const mtpt::ProjectedPoint& p) { return p.y > 1; }) ||
+              all4([](const mtpt::ProjectedPoint& p) { return p.z < -1; }) ||
+              all4([](const mtpt::ProjectedPoint& p) { return p.z > 1; });
+            if (culling.frustum && outside)
+            {
+              ++expectedCounts.frustumCulled;
+              continue;
+            }
+            if (culling.viewportWidth > 0 && culling.viewportHeight > 0 &&
+              !mtpt::detail::CoversPixelCentre(
+                corners, culling.viewportWidth, culling.viewportHeight))
+            {
+              ++expectedCounts.pixelCulled;
+              continue;
+            }
+          }
+          expected.push_back(all[c]);
+        }
+        expectedCounts.kept = expected.size();
+        culledByFrustum += expectedCounts.frustumCulled;
+        culledByPixels += expectedCounts.pixelCulled;
+        for (const int threads : { 1, 2, 3 })
+        {
+          std::vector<mtpt::SortKey> keys(n, 0);
+          const mtpt::KeyCounts counts =
+            mtpt::ComputeVisibleDepthKeys(projected.data(), points, mesh.Cells(),
+              list ? list->data() : nullptr, n, view.perspective, culling, keys.data(), threads);
+          keys.resize(counts.kept);
+          ASSERT_EQ(keys, expected) << threads << " threads";
+          EXPECT_EQ(counts.frustumCulled, expectedCounts.frustumCulled);
+          EXPECT_EQ(counts.pixelCulled, expectedCounts.pixelCulled);
+        }
+      }
+    }
+  }
+  // Both kinds of culling happened, so both were compared.
+  EXPECT_GT(culledByFrustum, 100u);
+  EXPECT_GT(culledByPixels, 100u);
+}
+
+INSTANTIATE_TEST_SUITE_P(InstructionSets, KeySimd,
+  ::testing::ValuesIn(hwy::SupportedAndGeneratedTargets()),
+  [](const ::testing::TestParamInfo<std::int64_t>& info)
+  { return std::string(hwy::TargetName(info.param)); });
 
 } // namespace
