@@ -392,7 +392,8 @@ constexpr std::size_t MaxLanes = 8;
  * A fragment's opacity 1 - exp(-density), with no cancellation for thin segments: with
  * -density = q ln 2 + r (q whole, |r| <= ln 2 / 2) and s = 2^q, it is (1 - s) - s expm1(r),
  * which for q = 0 is -expm1(r) itself and otherwise subtracts nothing close. expm1(r) is its
- * Taylor polynomial of degree 7 (the remainder is below 2e-8 relative on that interval); the
+ * Taylor polynomial of degree 7 (the remainder is below 2e-8 relative on that interval),
+ * evaluated as r times pairs of terms in powers of r^2 (Estrin's scheme); the
  * densities are clamped to [-87, 88], where 2^q is a normal float and the opacity already 1
  * in float at the top. NaN stays NaN. Within 4 units in the last place of the float result
  * (tested against std::expm1 by the core tests through OpacitiesOfDensities), at about half
@@ -407,12 +408,15 @@ HWY_INLINE V OpacityOfDensity(D d, V density)
   // r = -x - q ln 2, ln 2 in two parts (Cody and Waite) so that q ln 2 is exact enough.
   const V r = hn::NegMulAdd(
     q, hn::Set(d, 1.42860682e-6f), hn::NegMulAdd(q, hn::Set(d, 0.693145752f), hn::Neg(x)));
-  V p = hn::Set(d, 1.0f / 5040);
-  const float coefficients[] = { 1.0f / 720, 1.0f / 120, 1.0f / 24, 1.0f / 6, 0.5f, 1.0f };
-  for (float c : coefficients)
-  {
-    p = hn::MulAdd(p, r, hn::Set(d, c));
-  }
+  // The degree-6 polynomial in powers of r^2 (three pairs) rather than Horner's seven steps:
+  // a shorter chain of dependent multiply-adds in the fragment loop.
+  const V r2 = hn::Mul(r, r);
+  const V e0 = hn::MulAdd(hn::Set(d, 0.5f), r, hn::Set(d, 1.0f));
+  const V e1 = hn::MulAdd(hn::Set(d, 1.0f / 24), r, hn::Set(d, 1.0f / 6));
+  const V e2 = hn::MulAdd(hn::Set(d, 1.0f / 720), r, hn::Set(d, 1.0f / 120));
+  V p = hn::MulAdd(hn::Set(d, 1.0f / 5040), r2, e2);
+  p = hn::MulAdd(p, r2, e1);
+  p = hn::MulAdd(p, r2, e0);
   p = hn::Mul(p, r); // expm1(r)
   const V s = hn::BitCast(d, hn::ShiftLeft<23>(hn::Add(hn::ConvertTo(di, q), hn::Set(di, 127))));
   const V opacity = hn::NegMulAdd(s, p, hn::Sub(hn::Set(d, 1.0f), s));
