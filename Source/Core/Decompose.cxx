@@ -494,6 +494,14 @@ inline Projection DecomposeToFan(
   return g.projection;
 }
 
+/// Whether the viewport of `input` culls the tetrahedron `corners` (DecomposeInput's
+/// viewport): all four corners usable and no pixel centre in their box.
+inline bool CoversNoPixel(const DecomposeInput& input, const ProjectedPoint* const corners[4])
+{
+  return input.viewportWidth > 0 && input.viewportHeight > 0 && AllUsable(corners) &&
+    !detail::CoversPixelCentre(corners, input.viewportWidth, input.viewportHeight);
+}
+
 /// The tetrahedron `corners` into slot-local records with global index base `base`,
 /// culled when it covers no pixel centre of the viewport.
 inline ProjectionClass DecomposeCorners(const DecomposeInput& input,
@@ -501,9 +509,7 @@ inline ProjectionClass DecomposeCorners(const DecomposeInput& input,
   std::uint32_t base, TetVertex slotVertices[VerticesPerTetrahedron],
   std::uint32_t slotIndices[IndicesPerTetrahedron])
 {
-  const bool cull = input.viewportWidth > 0 && input.viewportHeight > 0 && AllUsable(corners) &&
-    !detail::CoversPixelCentre(corners, input.viewportWidth, input.viewportHeight);
-  if (cull)
+  if (CoversNoPixel(input, corners))
   {
     WriteDegenerateSlot(slotVertices, slotIndices, base);
     return ProjectionClass::CoversNoPixel;
@@ -635,9 +641,7 @@ inline ProjectionClass DecomposeFanCorners(const DecomposeInput& input,
   const ProjectedPoint* const corners[4], const float scalars[4], const float* const* colours,
   Fan& fan)
 {
-  const bool cull = input.viewportWidth > 0 && input.viewportHeight > 0 && AllUsable(corners) &&
-    !detail::CoversPixelCentre(corners, input.viewportWidth, input.viewportHeight);
-  if (cull)
+  if (CoversNoPixel(input, corners))
   {
     fan = Fan{};
     return ProjectionClass::CoversNoPixel;
@@ -805,8 +809,7 @@ public:
     const ProjectedPoint* const corners[4] = { this->Input.points + ids[0],
       this->Input.points + ids[1], this->Input.points + ids[2], this->Input.points + ids[3] };
     // As DecomposeCorners: culled when it covers no pixel centre, then drawable or not.
-    if (this->Input.viewportWidth > 0 && this->Input.viewportHeight > 0 && AllUsable(corners) &&
-      !detail::CoversPixelCentre(corners, this->Input.viewportWidth, this->Input.viewportHeight))
+    if (CoversNoPixel(this->Input, corners))
     {
       this->Skip(k, ProjectionClass::CoversNoPixel);
       return;

@@ -4,7 +4,8 @@
 // stores to lines not in cache first read them for ownership; with ~40 stores a record the
 // store buffer fills and the core stalls (Documentation/algorithm.md, "Decomposition at a
 // fixed stride", has the measurement). The one copy of each record kind, for the
-// decomposition and for the compositor's binning.
+// decomposition and for the compositor's binning; the batched decomposition's writers
+// (Decompose.cxx, SlotWriter and FanWriter) stream the same bytes from registers instead.
 #ifndef mtpt_detail_Streaming_h
 #define mtpt_detail_Streaming_h
 
