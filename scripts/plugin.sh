@@ -69,7 +69,9 @@ if ! installed python3-paraview; then
   # tree (pvbatch; libvtkCommonCore found there first via LD_LIBRARY_PATH), both find the
   # extracted folder instead.
   mkdir -p "$package_root/usr/lib/$arch"
-  ln -sf "/usr/lib/$arch/libvtkCommonCore-pv5.11.so.1" "$package_root/usr/lib/$arch/"
+  for core in /usr/lib/"$arch"/libvtkCommonCore-pv*.so.1; do
+    [ -e "$core" ] && ln -sf "$core" "$package_root/usr/lib/$arch/"
+  done
   ln -sf "$(readlink -f /usr/bin/pvbatch)" "$package_root/usr/bin/pvbatch"
   pvpython="$package_root/usr/bin/pvpython"
   pvbatch="$package_root/usr/bin/pvbatch"

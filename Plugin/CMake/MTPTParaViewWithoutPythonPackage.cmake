@@ -19,6 +19,7 @@ function (mtpt_define_missing_paraview_targets config_dir)
   set(export_files
     "${config_dir}/vtk/VTKPython-targets.cmake"
     "${config_dir}/ParaViewPython-targets.cmake"
+    "${config_dir}/ParaViewPythonIncubator-targets.cmake"
     "${config_dir}/ParaViewTools-targets.cmake")
   foreach (export_file IN LISTS export_files)
     if (NOT EXISTS "${export_file}")
@@ -104,7 +105,7 @@ function (mtpt_use_extracted_paraview_hierarchy package_root)
       continue ()
     endif ()
     get_target_property(hierarchy "${target}" INTERFACE_vtk_module_hierarchy)
-    if (NOT hierarchy OR EXISTS "${hierarchy}")
+    if (NOT hierarchy OR EXISTS "${hierarchy}" OR NOT hierarchy MATCHES "/vtk/hierarchy/ParaView/")
       continue ()
     endif ()
     get_filename_component(name "${hierarchy}" NAME)

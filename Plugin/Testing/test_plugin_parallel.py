@@ -43,8 +43,16 @@ def main():
 
     # Cells per rank: each cell is given the rank that holds it (ProcessId), and each rank's
     # part is fetched on its own.
-    ids = simple.ProcessIdScalars(Input=distributed)
-    ids.CellScalars = 1
+    if hasattr(simple, "ProcessIdScalars"):  # ParaView 5.11
+        ids = simple.ProcessIdScalars(Input=distributed)
+        ids.CellScalars = 1
+        extra = []
+    else:  # ParaView 6: ProcessIds; its "CellProcessIds" is the ProcessIds attribute, which
+        # Fetch's MPI gather (VTK's legacy-writer marshalling) drops: copy it to "ProcessId".
+        pids = simple.ProcessIds(Input=distributed, GeneratePointData=0, GenerateCellData=1)
+        ids = simple.Calculator(Input=pids, AttributeType="Cell Data", Function="CellProcessIds",
+                                ResultArrayName="ProcessId", ResultArrayType="Int")
+        extra = [pids]
     counts = []
     for rank in range(ranks):
         part = servermanager.Fetch(ids, rank)
@@ -58,6 +66,8 @@ def main():
     ok &= testing.check(min(counts) >= total / (4 * ranks),
                         "every rank holds at least a quarter of its even share")
     simple.Delete(ids)
+    for proxy in extra:
+        simple.Delete(proxy)
 
     view = testing.make_view()
     display = testing.show_volume(distributed, view, testing.MTPT_REPRESENTATION)
