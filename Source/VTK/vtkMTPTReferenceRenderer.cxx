@@ -226,7 +226,7 @@ int TranslucentTriangles(vtkRenderer* renderer, std::vector<mtpt::ReferenceTrian
   {
     vtkProperty* p = actor->GetProperty();
     auto* poly = vtkPolyData::SafeDownCast(
-      actor->GetMapper() ? actor->GetMapper()->GetInputAsDataSet() : nullptr);
+      actor->GetMapper() ? actor->GetMapper()->GetInput() : nullptr);
     const double opacity = p->GetOpacity();
     if (!actor->GetVisibility() || !poly || !(opacity > 0.0 && opacity < 1.0))
     {

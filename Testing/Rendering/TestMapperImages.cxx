@@ -216,23 +216,29 @@ TEST_F(MapperImages, IdenticalForEveryThreadCountAndOrderMethod)
 
 /// The CPU compositor and the OpenGL path draw the same triangles with the same math:
 /// they may differ only where the rasterizers' coverage rules and interpolation rounding
-/// differ (pixels on triangle edges, Mesa's 8-bit texture filter weights).
+/// differ (pixels on triangle edges, Mesa's 8-bit texture filter weights), and, in VTK's
+/// multisampled window, on the silhouette of opaque geometry: OpenGL tests the volume's
+/// depth per sample, the CPU compositor per pixel against the resolved depth, so a pixel the
+/// silhouette crosses may differ by the volume's colour times the samples' coverage.
 TEST_F(MapperImages, CPUCompositorMatchesTheOpenGLPath)
 {
   struct Case
   {
     const char* name;
     Scene scene;
+    double worst;
   };
-  const Case cases[] = { { "box-ortho", BoxScene(false) }, { "box-persp", BoxScene(true) },
-    { "bluntfin-persp", BluntFinScene(true) }, { "bluntfin-ortho", BluntFinScene(false) },
-    { "box-sphere", SphereScene() } };
+  // Measured RMSE 0.00015-0.00040 over covered pixels; worst 0.004-0.008 without opaque
+  // geometry; with the sphere 0.008 (Mesa 22.3), 0.027 (Mesa 26.2: one silhouette pixel;
+  // Documentation/testing.md, "Today's stack").
+  const Case cases[] = { { "box-ortho", BoxScene(false), 0.02 },
+    { "box-persp", BoxScene(true), 0.02 }, { "bluntfin-persp", BluntFinScene(true), 0.02 },
+    { "bluntfin-ortho", BluntFinScene(false), 0.02 }, { "box-sphere", SphereScene(), 0.04 } };
   for (const Case& c : cases)
   {
     auto gl = MakeMapper(Mapper::OPENGL_BACKEND);
     auto cpu = MakeMapper(Mapper::CPU_BACKEND);
-    // Measured RMSE 0.00015-0.00019 over covered pixels, worst 0.004-0.008.
-    ExpectClose(Render(c.scene, cpu), Render(c.scene, gl), { 0.001, 0.02, 0 },
+    ExpectClose(Render(c.scene, cpu), Render(c.scene, gl), { 0.001, c.worst, 0 },
       std::string(c.name) + " CPU vs GL");
   }
 }
