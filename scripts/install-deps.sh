@@ -12,6 +12,7 @@ packages=(
   clang libomp-dev libclang-rt-14-dev     # ThreadSanitizer with an OpenMP runtime it can see, libFuzzer
   libhwy-dev                              # Google Highway: SIMD compositor, run-time dispatch
   libcli11-dev                            # command-line parsing of the benchmarks and the example
+  python3-pytest python3-venv             # Python tests; pip install from source in a venv
 )
 
 missing=()
