@@ -4,8 +4,8 @@
 # picks the first free display number racily, so concurrent launches start their search
 # at a random number instead of all at :99. -noreset: by default Xvfb resets when its last
 # client disconnects, and a window opened during the reset fails to connect.
-# MTPT_NO_XVFB=1: run the command as is, for a VTK whose windows need no X server (OSMesa,
-# EGL; scripts/test-vtk.sh).
+# MTPT_NO_XVFB=1: run the command as is, for a VTK whose windows need no X server (a VTK
+# 9.4 or newer built with OSMesa or EGL, run with VTK_DEFAULT_OPENGL_WINDOW set).
 set -euo pipefail
 if [ -n "${DISPLAY:-}" ] || [ "${MTPT_NO_XVFB:-0}" = 1 ]; then
   exec "$@"

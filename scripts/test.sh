@@ -6,7 +6,10 @@ set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${1:-$here/build}"
 
-"$here/scripts/install-deps.sh"
+# Inside the Debian unstable chroot (scripts/sid-chroot.sh) the packages are the chroot's.
+if [ "${MTPT_IN_SID_CHROOT:-0}" != 1 ]; then
+  "$here/scripts/install-deps.sh"
+fi
 
 jobs="$(nproc)"
 cmake -S "$here" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release

@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Today's stack: builds MTPT against Debian unstable's VTK 9.6, runs every ctest there
+# (the Python tests and `pip install` from source included, PyVista's among them), then
+# builds the ParaView plugin against ParaView 6.1 and runs its tests: scripts/test.sh,
+# inside the chroot made or reused by scripts/sid-chroot.sh.
+#
+# Usage: scripts/test-sid.sh [build-dir]   (default: build-sid, in this checkout; the
+#        plugin's tree is <build-dir>-plugin)
+set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+build="${1:-build-sid}"
+case "$build" in
+/*) ;;
+*) build="$here/$build" ;;
+esac
+case "$build" in
+"$here"/*) ;;
+*)
+  echo "test-sid: the build tree must lie inside the checkout ($here), which is what the" \
+    "chroot sees" >&2
+  exit 1
+  ;;
+esac
+started=$(date +%s)
+"$here/scripts/sid-chroot.sh" bash -c 'for p in libvtk9-dev paraview python3-pyvista python3 \
+  libgl1-mesa-dri; do dpkg-query -W -f="test-sid: \${Package} \${Version}\n" "$p"; done'
+"$here/scripts/sid-chroot.sh" bash "$here/scripts/test.sh" "$build"
+echo "test-sid: today's stack built and tested in $(($(date +%s) - started)) s"
