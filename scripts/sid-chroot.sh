@@ -9,11 +9,11 @@
 #
 # The chroot lives in MTPT_SID_CHROOT (default /var/cache/mtpt/sid-chroot), outside any
 # checkout, so every clone and every CI run on the machine shares it. It is made anew when
-# the archive, the suite or the package list change, and when the archive's versions of
-# the installed packages differ from the installed ones (checked at each use with one
-# `apt-get update`; an archive that cannot be reached keeps the chroot as it is). A new
-# chroot is built beside the old one and replaces it only once complete, so an interrupted
-# run leaves no half-made chroot behind.
+# the archive or the suite change, and when the archive's versions of the installed
+# packages differ from the installed ones (checked at each use with one `apt-get update`;
+# an archive that cannot be reached keeps the chroot as it is); packages added to the list
+# below are installed into it. A new chroot is built beside the old one and replaces it
+# only once complete, so an interrupted run leaves no half-made chroot behind.
 #
 # The archive's address is the host's own, read from its apt sources; Debian's unstable
 # there is a frozen snapshot whose Release file has expired, so apt runs with
@@ -34,7 +34,7 @@ packages=(
   paraview paraview-dev python3-paraview openmpi-bin    # ParaView 6.1, pvpython, MPI pvbatch
   python3-pyvista                                       # PyVista
   python3-dev python3-venv python3-pip python3-pytest   # pip from source, pytest
-  xvfb xauth                                            # headless OpenGL (Mesa llvmpipe)
+  xvfb xauth x11-apps                                   # headless OpenGL (Mesa llvmpipe); xwd
   libhwy-dev libcli11-dev                               # SIMD dispatch, argument parsing
   ca-certificates
 )
@@ -62,7 +62,7 @@ archive() {
   return 1
 }
 mirror="$(archive)" || { log "no Debian archive found in /etc/apt/sources*"; exit 1; }
-config="suite=$suite mirror=$mirror packages=${packages[*]}"
+base="suite=$suite mirror=$mirror"
 
 apt_options=(-o Acquire::Check-Valid-Until=false -o APT::Install-Recommends=false
   -o Dpkg::Use-Pty=0 -q)
@@ -118,22 +118,33 @@ make_root() {
     >"$dir/etc/apt/apt.conf.d/99mtpt"
   log "installing ${#packages[@]} packages"
   in_root "$dir" apt-get "${apt_options[@]}" update >>"$dir.log" 2>&1
-  in_root "$dir" apt-get "${apt_options[@]}" install -y "${packages[@]}" >>"$dir.log" 2>&1 ||
-    { tail -n 20 "$dir.log" >&2; log "package installation failed (log: $dir.log)"; return 1; }
-  in_root "$dir" apt-get clean
-  echo "$config" >"$dir/.mtpt-chroot"
+  install_packages "$dir" "$dir.log"
+  echo "$base" >"$dir/.mtpt-chroot"
   log "made in $(($(date +%s) - started)) s ($(du -sh "$dir" | cut -f1))"
+}
+
+# install_packages DIR LOG: the package list, and a stamp of it.
+install_packages() {
+  local dir="$1" log_file="$2"
+  in_root "$dir" apt-get "${apt_options[@]}" install -y "${packages[@]}" >>"$log_file" 2>&1 ||
+    { tail -n 20 "$log_file" >&2; log "package installation failed (log: $log_file)"; return 1; }
+  in_root "$dir" apt-get clean
+  echo "${packages[*]}" >"$dir/.mtpt-packages"
 }
 
 # stale DIR: true when the chroot must be made anew.
 stale() {
   local dir="$1"
   [ -x "$dir/usr/bin/env" ] || { log "no chroot at $dir"; return 0; }
-  [ "$(cat "$dir/.mtpt-chroot" 2>/dev/null)" = "$config" ] ||
-    { log "the archive, suite or package list changed"; return 0; }
+  [ "$(cat "$dir/.mtpt-chroot" 2>/dev/null)" = "$base" ] ||
+    { log "the archive or the suite changed"; return 0; }
   if ! in_root "$dir" timeout 300 apt-get "${apt_options[@]}" update >/dev/null 2>&1; then
     log "archive not reached: the cached chroot is used as it is"
     return 1
+  fi
+  if [ "$(cat "$dir/.mtpt-packages" 2>/dev/null)" != "${packages[*]}" ]; then
+    log "the package list changed: installing it"
+    install_packages "$dir" "$dir.log" || return 0
   fi
   local upgrades
   upgrades="$(in_root "$dir" apt-get "${apt_options[@]}" -s dist-upgrade 2>/dev/null | grep -c '^Inst ' || true)"
