@@ -25,8 +25,9 @@ def main():
     parser.add_argument("mesh", nargs="?", default=DEFAULT, help="a file PyVista reads (default: the blunt fin)")
     parser.add_argument("--scalars", help="point or cell array to draw (default: the active scalars)")
     parser.add_argument("--cmap", default="viridis")
-    parser.add_argument("--opacity", default="sigmoid_5", help="PyVista's opacity name, e.g. linear, sigmoid, geom")
-    parser.add_argument("--opacity-unit-distance", type=float, default=None)
+    parser.add_argument("--opacity", default="linear", help="PyVista's opacity name, e.g. linear, sigmoid, geom")
+    parser.add_argument("--opacity-unit-distance", type=float, default=0.4,
+                        help="length over which the opacity applies (PyVista's default for grids: 1)")
     parser.add_argument("--backend", default="automatic", choices=["automatic", "opengl", "cpu"])
     parser.add_argument("--shading", default="vtk-compatible", choices=["vtk-compatible", "pre-integrated"])
     parser.add_argument("--size", default="800x600", help="window size, WIDTHxHEIGHT")
@@ -44,6 +45,7 @@ def main():
     plotter.camera.azimuth = 30
     plotter.camera.elevation = 20
     plotter.reset_camera()
+    plotter.camera.zoom(1.5)
     plotter.add_text(f"MTPT in PyVista {pyvista.__version__}: {mesh.n_cells:,} cells",
                      font_size=10, position="upper_left")
     if args.screenshot:
