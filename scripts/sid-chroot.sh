@@ -155,10 +155,11 @@ stale() {
   return 1
 }
 
-# One user of the cache at a time while it is checked or made.
+# The cache is checked and made under an exclusive lock, and used under a shared one, so
+# that no run replaces the chroot while another runs a command in it.
 mkdir -p "$(dirname "$root")"
 exec 9>"$root.lock"
-flock 9
+flock -x 9
 if stale "$root"; then
   make_root "$root.new"
   rm -rf "$root"
@@ -166,7 +167,7 @@ if stale "$root"; then
 else
   log "reusing $root"
 fi
-flock -u 9
+flock -s 9
 
 if [ $# -eq 0 ]; then
   set -- sh -c 'for p in libvtk9-dev paraview python3-pyvista python3 libgl1-mesa-dri; do

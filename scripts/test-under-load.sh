@@ -46,7 +46,8 @@ for run in $(seq 1 "$soak_runs"); do
   started=$(date +%s)
   if run_ctest "$log" -R MapperSoak -V; then result=passed; else result=FAILED; failed=1; fi
   echo "test-under-load: soak $run: $result in $(($(date +%s) - started)) s:" \
-    "$(grep -oE 'C\+\+ heap in use [^;]*; malloc in use [^(]*\(bound [0-9]+\)' "$log" | head -n 1)"
+    "$(grep -oE 'C\+\+ heap in use [^,]*, malloc in use [^,]*\(bound [0-9]+\)' "$log" | head -n 1);" \
+    "$(grep -oE 'resident memory [0-9.]+ -> [0-9.]+ MiB' "$log" | head -n 1) (not asserted)"
 done
 for run in $(seq 1 "$suite_runs"); do
   log="$build/under-load-suite-$run.log"
