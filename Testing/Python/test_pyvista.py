@@ -176,6 +176,26 @@ def test_steep_opacity_is_closer_to_the_exact_integral_than_vtk_pt(mesh):
     assert mine < pts
 
 
+def test_an_on_screen_window_draws_the_off_screen_image(mesh):
+    # A window on the display (Xvfb in the tests), shown as plotter.show() shows it.
+    images = []
+    for off_screen in (True, False):
+        pl = pyvista.Plotter(off_screen=off_screen, window_size=SIZE)
+        pl.background_color = BACKGROUND
+        add_volume(pl, mesh, show_scalar_bar=False)
+        view(pl)
+        if off_screen:
+            images.append(snapshot(pl))
+        else:
+            pl.show(auto_close=False, interactive=False)
+            assert not pl.ren_win.GetOffScreenRendering()
+            images.append(snapshot(pl))
+        pl.close()
+    covered = np.any(np.abs(images[0] - np.array(BACKGROUND)) > 2 / 255, axis=2)
+    assert covered.mean() > 0.05
+    assert np.abs(images[0] - images[1]).max() <= 1 / 255
+
+
 def test_mtpt_settings(mesh):
     pl = plotter()
     actor = add_volume(pl, mesh, backend="cpu", shading_mode="pre-integrated",
