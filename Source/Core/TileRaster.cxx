@@ -857,7 +857,8 @@ void SegmentsOfLanes(D d, const SegmentTable& t, float inverseUnit, const float*
     const V weight = hn::Mul(hn::Sub(one, alpha), a);
     for (int k = 0; k < 3; ++k)
     {
-      const V mean = hn::Div(e[k], tau);
+      // The mean colour kept in [0, 1], as in Segment.
+      const V mean = hn::Min(one, hn::Max(zero, hn::Div(e[k], tau)));
       const V low = hn::Min(hn::Min(mean, c0[k]), c1[k]);
       const V high = hn::Max(hn::Max(mean, c0[k]), c1[k]);
       const V c = hn::Add(mean, hn::Mul(hn::Sub(c0[k], c1[k]), hn::Sub(half, h)));

@@ -186,7 +186,9 @@ void PreIntegrationTable::Segment(const TransferFunctionTable& tf, float front, 
     {
       // Within the colours of the step (a colour that is not linear across the step could
       // otherwise push the correction past them; found by the fuzzer).
-      const double mean = e[k] / tau;
+      // The step's mean colour lies in [0, 1]; differences of the integrals can round it
+      // just outside (-1.5e-16 where the colour is 0; found by the fuzzer).
+      const double mean = std::min(1.0, std::max(0.0, e[k] / tau));
       const double low = std::min({ mean, static_cast<double>(c0[k]), static_cast<double>(c1[k]) });
       const double high =
         std::max({ mean, static_cast<double>(c0[k]), static_cast<double>(c1[k]) });

@@ -112,7 +112,7 @@ vec4 PreIntegrated(float ua, float ub, float len)
     float h = d < 1e-3 ? 0.5 - d / 12.0 : 1.0 / d - 1.0 / (exp(d) - 1.0);
     vec3 c0 = EntryAt(u0).rgb;
     vec3 c1 = EntryAt(u1).rgb;
-    vec3 mean = e / tau;
+    vec3 mean = clamp(e / tau, 0.0, 1.0); // as the CPU compositor: rounding kept in [0, 1]
     vec3 stepColour = clamp(mean + (c0 - c1) * (0.5 - h), min(mean, min(c0, c1)), max(mean, max(c0, c1)));
     colour += (1.0 - alpha) * a * stepColour;
     alpha += (1.0 - alpha) * a;
