@@ -451,7 +451,10 @@ inline float Unit(std::uint8_t value)
 }
 inline void Store(float value, float& out)
 {
-  out = value;
+  // Colours and opacity lie in [0, 1]; the accumulated sums can round just past 1 (a
+  // premultiplied colour over an opaque pixel: found by the fuzzer), as 8 bits are clamped.
+  // A NaN stays one, for the tests to see.
+  out = value > 1.0f ? 1.0f : (value < 0.0f ? 0.0f : value);
 }
 inline void Store(float value, std::uint8_t& out)
 {
