@@ -159,7 +159,7 @@ stale() {
 # that no run replaces the chroot while another runs a command in it.
 mkdir -p "$(dirname "$root")"
 exec 9>"$root.lock"
-flock -x 9
+flock -x -w 3600 9 || { log "the cache stayed locked for an hour (see $root.lock)"; exit 1; }
 if stale "$root"; then
   make_root "$root.new"
   rm -rf "$root"
@@ -173,4 +173,6 @@ if [ $# -eq 0 ]; then
   set -- sh -c 'for p in libvtk9-dev paraview python3-pyvista python3 libgl1-mesa-dri; do
     dpkg-query -W -f="\${Package} \${Version}\n" "$p"; done'
 fi
-in_root "$root" "$@"
+# The command does not inherit the lock: this script holds it until the command ends, and a
+# daemon the command leaves behind (an X server, say) must not keep it.
+in_root "$root" "$@" 9>&-
