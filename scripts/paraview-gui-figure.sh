@@ -13,10 +13,8 @@ plugin="$(find "$here/build-sid-plugin/lib" -name MTPT.so -path '*/plugins/MTPT/
 [ -n "$plugin" ] || { echo "paraview-gui-figure: no plugin in build-sid-plugin (run scripts/test-sid.sh)" >&2; exit 1; }
 case "$output" in "$here"/*) ;; *) echo "paraview-gui-figure: write inside the checkout" >&2; exit 1 ;; esac
 work="$here/build-sid-plugin/gui-figure"
-rm -rf "$work" && mkdir -p "$work/home/.config/ParaView"
-# A user settings file without the welcome dialog.
-printf '{ "settings": { "GeneralSettings": { "ShowWelcomeDialog": 0 } } }\n' \
-  >"$work/home/.config/ParaView/ParaView-UserSettings.json"
+# A home of its own; --dr (no user settings) also leaves out the welcome dialog.
+rm -rf "$work" && mkdir -p "$work/home"
 "$here/scripts/sid-chroot.sh" bash -c '
   set -euo pipefail
   work="$1"; plugin="$2"; data="$3"; scene="$4"; output="$5"

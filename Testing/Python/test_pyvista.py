@@ -46,8 +46,8 @@ def mesh():
     return grid
 
 
-def plotter(multi_samples=None):
-    pl = pyvista.Plotter(off_screen=True, window_size=SIZE)
+def plotter(multi_samples=None, off_screen=True):
+    pl = pyvista.Plotter(off_screen=off_screen, window_size=SIZE)
     pl.background_color = BACKGROUND
     if multi_samples is not None:
         pl.ren_win.SetMultiSamples(multi_samples)
@@ -180,8 +180,7 @@ def test_an_on_screen_window_draws_the_off_screen_image(mesh):
     # A window on the display (Xvfb in the tests), shown as plotter.show() shows it.
     images = []
     for off_screen in (True, False):
-        pl = pyvista.Plotter(off_screen=off_screen, window_size=SIZE)
-        pl.background_color = BACKGROUND
+        pl = plotter(off_screen=off_screen)
         add_volume(pl, mesh, show_scalar_bar=False)
         view(pl)
         if off_screen:
