@@ -5,8 +5,8 @@
   0  vocabulary: mtpt/MeshView.h, Records.h, Shading.h, Stage.h, Threads.h, Timing.h,
      TransferFunctionTable.h
   1  helpers: detail/*.h
-  2  stages: mtpt/Transform.h, Culling.h, DepthKeys.h, NearPlane.h, VisibilityOrder.h,
-     Decompose.h (a stage may include an earlier one)
+  2  stages: mtpt/Transform.h, Culling.h, LevelOfDetail.h, DepthKeys.h, NearPlane.h,
+     VisibilityOrder.h, Decompose.h (a stage may include an earlier one)
   3  assemblies: mtpt/Compositor.h, FramePipeline.h, ReferenceRenderer.h, ImageSampling.h
 A source file belongs to the layer of the header it implements. Exit status 1 with one line
 per upward include; a header that the table does not know is an error too.
@@ -19,7 +19,8 @@ import sys
 LAYERS = {
     "mtpt/MeshView.h": 0, "mtpt/Records.h": 0, "mtpt/Shading.h": 0, "mtpt/Stage.h": 0,
     "mtpt/Threads.h": 0, "mtpt/Timing.h": 0, "mtpt/TransferFunctionTable.h": 0,
-    "mtpt/Transform.h": 2, "mtpt/Culling.h": 2, "mtpt/DepthKeys.h": 2, "mtpt/NearPlane.h": 2,
+    "mtpt/Transform.h": 2, "mtpt/Culling.h": 2, "mtpt/LevelOfDetail.h": 2,
+    "mtpt/DepthKeys.h": 2, "mtpt/NearPlane.h": 2,
     "mtpt/VisibilityOrder.h": 2, "mtpt/Decompose.h": 2,
     "mtpt/Compositor.h": 3, "mtpt/FramePipeline.h": 3, "mtpt/ReferenceRenderer.h": 3,
     "mtpt/ImageSampling.h": 3,

@@ -903,15 +903,18 @@ private:
   int Count = 0;
 };
 
-/// Cells [begin, end) whose ranks fall in [firstRank, firstRank + count), in batches.
+/// The cells of entries [begin, end) (of input.cellList, or cell ids without one) whose
+/// ranks fall in [firstRank, firstRank + count), in batches.
 template <typename Access, typename Writer>
 void DecomposeBlock(const Access& cells, const DecomposeInput& input, const float* cellScalars,
   const std::uint32_t* rank, std::size_t firstRank, std::size_t count, std::int64_t begin,
   std::int64_t end, const Writer& writer, ProjectionClass* classes)
 {
   Batch<Writer> batch(input, writer, classes);
-  for (std::int64_t c = begin; c < end; ++c)
+  const std::uint32_t* list = input.cellList;
+  for (std::int64_t i = begin; i < end; ++i)
   {
+    const std::int64_t c = list ? static_cast<std::int64_t>(list[i]) : i;
     const std::uint64_t k = static_cast<std::uint64_t>(rank[c]) - firstRank;
     if (rank[c] == NotInOrder || k >= count)
     {
@@ -945,13 +948,15 @@ void DecomposeAllByRank(const Access& cells, const DecomposeInput& input, const 
   {
     cellInput.viewportWidth = cellInput.viewportHeight = 0;
   }
-  const auto n = static_cast<std::int64_t>(input.cells.cellCount);
+  const std::uint32_t* list = input.cellList;
+  const auto n = static_cast<std::int64_t>(list ? input.cellListCount : input.cells.cellCount);
   if (input.colours)
   {
     // Dependent colours mix the corners' colours with the scalar code's weights.
     ParallelSlots(n, threads,
-      [&](std::int64_t c)
+      [&](std::int64_t i)
       {
+        const std::int64_t c = list ? static_cast<std::int64_t>(list[i]) : i;
         // One unsigned comparison: NotInOrder and ranks outside the window both fail.
         const std::uint64_t k = static_cast<std::uint64_t>(rank[c]) - firstRank;
         if (rank[c] != NotInOrder && k < count)

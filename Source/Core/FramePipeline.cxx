@@ -61,7 +61,7 @@ bool FramePipeline::Timed(double& seconds, Body&& stage)
 std::size_t FramePipeline::MemoryBytes() const
 {
   return this->Transform.MemoryBytes() + this->Culling.MemoryBytes() +
-    this->DepthKeys.MemoryBytes() + this->NearPlaneCut.MemoryBytes() + this->Order.MemoryBytes() +
+    this->Selection.MemoryBytes() + this->DepthKeys.MemoryBytes() + this->NearPlaneCut.MemoryBytes() + this->Order.MemoryBytes() +
     this->Slots.MemoryBytes() + this->FanBuffers.MemoryBytes();
 }
 
@@ -69,6 +69,7 @@ void FramePipeline::ForgetAll()
 {
   this->Transform.Forget();
   this->Culling.Forget();
+  this->Selection.Forget();
   this->DepthKeys.Forget();
   this->NearPlaneCut.Forget();
   this->Order.Forget();
@@ -80,6 +81,7 @@ void FramePipeline::Release()
 {
   this->Transform.Release();
   this->Culling.Release();
+  this->Selection.Release();
   this->DepthKeys.Release();
   this->NearPlaneCut.Release();
   this->Order.Release();
@@ -96,6 +98,18 @@ bool FramePipeline::Run(const FrameInput& input, int threads)
   }
   this->DecomposeBatch(0, this->SortedSize, threads);
   return true;
+}
+
+void FramePipeline::PrepareLevelOfDetail(const FrameInput& input, int threads)
+{
+  const std::size_t n = input.cells.cellCount;
+  if (n > MaxTetrahedra() || ImportanceThreshold(input.cellFraction, n) >= (std::uint64_t{ 1 } << ImportanceBits(n)))
+  {
+    return;
+  }
+  this->Selection.PrepareImportance(
+    MeshKey::Of(input.points, input.cells, input.scalars, input.colours, input.dataVersion),
+    input.points, input.cells, ThreadsForWork(n, detail::CellsPerThread, threads));
 }
 
 bool FramePipeline::Prepare(const FrameInput& input, int threads)
@@ -139,6 +153,20 @@ bool FramePipeline::Prepare(const FrameInput& input, int threads)
         input.scalars, input.opacity, threads);
     });
   this->LastStats.opacityCulled = this->Culling.Culled();
+  // 2b. The level of detail's subset.
+  Timed(this->LastTimes.select,
+    [&]
+    {
+      return this->Selection.Update(
+        { mesh, this->Culling.Version(), ImportanceThreshold(input.cellFraction, n) },
+        input.points, input.cells, this->Culling.Visible(), this->Culling.VisibleCount(),
+        threads);
+    });
+  this->LastStats.leftOut = this->Selection.LeftOut();
+  this->LastStats.attenuationScale = this->Selection.LeftOut() > 0
+    ? static_cast<double>(this->Culling.VisibleCount()) /
+      static_cast<double>(std::max<std::size_t>(this->Selection.SelectedCount(), 1))
+    : 1.0;
   if (!this->Continue(Stage::Cull) || !this->UpdateOrder(input, mesh, threads))
   {
     return false;
@@ -153,6 +181,8 @@ bool FramePipeline::Prepare(const FrameInput& input, int threads)
   d.viewportWidth = input.viewportWidth;
   d.viewportHeight = input.viewportHeight;
   d.cellsCoverPixels = true; // the depth keys culled with this viewport (KeyCulling)
+  d.cellList = this->Selection.Selected();
+  d.cellListCount = this->Selection.SelectedCount();
   this->SortedSize = this->Order.Count();
   return this->Continue(Stage::Order);
 }
@@ -162,7 +192,7 @@ bool FramePipeline::UpdateOrder(const FrameInput& input, const MeshKey& mesh, in
   // 3. Depth keys, and the near plane's cut.
   DepthKeyStage::Key keyKey;
   keyKey.points = this->Transform.Version();
-  keyKey.visible = this->Culling.Version();
+  keyKey.visible = this->Selection.Version();
   keyKey.perspective = input.perspective;
   keyKey.culling.frustum = input.cullFrustum;
   keyKey.culling.viewportWidth = input.viewportWidth;
@@ -172,7 +202,7 @@ bool FramePipeline::UpdateOrder(const FrameInput& input, const MeshKey& mesh, in
     [&]
     {
       const bool computed = this->DepthKeys.Update(keyKey, points, input.points.count, input.cells,
-        this->Culling.Visible(), this->Culling.VisibleCount(), threads);
+        this->Selection.Selected(), this->Selection.SelectedCount(), threads);
       return this->NearPlaneCut.Update({ this->DepthKeys.Version() }, this->DepthKeys.Keys(),
                points, input.points.count, input.cells, input.scalars, input.colours,
                input.projection, input.perspective, threads) ||
@@ -192,7 +222,7 @@ bool FramePipeline::UpdateOrder(const FrameInput& input, const MeshKey& mesh, in
   OrderStage::Cells cells;
   cells.mesh = mesh;
   cells.points = this->Transform.Version();
-  cells.visible = this->Culling.Version();
+  cells.visible = this->Selection.Version();
   cells.perspective = input.perspective;
   cells.whole =
     counts.frustumCulled == 0 && counts.pixelCulled == 0 && this->NearPlaneCut.Clipped() == 0;
@@ -210,7 +240,9 @@ bool FramePipeline::UpdateOrder(const FrameInput& input, const MeshKey& mesh, in
     Timed(this->LastTimes.decompose,
       [&]
       {
-        this->Order.Invert(input.cells.cellCount + this->NearPlaneCut.Pieces().size(), threads);
+        // The decomposition visits the keys' candidates only (DecomposeInput::cellList).
+        this->Order.Invert(input.cells.cellCount + this->NearPlaneCut.Pieces().size(), threads,
+          this->Selection.Selected(), this->Selection.SelectedCount(), input.cells.cellCount);
         return true;
       });
   }

@@ -308,15 +308,31 @@ bool SortNearlySorted(SortKey* keys, std::size_t count, std::size_t moveBudget, 
   return true;
 }
 
-void InvertOrder(
-  const SortKey* order, std::size_t count, std::size_t cellCount, std::uint32_t* rank, int threads)
+void InvertOrder(const SortKey* order, std::size_t count, std::size_t cellCount,
+  std::uint32_t* rank, int threads, const std::uint32_t* candidates, std::size_t candidateCount,
+  std::size_t meshCells)
 {
   const int nthreads = detail::ResolveThreads(threads);
   const auto cells = static_cast<std::int64_t>(cellCount);
   const auto n = static_cast<std::int64_t>(count);
+  const auto listed = static_cast<std::int64_t>(candidateCount);
+  const auto first = static_cast<std::int64_t>(std::min(meshCells, cellCount));
 #pragma omp parallel num_threads(nthreads)
   {
-    if (n < cells) // only a partial order leaves ranks to mark
+    if (candidates) // the candidates and the ids after the mesh's cells
+    {
+#pragma omp for schedule(static) nowait
+      for (std::int64_t i = 0; i < listed; ++i)
+      {
+        rank[candidates[i]] = NotInOrder;
+      }
+#pragma omp for schedule(static)
+      for (std::int64_t c = first; c < cells; ++c)
+      {
+        rank[c] = NotInOrder;
+      }
+    }
+    else if (n < cells) // only a partial order leaves ranks to mark
     {
 #pragma omp for schedule(static)
       for (std::int64_t c = 0; c < cells; ++c)
@@ -431,13 +447,15 @@ void OrderStage::Mutate(OrderMutation mutation)
   }
 }
 
-void OrderStage::Invert(std::size_t ranked, int threads)
+void OrderStage::Invert(std::size_t ranked, int threads, const std::uint32_t* candidates,
+  std::size_t candidateCount, std::size_t meshCells)
 {
   if (this->Ranks.size() < ranked)
   {
     this->Ranks.resize(ranked);
   }
-  InvertOrder(this->Sorted.data(), this->Sorted.size(), ranked, this->Ranks.data(), threads);
+  InvertOrder(this->Sorted.data(), this->Sorted.size(), ranked, this->Ranks.data(), threads,
+    candidates, candidateCount, meshCells);
 }
 
 void OrderStage::Release()

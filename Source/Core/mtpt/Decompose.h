@@ -128,6 +128,11 @@ struct DecomposeInput
   /// keys' culling, KeyCulling): the by-rank decompositions then skip the test for cells
   /// and keep it for near-plane pieces (DecomposeIntoSlot, DecomposeIntoFan).
   bool cellsCoverPixels = false;
+  /// The by-rank decompositions: the ascending list of the cells the order was made from
+  /// (the depth keys' candidates), so that they visit those only and read no other rank;
+  /// null: every cell of the mesh.
+  const std::uint32_t* cellList = nullptr;
+  std::size_t cellListCount = 0;
 };
 
 /**

@@ -81,7 +81,7 @@ public:
   struct Key
   {
     std::uint64_t points = 0;  ///< TransformStage::Version()
-    std::uint64_t visible = 0; ///< CullingStage::Version()
+    std::uint64_t visible = 0; ///< CellSelectionStage::Version()
     bool perspective = false;
     KeyCulling culling;
     bool operator==(const Key& o) const

@@ -3,7 +3,8 @@
  * @file FramePipeline.h
  * @brief The CPU stages of one frame in sequence: 1 transform (Transform.h), 2 opacity
  * culling (Culling.h), 3 depth keys (DepthKeys.h) and 3b the near plane's cut
- * (NearPlane.h), 4 visibility order (VisibilityOrder.h), 5 decomposition (Decompose.h).
+ * (NearPlane.h), 4 visibility order (VisibilityOrder.h), 5 decomposition (Decompose.h); 2b,
+ * in moving frames, the level of detail's subset of the cells (LevelOfDetail.h).
  * Each stage is an object that owns its result, the key it was computed from and a version
  * (Stage.h; Documentation/architecture.md, "The stages of a frame"); this class only runs
  * them in order, passing each the versions of the results it reads, times them and gathers
@@ -35,6 +36,7 @@
 #include "mtpt/Culling.h"
 #include "mtpt/Decompose.h"
 #include "mtpt/DepthKeys.h"
+#include "mtpt/LevelOfDetail.h"
 #include "mtpt/NearPlane.h"
 #include "mtpt/Transform.h"
 #include "mtpt/VisibilityOrder.h"
@@ -48,12 +50,13 @@ namespace mtpt
 {
 
 /// Wall-clock seconds of each CPU stage of the last frame. `cull` is the opacity culling
-/// (cell scalar ranges and the visible-cell list); `decompose` includes inverting the order
-/// and sums over the frame's batches.
+/// (cell scalar ranges and the visible-cell list); `select` the level of detail's subset
+/// (LevelOfDetail.h); `decompose` includes inverting the order and sums over the frame's
+/// batches.
 struct StageTimes
 {
-  double transform = 0, cull = 0, keys = 0, order = 0, decompose = 0;
-  double Total() const { return transform + cull + keys + order + decompose; }
+  double transform = 0, cull = 0, select = 0, keys = 0, order = 0, decompose = 0;
+  double Total() const { return transform + cull + select + keys + order + decompose; }
 };
 
 /// What the last frame did: cell counts at each culling step and what it reused.
@@ -61,6 +64,10 @@ struct FrameStats
 {
   std::size_t cells = 0;            ///< cells in the mesh
   std::size_t opacityCulled = 0;    ///< transparent over their whole scalar range
+  std::size_t leftOut = 0;          ///< visible, left out by the level of detail
+  /// What the backends multiply every attenuation by: visible / drawn cells (1 without a
+  /// level of detail), so that a ray keeps its expected optical depth (LevelOfDetail.h).
+  double attenuationScale = 1;
   std::size_t frustumCulled = 0;    ///< entirely outside the view volume
   std::size_t sorted = 0;           ///< cells sorted and given a slot
   std::size_t pixelCulled = 0;      ///< covering no pixel centre (before the sort; pieces after)
@@ -96,6 +103,9 @@ struct FrameInput
   TransferFunctionTable opacity;
   /// Skip cells entirely outside the view volume before sorting.
   bool cullFrustum = true;
+  /// The level of detail of a moving frame: the fraction of the visible cells drawn, a
+  /// CellFractionLevel (LevelOfDetail.h). 1: every cell, the full frame.
+  double cellFraction = 1;
   /// Change counters, read only with reuse on (FramePipeline::SetReuse): change
   /// `dataVersion` whenever the content of the points, cells or scalars changes, and
   /// `opacityVersion` whenever the content of the opacity table changes.
@@ -157,6 +167,12 @@ public:
    * DecomposeBatch, or use Run for the whole order at once.
    */
   bool Prepare(const FrameInput& input, int threads);
+  /**
+   * The analysis a frame of `input` with a cell fraction below 1 needs once per mesh (the
+   * level of detail's importance order, LevelOfDetail.h), done now so that it is not part
+   * of the frame's time; nothing when it is done or the fraction is 1.
+   */
+  void PrepareLevelOfDetail(const FrameInput& input, int threads);
   /// Whether the last Prepare was stopped by the stage callback.
   bool Stopped() const { return this->WasStopped; }
 
@@ -233,6 +249,7 @@ private:
   // The stages, in the order they run (Documentation/architecture.md, "The stages").
   TransformStage Transform;
   CullingStage Culling;
+  CellSelectionStage Selection;
   DepthKeyStage DepthKeys;
   NearPlaneStage NearPlaneCut;
   OrderStage Order;

@@ -79,11 +79,15 @@ bool SortNearlySorted(SortKey* keys, std::size_t count, std::size_t moveBudget, 
 
 /**
  * The inverse of a visibility order: rank[c] = k where order[k] holds cell c, and
- * NotInOrder for the cells of [0, cellCount) that the order leaves out.
+ * NotInOrder for the cells of [0, cellCount) that the order leaves out. With `candidates`
+ * (the ascending list of `candidateCount` mesh cells the order was made from, and every id
+ * from `meshCells` on), only those ids are written: the ranks of other cells are left as
+ * they were, for readers that visit the candidates only (DecomposeInput::cellList).
  * Thread safety: reentrant; `threads` OpenMP threads. Determinism: a pure function.
  */
-void InvertOrder(
-  const SortKey* order, std::size_t count, std::size_t cellCount, std::uint32_t* rank, int threads);
+void InvertOrder(const SortKey* order, std::size_t count, std::size_t cellCount,
+  std::uint32_t* rank, int threads, const std::uint32_t* candidates = nullptr,
+  std::size_t candidateCount = 0, std::size_t meshCells = 0);
 
 /**
  * Deliberately wrong visibility orders, for testing that tests can see the order (a test
@@ -131,7 +135,7 @@ public:
   {
     MeshKey mesh;
     std::uint64_t points = 0;  ///< TransformStage::Version(): a new one is a moved view
-    std::uint64_t visible = 0; ///< CullingStage::Version()
+    std::uint64_t visible = 0; ///< CellSelectionStage::Version()
     bool perspective = false;
     bool whole = false; ///< nothing culled by frustum or pixel coverage, nothing cut
     std::array<double, 3> direction{};
@@ -147,8 +151,10 @@ public:
   /// whether sorting from the previous order may be tried (reuse is on).
   bool Update(const Key& key, const Cells& cells, bool fromPrevious, const DepthKeyStage& keys,
     const NearPlaneStage& nearPlane, int threads);
-  /// The inverse of the order over `ranked` cell ids (the mesh's cells and the pieces).
-  void Invert(std::size_t ranked, int threads);
+  /// The inverse of the order over `ranked` cell ids (the mesh's cells and the pieces); with
+  /// `candidates`, over those and the pieces only (InvertOrder).
+  void Invert(std::size_t ranked, int threads, const std::uint32_t* candidates = nullptr,
+    std::size_t candidateCount = 0, std::size_t meshCells = 0);
 
   /// The order: Count() keys, back to front.
   const std::vector<SortKey>& Keys() const { return this->Sorted; }

@@ -1,0 +1,174 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file LevelOfDetail.h
+ * @brief Stage 2b of a frame: the cells a moving frame draws when it cannot draw them all
+ * in the time the renderer allots, and the rule that splits that time between the cell
+ * fraction and the image sample distance (Documentation/level-of-detail.md).
+ *
+ * The subset is a prefix of an importance order computed once per mesh: the cells sorted
+ * along the Morton curve of their centroids, then taken in the van der Corput order of
+ * their position on the curve (position p gets importance bitreverse(p)). Any prefix of
+ * that order is spread evenly over the mesh: half the cells keep every other cell along
+ * the curve, a quarter every fourth, and so on. The backends compensate the opacity of the
+ * cells left out by scaling every drawn cell's attenuation by visible / drawn, so that a
+ * ray keeps its expected optical depth.
+ *
+ * A fraction of 1 selects nothing: the frame is the full frame, bit for bit.
+ */
+#ifndef mtpt_LevelOfDetail_h
+#define mtpt_LevelOfDetail_h
+
+#include "mtpt/MeshView.h"
+#include "mtpt/Stage.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace mtpt
+{
+
+/**
+ * The importance of every cell (see the file comment): importance[c] for c in
+ * [0, cells.cellCount), distinct values in [0, 2^ImportanceBits(cellCount)). A cell that is
+ * not a tetrahedron or names a point outside the mesh gets the centroid (0, 0, 0) of the
+ * bounding box's corner; it is never drawn anyway. Thread safety: reentrant; `threads`
+ * OpenMP threads (<= 0: all). Determinism: the same values for any thread count.
+ */
+void ComputeImportance(
+  const PointsView& points, const CellsView& cells, std::uint32_t* importance, int threads);
+
+/// Bits of the importance values of a mesh of `cellCount` cells: ceil(log2(cellCount)).
+int ImportanceBits(std::size_t cellCount);
+
+/**
+ * The importance below which a cell is drawn for a fraction in (0, 1] of a mesh of
+ * `cellCount` cells: ceil(fraction * 2^bits), so fraction 1 keeps every cell. Pure function.
+ */
+std::uint64_t ImportanceThreshold(double fraction, std::size_t cellCount);
+
+/**
+ * The fractions a moving frame draws: 2^(-k/4) for k = 0, 1, 2, ..., so that the subset,
+ * and what the stages can reuse with it, changes only when the wanted fraction crosses a
+ * level. Returns the largest level at or below `fraction` and at least the level at or
+ * below `minimum`; 1 for a fraction >= 1 or NaN. Pure function.
+ */
+double CellFractionLevel(double fraction, double minimum);
+
+/**
+ * Stage 2b as a stage of FramePipeline (Stage.h): the cells of the visible list (Culling.h)
+ * whose importance is below the threshold, in ascending order. The importance is kept
+ * until the mesh changes; the subset until the mesh, the visible list or the threshold
+ * change. With every cell kept it passes the visible list through, computing nothing.
+ */
+class CellSelectionStage
+{
+public:
+  struct Key
+  {
+    MeshKey mesh;
+    std::uint64_t visible = 0;   ///< CullingStage::Version()
+    std::uint64_t threshold = 0; ///< ImportanceThreshold; 2^bits or more: every cell
+    bool operator==(const Key& o) const
+    {
+      return mesh == o.mesh && visible == o.visible && threshold == o.threshold;
+    }
+  };
+
+  /**
+   * Brings the subset up to date with `key`, from the visible list `visible` (ascending;
+   * null: every cell) of `visibleCount` cells. True when it computed anything.
+   */
+  bool Update(const Key& key, const PointsView& points, const CellsView& cells,
+    const std::uint32_t* visible, std::size_t visibleCount, int threads);
+
+  /**
+   * Computes the importance order of the mesh `key` unless it is kept: what a subset of it
+   * needs, once per mesh. Update calls it too; an application calls it ahead of a frame to
+   * keep the work out of the frame's time. True when it computed.
+   */
+  bool PrepareImportance(
+    const MeshKey& key, const PointsView& points, const CellsView& cells, int threads);
+
+  /// The cells to draw in ascending order (null: every cell, as the visible list's null).
+  const std::uint32_t* Selected() const { return this->Passed ? this->Visible : this->List.data(); }
+  std::size_t SelectedCount() const { return this->Passed ? this->VisibleCount : this->List.size(); }
+  /// Visible cells left out of this frame.
+  std::size_t LeftOut() const { return this->VisibleCount - this->SelectedCount(); }
+  /// Changes whenever the subset changes.
+  std::uint64_t Version() const { return this->Record.Version(); }
+  void Forget();
+  void Release();
+  std::size_t MemoryBytes() const;
+
+private:
+  StageRecord<MeshKey> ImportanceRecord;
+  StageRecord<Key> Record;
+  std::vector<std::uint32_t> Importance, List;
+  const std::uint32_t* Visible = nullptr;
+  std::size_t VisibleCount = 0;
+  bool Passed = true;
+};
+
+/// The level of detail of one frame.
+struct Detail
+{
+  double cellFraction = 1;   ///< CellFractionLevel of the visible cells drawn
+  double sampleDistance = 1; ///< image sample distance (ImageSampling.h)
+};
+
+/// What the rule may change and within which bounds.
+struct DetailLimits
+{
+  bool adjustFraction = true, adjustDistance = true;
+  double minimumFraction = 0.05;
+  double minimumDistance = 1, maximumDistance = 10;
+  /// The distance the rule reaches before it lowers the fraction: a coarser image costs
+  /// far less error than fewer cells (Documentation/level-of-detail.md, "The budget rule").
+  double preferredDistance = 4;
+};
+
+/// A frame as the rule learns from it.
+struct MeasuredFrame
+{
+  Detail detail;
+  double seconds = 0;         ///< the whole frame; 0: never timed
+  double cellSeconds = 0;     ///< the per-cell CPU stages (StageTimes::Total)
+  double viewportSeconds = 0; ///< work that follows the viewport alone (read-back, write-back)
+};
+
+/**
+ * The seconds the volume may take of the time the renderer allots it, `allottedSeconds`,
+ * when the rest of each frame (the window's own work: clearing, resolving multisampled
+ * buffers, presenting; other props) takes time too: VTK allots the whole frame's time to
+ * the props. The rest is estimated from `intervalSeconds`, the time from the start of the
+ * last frame to the start of this one, less `lastSeconds`, the volume's part of the last
+ * frame; it is trusted only when frames follow each other (an interval of at most twice
+ * the allotted time plus the volume's), as they do while the user drags, and takes at most
+ * half the allotted time. Otherwise the volume gets the whole allotment. Pure function.
+ */
+double VolumeBudget(double allottedSeconds, double intervalSeconds, double lastSeconds);
+
+/**
+ * The level of detail of the next frame given the last one and the seconds the renderer
+ * allots. Model: a frame takes Z + f * (C + R / d^2) at cell fraction f and image sample
+ * distance d, with Z = viewportSeconds, C = cellSeconds / f and R = (seconds - cellSeconds
+ * - Z) * d^2 / f measured on the last frame: the viewport's work is fixed, the per-cell
+ * stages scale with the cells, the rest with the cells and the samples. The rest shrinks
+ * less than that in truth (per-cell set-up), so the model never overshoots: each frame
+ * closes part of the gap from the same side. The variable part gets the allotment less Z,
+ * and at least half the allotment: where the viewport's work nearly fills the allotment, the
+ * frame runs over it rather than dropping nearly every cell. Among the details the model says fit, it takes the first of: every cell at the
+ * smallest distance; every cell at a distance up to the preferred one; the preferred
+ * distance and the largest fraction level; the smallest fraction and the smallest distance
+ * that fits, up to the largest. A frame never timed, or an allotment that is not a positive
+ * finite number, gives every cell at the smallest distance, as does an allotment the full
+ * frame fits: a still frame is always the full image. Settings that the limits do not let
+ * it adjust keep the value in `fixed`. Pure function.
+ */
+Detail ChooseDetail(const MeasuredFrame& last, double allottedSeconds, const DetailLimits& limits,
+  const Detail& fixed);
+
+} // namespace mtpt
+
+#endif
