@@ -98,7 +98,9 @@ bool CPUBackend::Draw(const BackendFrame& frame, BackendTimes& times)
   const bool colourRead = target.Empty() || this->ReadColour(frame, target);
   this->Target.Restore(frame.window);
   times.upload += SecondsSince(start);
-  return colourRead && this->WriteBack(frame, region, target, times);
+  const bool written = colourRead && this->WriteBack(frame, region, target, times);
+  times.viewport += times.upload + times.draw;
+  return written;
 }
 
 bool CPUBackend::MayHaveOpaqueGeometry(vtkRenderer* renderer)
@@ -289,6 +291,7 @@ bool CPUBackend::WriteBack(const BackendFrame& frame, const PixelRegion& region,
   if (frame.Sampled())
   {
     this->Magnify(frame, region, target);
+    times.viewport += SecondsSince(start);
   }
   else
   {

@@ -250,7 +250,9 @@ bool OpenGLBackend::WriteTarget(const BackendFrame& frame, bool drawn, BackendTi
       this->Target.WriteToWindow(
         frame.window, this->Target.Colour(), frame.origin, frame.size, this->ErrorMessage);
   }
-  times.draw += SecondsSince(start);
+  const double seconds = SecondsSince(start);
+  times.draw += seconds;
+  times.viewport += seconds;
   return written;
 }
 

@@ -86,6 +86,10 @@ struct BackendTimes
   double upload = 0;    ///< OpenGL: buffer upload; CPU: read-back of depth and colour, image upload
   double draw = 0;      ///< OpenGL: the draw calls; CPU: the quad that writes the image
   double composite = 0; ///< CPU: compositing on the CPU (and magnifying a sampled image)
+  /// Of the above, the work that follows the viewport alone, whatever the cells and the
+  /// image sample distance (CPU: read-back, magnification, image upload and write-back;
+  /// OpenGL: writing an off-screen target back), for the level of detail's budget rule.
+  double viewport = 0;
   double decompose = 0; ///< decomposition of the batches (included in the pipeline's times)
   int batches = 0;      ///< batches drawn
   bool stopped = false; ///< afterBatch stopped the frame

@@ -120,6 +120,12 @@ public:
   };
   std::vector<RenderTime> RenderTimes;
 
+  /// The level of detail of the last frame drawn and what it cost (automatic adjustment).
+  mtpt::MeasuredFrame LastDetail;
+  /// When the current and the last frame started (Render's entry).
+  mtpt::Clock::time_point FrameStart, LastFrameStart;
+  bool Started = false;
+
   // The last frame.
   mtpt::BackendTimes Times;
   int LastBackend = OPENGL_BACKEND;
@@ -296,7 +302,8 @@ double vtkMultiThreadedProjectedTetrahedraMapper::GetDepthKeySeconds()
 }
 double vtkMultiThreadedProjectedTetrahedraMapper::GetCullSeconds()
 {
-  return this->Internal->Pipeline.Times().cull;
+  const mtpt::StageTimes& times = this->Internal->Pipeline.Times();
+  return times.cull + times.select;
 }
 double vtkMultiThreadedProjectedTetrahedraMapper::GetOrderSeconds()
 {
@@ -368,6 +375,10 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::IsSoftwareRenderer(const char* r
 vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfTetrahedra()
 {
   return this->Internal->Tetrahedra;
+}
+vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfCellsLeftOut()
+{
+  return static_cast<vtkIdType>(this->Internal->Pipeline.Stats().leftOut);
 }
 vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfOpacityCulledCells()
 {
@@ -593,6 +604,8 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
   in.Times = mtpt::BackendTimes{};
   in.Tetrahedra = 0;
   in.Stopped = false;
+  in.LastFrameStart = in.Started ? in.FrameStart : mtpt::Clock::time_point{};
+  in.FrameStart = mtpt::Clock::now();
   auto* window = vtkOpenGLRenderWindow::SafeDownCast(renderer->GetRenderWindow());
   if (!window)
   {
@@ -610,29 +623,75 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
   {
     return;
   }
-  // Timed from here, as VTK's ray caster times its frames: the update of the input is not
-  // part of the frame. Automatic adjustment scales the distance by the last frame's time.
+  // Timed from here, as VTK's ray caster times its frames: the update of the input, and its
+  // analysis for the level of detail, are not part of the frame.
+  const float distance = this->ImageSampleDistance, fraction = this->CellFraction;
+  this->AdjustDetail(renderer, volume);
+  frame.cellFraction = mtpt::CellFractionLevel(this->CellFraction, 0.0);
+  in.Pipeline.PrepareLevelOfDetail(frame, this->NumberOfThreads);
   const auto start = mtpt::Clock::now();
-  const float distance = this->ImageSampleDistance;
-  if (this->AutoAdjustSampleDistances)
-  {
-    this->ImageSampleDistance = static_cast<float>(mtpt::AdjustImageSampleDistance(distance,
-      this->RetrieveRenderTime(renderer, volume), volume->GetAllocatedRenderTime(),
-      this->MinimumImageSampleDistance, this->MaximumImageSampleDistance));
-  }
   if (!this->DrawPrepared(renderer, volume, window, frame))
   {
-    // No frame, or a stopped one: nothing to learn the next distance from (VTK's ray caster
+    // No frame, or a stopped one: nothing to learn the next detail from (VTK's ray caster
     // restores the distance of an aborted frame too).
     this->ImageSampleDistance = distance;
+    this->CellFraction = fraction;
     return;
   }
-  if (this->AutoAdjustSampleDistances)
+  if (this->AutoAdjustSampleDistances || this->AutoAdjustCellFraction)
   {
     glFinish(); // the time of the drawing, not of its submission
   }
   this->TimeToDraw = mtpt::SecondsSince(start);
   this->StoreRenderTime(renderer, volume, this->TimeToDraw);
+  in.LastDetail.detail = { frame.cellFraction, this->ImageSampleDistance };
+  in.Started = true;
+}
+
+double vtkMultiThreadedProjectedTetrahedraMapper::RetrieveFrameInterval()
+{
+  const Internals& in = *this->Internal;
+  return in.LastFrameStart == mtpt::Clock::time_point{}
+    ? 0.0
+    : std::chrono::duration<double>(in.FrameStart - in.LastFrameStart).count();
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::RetrieveFrameCosts(
+  double& cellSeconds, double& viewportSeconds)
+{
+  cellSeconds = this->Internal->Pipeline.Times().Total();
+  viewportSeconds = this->Internal->Times.viewport;
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::AdjustDetail(
+  vtkRenderer* renderer, vtkVolume* volume)
+{
+  const double last = this->RetrieveRenderTime(renderer, volume);
+  const double allotted = volume->GetAllocatedRenderTime();
+  if (!this->AutoAdjustCellFraction)
+  {
+    // VTK's own rule for the distance alone (vtkUnstructuredGridVolumeRayCastMapper).
+    if (this->AutoAdjustSampleDistances)
+    {
+      this->ImageSampleDistance =
+        static_cast<float>(mtpt::AdjustImageSampleDistance(this->ImageSampleDistance, last,
+          allotted, this->MinimumImageSampleDistance, this->MaximumImageSampleDistance));
+    }
+    return;
+  }
+  mtpt::DetailLimits limits;
+  limits.adjustDistance = this->AutoAdjustSampleDistances != 0;
+  limits.minimumFraction = this->MinimumCellFraction;
+  limits.minimumDistance = this->MinimumImageSampleDistance;
+  limits.maximumDistance = this->MaximumImageSampleDistance;
+  mtpt::MeasuredFrame measured = this->Internal->LastDetail;
+  measured.seconds = last;
+  this->RetrieveFrameCosts(measured.cellSeconds, measured.viewportSeconds);
+  const mtpt::Detail next =
+    mtpt::ChooseDetail(measured, mtpt::VolumeBudget(allotted, this->RetrieveFrameInterval(), last),
+      limits, { this->CellFraction, this->ImageSampleDistance });
+  this->CellFraction = static_cast<float>(next.cellFraction);
+  this->ImageSampleDistance = static_cast<float>(next.sampleDistance);
 }
 
 bool vtkMultiThreadedProjectedTetrahedraMapper::DrawPrepared(
@@ -661,6 +720,8 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::DrawPrepared(
     }
     return false;
   }
+  // The level of detail's compensation for the cells left out (mtpt/LevelOfDetail.h).
+  draw.unitDistance /= in.Pipeline.Stats().attenuationScale;
   in.Tetrahedra = static_cast<vtkIdType>(in.Pipeline.SortedCount());
   if (in.Tetrahedra > 0) // else everything is culled: transparent or out of view
   {
@@ -871,6 +932,9 @@ void vtkMultiThreadedProjectedTetrahedraMapper::PrintSelf(ostream& os, vtkIndent
   os << indent << "MinimumImageSampleDistance: " << this->MinimumImageSampleDistance << "\n";
   os << indent << "MaximumImageSampleDistance: " << this->MaximumImageSampleDistance << "\n";
   os << indent << "AutoAdjustSampleDistances: " << this->AutoAdjustSampleDistances << "\n";
+  os << indent << "CellFraction: " << this->CellFraction << "\n";
+  os << indent << "MinimumCellFraction: " << this->MinimumCellFraction << "\n";
+  os << indent << "AutoAdjustCellFraction: " << this->AutoAdjustCellFraction << "\n";
   os << indent << "ImageViewportSize (last frame): " << this->ImageViewportSize[0] << " x "
      << this->ImageViewportSize[1] << "\n";
   const mtpt::FrameStats& stats = this->Internal->Pipeline.Stats();

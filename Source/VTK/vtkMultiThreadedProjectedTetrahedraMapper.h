@@ -258,7 +258,8 @@ public:
   ///@{
   /// Seconds spent by the last Render in each stage (0 before the first).
   double GetTransformSeconds();
-  /// Opacity culling: cell scalar ranges and the visible-cell list (0 when reused).
+  /// Opacity culling: cell scalar ranges and the visible-cell list, and the level of
+  /// detail's subset of it (0 when reused).
   double GetCullSeconds();
   double GetDepthKeySeconds();
   double GetOrderSeconds();
@@ -352,6 +353,45 @@ public:
   vtkGetMacro(AutoAdjustSampleDistances, vtkTypeBool);
   vtkBooleanMacro(AutoAdjustSampleDistances, vtkTypeBool);
   ///@}
+
+  ///@{
+  /**
+   * The fraction of the visible cells a frame draws, in (0, 1] (default 1, every cell).
+   * Below 1 the frame draws an evenly spread subset of the cells, chosen from an importance
+   * order computed once per input change, and scales every drawn cell's attenuation by the
+   * inverse of the fraction drawn, so that the volume keeps its look at a fraction of the
+   * per-cell work (Documentation/level-of-detail.md). Rounded down to a level 2^(-k/4).
+   * With AutoAdjustCellFraction on (the default) every Render sets it from the time the
+   * renderer allots: set it with automatic adjustment off for a fixed fraction.
+   */
+  vtkSetClampMacro(CellFraction, float, 0.001f, 1.0f);
+  vtkGetMacro(CellFraction, float);
+  ///@}
+
+  ///@{
+  /// The smallest cell fraction automatic adjustment chooses (default 0.05); clamped to
+  /// [0.001, 1]. 1 turns the level of detail off.
+  vtkSetClampMacro(MinimumCellFraction, float, 0.001f, 1.0f);
+  vtkGetMacro(MinimumCellFraction, float);
+  ///@}
+
+  ///@{
+  /**
+   * Whether every Render adjusts CellFraction to the time the renderer allots the volume
+   * (default on). With AutoAdjustSampleDistances on as well, one rule splits the time
+   * between the two from the measured costs of the last frame: the per-cell CPU stages
+   * scale with the fraction, the rest with the fraction and the image sample distance
+   * (mtpt::ChooseDetail). A still frame (an allotment the full frame fits, as VTK's
+   * StillUpdateRate gives) always draws every cell at the minimum distance: the same image
+   * as a fresh mapper's.
+   */
+  vtkSetClampMacro(AutoAdjustCellFraction, vtkTypeBool, 0, 1);
+  vtkGetMacro(AutoAdjustCellFraction, vtkTypeBool);
+  vtkBooleanMacro(AutoAdjustCellFraction, vtkTypeBool);
+  ///@}
+
+  /// Visible cells the last Render left out for its level of detail.
+  vtkIdType GetNumberOfCellsLeftOut();
 
   /// The size of the image the last Render composited the volume at: the viewport's at
   /// image sample distance 1, else floor(viewport / ImageSampleDistance) (0, 0 before any).
@@ -452,6 +492,9 @@ protected:
   float MinimumImageSampleDistance = 1.0f;
   float MaximumImageSampleDistance = 10.0f;
   vtkTypeBool AutoAdjustSampleDistances = 1;
+  float CellFraction = 1.0f;
+  float MinimumCellFraction = 0.05f;
+  vtkTypeBool AutoAdjustCellFraction = 1;
   int ImageViewportSize[2] = { 0, 0 };
 
   ///@{
@@ -464,6 +507,19 @@ protected:
   void StoreRenderTime(vtkRenderer* renderer, vtkVolume* volume, double seconds);
   virtual double RetrieveRenderTime(vtkRenderer* renderer, vtkVolume* volume);
   ///@}
+
+  /**
+   * Seconds the last frame spent in the per-cell CPU stages (transform to decomposition)
+   * and in work that follows the viewport alone (read-back, magnification, write-back), from
+   * which automatic adjustment splits the time between cell fraction and image sample
+   * distance (mtpt::ChooseDetail). Virtual so that a test can supply simulated times.
+   */
+  virtual void RetrieveFrameCosts(double& cellSeconds, double& viewportSeconds);
+
+  /// Seconds from the start of the last frame this mapper drew to the start of this one (0
+  /// before the second), from which automatic adjustment estimates what the rest of each
+  /// frame takes (mtpt::VolumeBudget). Virtual so that a test can supply simulated times.
+  virtual double RetrieveFrameInterval();
 
 private:
   vtkMultiThreadedProjectedTetrahedraMapper(
@@ -480,6 +536,8 @@ private:
     mtpt::RenderBackend* backend, vtkOpenGLRenderWindow* window, mtpt::BackendFrame& draw);
   /// Sets an image sample distance setting, clamped to VTK's range; NaN is rejected.
   void SetDistance(const char* name, float distance, float& setting);
+  /// Sets ImageSampleDistance and CellFraction for the next frame from the time allotted.
+  void AdjustDetail(vtkRenderer* renderer, vtkVolume* volume);
   void SetUpFrame(vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window,
     mtpt::RenderBackend* backend, mtpt::FrameInput& frame, mtpt::BackendFrame& draw);
   void DrawFrame(mtpt::RenderBackend* backend, mtpt::BackendFrame& draw);

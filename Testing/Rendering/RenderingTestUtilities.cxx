@@ -433,6 +433,32 @@ const char* ShortBackendName(int backend)
   return backend == vtkMultiThreadedProjectedTetrahedraMapper::CPU_BACKEND ? "cpu" : "gl";
 }
 
+vtkSmartPointer<vtkImageData> FreshMapperImage(const Stage& stage,
+  vtkMultiThreadedProjectedTetrahedraMapper* under,
+  const std::function<void(vtkMultiThreadedProjectedTetrahedraMapper*)>& setUp)
+{
+  vtkNew<vtkMultiThreadedProjectedTetrahedraMapper> fresh;
+  fresh->SetInputData(under->GetInput());
+  setUp(fresh);
+  stage.volume->SetMapper(fresh);
+  stage.window->Render();
+  auto image = Grab(stage.window, false);
+  fresh->ReleaseGraphicsResources(stage.window);
+  stage.volume->SetMapper(under);
+  return image;
+}
+
+const char* BackendName(int backend)
+{
+  using Mapper = vtkMultiThreadedProjectedTetrahedraMapper;
+  return backend == Mapper::CPU_BACKEND
+    ? "CPU"
+    : (backend == Mapper::OPENGL_BACKEND ? "OpenGL" : "automatic");
+}
+
+const int Backends[2] = { vtkMultiThreadedProjectedTetrahedraMapper::CPU_BACKEND,
+  vtkMultiThreadedProjectedTetrahedraMapper::OPENGL_BACKEND };
+
 void ExpectCloseToVTK(
   const Scene& scene, const std::string& name, const Limits& limits, TheirWindow window)
 {

@@ -182,6 +182,21 @@ vtkSmartPointer<vtkMultiThreadedProjectedTetrahedraMapper> MakeMapper(int backen
 /// "cpu" or "gl", for image names.
 const char* ShortBackendName(int backend);
 
+/**
+ * The image of `stage`'s window with a fresh mapper of `under`'s input drawing the volume
+ * (after `setUp` configures it), in the same window and state; `under` draws the volume
+ * again afterwards.
+ */
+vtkSmartPointer<vtkImageData> FreshMapperImage(const Stage& stage,
+  vtkMultiThreadedProjectedTetrahedraMapper* under,
+  const std::function<void(vtkMultiThreadedProjectedTetrahedraMapper*)>& setUp);
+
+/// "CPU", "OpenGL" or "automatic", for messages.
+const char* BackendName(int backend);
+
+/// The two backends, CPU first.
+extern const int Backends[2];
+
 /// Where VTK's PT draws the image this mapper's is compared with.
 enum class TheirWindow
 {

@@ -6,9 +6,10 @@
 //   bilinearly: exactly the image of a window of that size, stretched;
 // - distance 2 stays within a stated bound of the full-resolution image and composites a
 //   quarter of the fragments;
-// - automatic adjustment follows the time the renderer allots (the window's desired update
-//   rate) with VTK's rule, from a simulated or a measured frame time, and a still frame
-//   returns to the full-resolution image;
+// - automatic adjustment of the distance alone (the cell fraction fixed) follows the time
+//   the renderer allots (the window's desired update rate) with VTK's rule, from a
+//   simulated or a measured frame time, and a still frame returns to the full-resolution
+//   image (TestMapperLevelOfDetail.cxx: both adjusted together);
 // - changing the distance between frames gives exactly a fresh mapper's image;
 // - opaque geometry still hides what lies behind it;
 // - no OpenGL error, and the same image, in every kind of window.
@@ -48,13 +49,6 @@ namespace
 {
 using namespace mtpt::rendering_test;
 using Mapper = vtkMultiThreadedProjectedTetrahedraMapper;
-
-const int Backends[] = { Mapper::CPU_BACKEND, Mapper::OPENGL_BACKEND };
-
-const char* BackendName(int backend)
-{
-  return backend == Mapper::CPU_BACKEND ? "CPU" : "OpenGL";
-}
 
 /// A mapper whose frames take a simulated time: fixedSeconds plus pixelSeconds per pixel of
 /// the image it last composited, whatever the machine (no test depends on a clock).
@@ -113,16 +107,12 @@ protected:
   /// `under`'s, in the same window and state; `under` draws the volume again afterwards.
   static vtkSmartPointer<vtkImageData> FreshImage(const Stage& stage, Mapper* under)
   {
-    vtkNew<Mapper> fresh;
-    fresh->SetInputData(under->GetInput());
-    fresh->SetCullInvisibleCells(under->GetCullInvisibleCells());
-    Fix(fresh, under->GetBackend(), under->GetImageSampleDistance());
-    stage.volume->SetMapper(fresh);
-    stage.window->Render();
-    auto image = Grab(stage.window, false);
-    fresh->ReleaseGraphicsResources(stage.window);
-    stage.volume->SetMapper(under);
-    return image;
+    return FreshMapperImage(stage, under,
+      [under](Mapper* fresh)
+      {
+        fresh->SetCullInvisibleCells(under->GetCullInvisibleCells());
+        Fix(fresh, under->GetBackend(), under->GetImageSampleDistance());
+      });
   }
 };
 vtkSmartPointer<vtkUnstructuredGrid> MapperImageSampleDistance::BluntFin;
@@ -375,6 +365,7 @@ TEST_F(MapperImageSampleDistance, AutomaticAdjustmentConvergesToTheAllottedTime)
   {
     vtkNew<SimulatedSlowMapper> mapper;
     mapper->SetBackend(backend);
+    mapper->AutoAdjustCellFractionOff(); // VTK's rule for the distance alone
     mapper->pixelSeconds = 0.480 / (400 * 300);
     Stage stage = FinStage(mapper, 400, 300);
     stage.window->SetDesiredUpdateRate(10);
@@ -422,6 +413,7 @@ TEST_F(MapperImageSampleDistance, AutomaticAdjustmentUsesTheMeasuredFrameTime)
   {
     vtkNew<Mapper> mapper;
     mapper->SetBackend(backend);
+    mapper->AutoAdjustCellFractionOff(); // VTK's rule for the distance alone
     Stage stage = FinStage(mapper, 300, 200);
     stage.window->SetDesiredUpdateRate(2000); // half a millisecond: too little for any frame
     stage.window->Render();
@@ -460,6 +452,7 @@ public:
 TEST_F(MapperImageSampleDistance, AStoppedFrameKeepsTheDistanceAndIsNotTimed)
 {
   vtkNew<Mapper> mapper;
+  mapper->AutoAdjustCellFractionOff(); // VTK's rule for the distance alone
   Stage stage = FinStage(mapper, 300, 200);
   stage.window->SetDesiredUpdateRate(2000);
   stage.window->Render();

@@ -35,13 +35,6 @@ namespace
 using namespace mtpt::rendering_test;
 using Mapper = vtkMultiThreadedProjectedTetrahedraMapper;
 
-const char* BackendName(int backend)
-{
-  return backend == Mapper::CPU_BACKEND
-    ? "CPU"
-    : (backend == Mapper::OPENGL_BACKEND ? "OpenGL" : "automatic");
-}
-
 class MapperWindows : public ::testing::Test
 {
 protected:
