@@ -391,6 +391,7 @@ vtkSmartPointer<vtkUnstructuredGridVolumeMapper> MakeMapper(
       settings.order == "partition" ? Mapper::PARTITION_SORT : Mapper::RADIX_SORT);
     mapper->SynchronizedTimingOn(); // stage timers that measure the work, not its submission
     mapper->SetAutoAdjustSampleDistances(settings.autoAdjust ? 1 : 0);
+    mapper->SetAutoAdjustCellFraction(settings.autoAdjust ? 1 : 0);
     mapper->SetImageSampleDistance(settings.imageSampleDistance);
     return mapper;
   }
@@ -797,7 +798,7 @@ void AddImageSamplingOptions(CLI::App& app, CommonOptions& options)
   app
     .add_option("--desired-update-rate", options.desiredUpdateRate,
       "the window asks for this many frames a second, as an interactor does while the user "
-      "drags, and MTPT adjusts its image sample distance to it (AutoAdjustSampleDistances)")
+      "drags, and MTPT adjusts its image sample distance and cell fraction to it (its defaults)")
     ->check(CLI::PositiveNumber);
   app
     .add_option("--warm-up", options.timing.warmUp,

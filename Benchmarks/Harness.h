@@ -112,7 +112,7 @@ struct MapperSettings
   std::string shading = "vtk";   ///< "vtk" or "pre-integrated"
   std::string order = "radix";   ///< "radix" or "partition"
   float imageSampleDistance = 1; ///< fixed, unless autoAdjust
-  bool autoAdjust = false;       ///< AutoAdjustSampleDistances (off: every pixel drawn)
+  bool autoAdjust = false; ///< AutoAdjustSampleDistances and AutoAdjustCellFraction (off: all drawn)
 };
 
 /**

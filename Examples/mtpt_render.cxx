@@ -8,8 +8,8 @@
 // each in its faster window, and the two images are written side by side; with --reference, both
 // are compared with the exact ray integral. With --interactive, the window asks for --update-rate
 // frames a second while the mouse drags the view (VTK's interactor asks for 15), the mapper draws
-// the volume at a coarser image sample distance to keep up, and the full image comes back
-// when the mouse is released.
+// a fraction of the cells at a coarser image sample distance to keep up (its level of detail),
+// and the full image comes back when the mouse is released.
 #include "Harness.h"
 
 #include "vtkMTPTReferenceRenderer.h"
@@ -200,14 +200,17 @@ Timed Time(Stage& stage, vtkUnstructuredGridVolumeMapper* mapper, const Options&
   return t;
 }
 
-/// After each interaction (the mouse released): the image sample distance of the last
-/// moving frame and its time, then the still frame's.
+/// After each interaction (the mouse released): the level of detail of the last moving
+/// frame and its time.
 void ReportInteraction(vtkObject*, unsigned long, void* clientData, void*)
 {
   auto* mapper = static_cast<Mapper*>(clientData);
-  std::printf("moving: image sample distance %.2f (%d x %d pixels), %.0f ms per frame\n",
-    mapper->GetImageSampleDistance(), mapper->GetImageViewportSize()[0],
-    mapper->GetImageViewportSize()[1], 1e3 * mapper->GetTimeToDraw());
+  std::printf("moving: %.3g of the visible cells (%lld tetrahedra), image sample distance %.2f "
+              "(%d x %d pixels), %.0f ms per frame\n",
+    static_cast<double>(mapper->GetCellFraction()),
+    static_cast<long long>(mapper->GetNumberOfTetrahedra()), mapper->GetImageSampleDistance(),
+    mapper->GetImageViewportSize()[0], mapper->GetImageViewportSize()[1],
+    1e3 * mapper->GetTimeToDraw());
   std::fflush(stdout);
 }
 
@@ -222,8 +225,8 @@ void Interact(Stage& stage, Mapper* mapper, double rate)
   {
     interactor->SetDesiredUpdateRate(rate);
     interactor->SetStillUpdateRate(0.0001);
-    std::printf("dragging: the volume is drawn coarser to keep %g frames a second, and in full "
-                "when the mouse is released\n",
+    std::printf("dragging: the volume is drawn with fewer cells and coarser to keep %g frames a "
+                "second, and in full when the mouse is released\n",
       rate);
   }
   interactor->Initialize();
@@ -362,9 +365,9 @@ int main(int argc, char** argv)
   app
     .add_option("--update-rate", o.updateRate,
       "with --interactive: frames a second asked for while the mouse drags the view (VTK's "
-      "interactor asks for 15); the volume is drawn at a coarser image sample distance to "
-      "keep up (AutoAdjustSampleDistances) and in full when the mouse is released; 0: always "
-      "in full")
+      "interactor asks for 15); the volume is drawn with a fraction of its cells at a coarser "
+      "image sample distance to keep up (AutoAdjustCellFraction, AutoAdjustSampleDistances) "
+      "and in full when the mouse is released; 0: always in full")
     ->check(CLI::NonNegativeNumber);
   auto* distance = app
                      .add_option("--image-sample-distance", o.common.mapper.imageSampleDistance,
