@@ -13,7 +13,8 @@ import traceback
 
 from paraview import simple
 from vtkmodules.util import numpy_support
-from vtkmodules.vtkIOImage import vtkPNGReader
+from vtkmodules.vtkIOImage import vtkPNGReader, vtkPNGWriter
+from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
 
 #: The representation type the plugin adds to unstructured grids.
 MTPT_REPRESENTATION = "Multi-threaded projected tetra"
@@ -93,6 +94,21 @@ def active_mapper_class(display):
 def save(view, path):
     simple.Render(view)
     simple.SaveScreenshot(path, view, ImageResolution=IMAGE_SIZE)
+
+
+def save_interactive(view, path):
+    """An interactive render, as ParaView draws while the user drags the view (its window
+    then asks for 5 frames a second, and its LOD applies), written as the window shows it."""
+    view.SMProxy.InteractiveRender()
+    grab = vtkWindowToImageFilter()
+    grab.SetInput(view.GetRenderWindow())
+    grab.ShouldRerenderOff()
+    grab.ReadFrontBufferOff()
+    grab.SetInputBufferTypeToRGB()
+    writer = vtkPNGWriter()
+    writer.SetInputConnection(grab.GetOutputPort())
+    writer.SetFileName(path)
+    writer.Write()
 
 
 def read_rgb(path):

@@ -4,7 +4,8 @@
 Loads the plugin, shows the blunt-fin mesh as the representation "Multi-threaded projected
 tetra", checks that it draws with vtkMultiThreadedProjectedTetrahedraMapper, and compares
 its image with ParaView's own "Volume" representation ("Projected tetra" mapper) of the same
-view. Then each mapper setting is changed through its property and the image checked.
+view. Then each mapper setting is changed through its property and the image checked, and
+an interactive render keeps the volume in place of ParaView's LOD geometry.
 
 usage: pvpython test_plugin_render.py PLUGIN DATA OUTPUT_DIR NAME
 Writes OUTPUT_DIR/NAME_mtpt.png and NAME_projected_tetra.png; exits non-zero on failure.
@@ -32,6 +33,11 @@ MAX_RMSE_MULTIBLOCK = 0.002
 # Image sample distance 2 against 1, over the volume's pixels (the mapper's own image test
 # measures 0.003 on the blunt fin at 400x300: Testing/Rendering/TestMapperImageSampleDistance).
 MAX_RMSE_COVERED_DISTANCE_2 = 0.01
+# An interactive render with the cell level of detail against the still render, over the
+# volume's pixels: whatever fraction and distance the time allotted gives, at most the
+# bound of a quarter of the cells (16/255 measured at 400x300 on the blunt fin:
+# Testing/Rendering/TestMapperLevelOfDetail); ParaView's LOD geometry is far from it.
+MAX_RMSE_COVERED_INTERACTIVE = 0.1
 
 args = testing.arguments(["PLUGIN", "DATA", "OUTPUT_DIR", "NAME"])
 out = functools.partial(testing.output_path, args)
@@ -74,6 +80,37 @@ def check_image_sample_distance(display, view):
                         "(RMSE %.2g)" % rmse)
     display.MTPTMaximumImageSampleDistance = 10.0
     display.MTPTImageSampleDistance = 1.0
+    return ok
+
+
+def check_level_of_detail(display, view):
+    """While the view moves, ParaView replaces a volume above its LOD threshold by the grid's
+    outline or surface. With the cell level of detail on (the default) the representation
+    keeps the volume: an interactive render with the threshold at 0 draws the volume, close
+    to the still image; off, ParaView's LOD geometry is drawn instead, far from it. Expects
+    the CPU backend and the settings of the image out("mtpt_cpu")."""
+    ok = True
+    threshold = view.LODThreshold
+    view.LODThreshold = 0.0
+    simple.Render(view)  # the next interactive render uses ParaView's LOD
+    testing.save_interactive(view, out("mtpt_interactive"))
+    figures = testing.compare(out("mtpt_cpu"), out("mtpt_interactive"))
+    print("%s: interactive render with the cell level of detail vs still: covered RMSE %.4f" %
+          (args["NAME"], figures["rmse_covered"]))
+    ok &= testing.check(figures["covered_b"] >= MIN_COVERED and
+                        figures["rmse_covered"] <= MAX_RMSE_COVERED_INTERACTIVE,
+                        "the volume stays while the view moves (covered RMSE %.4f <= %.2f)" %
+                        (figures["rmse_covered"], MAX_RMSE_COVERED_INTERACTIVE))
+    display.MTPTAutoAdjustCellFraction = 0
+    simple.Render(view)
+    testing.save_interactive(view, out("paraview_lod"))
+    figures = testing.compare(out("mtpt_cpu"), out("paraview_lod"))
+    ok &= testing.check(figures["rmse_covered"] > MAX_RMSE_COVERED_INTERACTIVE,
+                        "off: ParaView's LOD geometry in its place (covered RMSE %.4f)" %
+                        figures["rmse_covered"])
+    display.MTPTAutoAdjustCellFraction = 1
+    view.LODThreshold = threshold
+    simple.Render(view)
     return ok
 
 
@@ -137,6 +174,7 @@ def main():
     display.MTPTShadingMode = "VTK-compatible"
 
     ok &= check_image_sample_distance(display, view)
+    ok &= check_level_of_detail(display, view)
     simple.Hide(reader, view)
 
     # A multi-block input: the mesh cut into two blocks of whole cells (the cells inside a

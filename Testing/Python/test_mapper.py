@@ -82,6 +82,30 @@ def test_import_and_settings():
     assert mapper.GetImageSampleDistance() == 2.5
     mapper.SetImageSampleDistance(1000)  # clamped, as VTK's ray caster clamps it
     assert mapper.GetImageSampleDistance() == 100.0
+    # Cell level of detail for moving frames: on, every cell until the view moves.
+    assert mapper.GetAutoAdjustCellFraction() == 1
+    assert mapper.GetCellFraction() == 1.0
+    assert abs(mapper.GetMinimumCellFraction() - 0.05) < 1e-7  # a float
+    mapper.AutoAdjustCellFractionOff()
+    mapper.SetCellFraction(0.0)  # clamped
+    assert abs(mapper.GetCellFraction() - 0.001) < 1e-9
+
+
+def test_a_cell_fraction_draws_fewer_cells(bluntfin):
+    """A quarter of the cells, compensated: close to the full image, not equal to it."""
+    full_mapper = Mapper()
+    full = render(bluntfin, full_mapper)
+    mapper = Mapper()
+    mapper.AutoAdjustCellFractionOff()
+    mapper.SetCellFraction(0.25)
+    quarter = render(bluntfin, mapper)
+    assert mapper.GetNumberOfCellsLeftOut() > 0
+    assert mapper.GetNumberOfTetrahedra() < full_mapper.GetNumberOfTetrahedra() / 3
+    covered = covered_pixels(full, BACKGROUND)
+    error = rmse([quarter[3 * p + c] for p in covered for c in range(3)],
+                 [full[3 * p + c] for p in covered for c in range(3)])
+    print("a quarter of the cells against all: covered RMSE %.4f" % error)
+    assert 0 < error < 18 / 255, error
 
 
 def test_render_matches_vtk_pt(bluntfin):

@@ -3,6 +3,8 @@
 
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
 #include "vtkObjectFactory.h"
+#include "vtkPVLODVolume.h"
+#include "vtkPVView.h"
 
 vtkStandardNewMacro(vtkMTPTUnstructuredGridVolumeRepresentation);
 
@@ -121,6 +123,46 @@ void vtkMTPTUnstructuredGridVolumeRepresentation::SetAutoAdjustSampleDistances(i
 int vtkMTPTUnstructuredGridVolumeRepresentation::GetAutoAdjustSampleDistances()
 {
   return this->MTPTMapper->GetAutoAdjustSampleDistances();
+}
+
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetAutoAdjustCellFraction(int adjust)
+{
+  this->MTPTMapper->SetAutoAdjustCellFraction(adjust);
+  if (!adjust)
+  {
+    this->MTPTMapper->SetCellFraction(1.0f); // every cell, as before the adjustment
+  }
+}
+
+int vtkMTPTUnstructuredGridVolumeRepresentation::GetAutoAdjustCellFraction()
+{
+  return this->MTPTMapper->GetAutoAdjustCellFraction();
+}
+
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetMinimumCellFraction(double fraction)
+{
+  this->MTPTMapper->SetMinimumCellFraction(static_cast<float>(fraction));
+}
+
+double vtkMTPTUnstructuredGridVolumeRepresentation::GetMinimumCellFraction()
+{
+  return this->MTPTMapper->GetMinimumCellFraction();
+}
+
+//------------------------------------------------------------------------------
+int vtkMTPTUnstructuredGridVolumeRepresentation::ProcessViewRequest(
+  vtkInformationRequestKey* requestType, vtkInformation* inInfo, vtkInformation* outInfo)
+{
+  const int result = this->Superclass::ProcessViewRequest(requestType, inInfo, outInfo);
+  if (requestType == vtkPVView::REQUEST_RENDER() && this->GetActor() &&
+    this->GetActiveVolumeMapper() == this->MTPTMapper.GetPointer() &&
+    this->MTPTMapper->GetAutoAdjustCellFraction())
+  {
+    // The superclass turns ParaView's level of detail (the outline or surface) on for an
+    // interactive render above the LOD threshold; the mapper's own keeps the volume.
+    this->GetActor()->SetEnableLOD(0);
+  }
+  return result;
 }
 
 //------------------------------------------------------------------------------

@@ -13,6 +13,11 @@
  * sharing the properties of the stock "Volume" representation, and adds the mapper's
  * settings, which this class forwards to the mapper.
  *
+ * While the view moves, ParaView's own level of detail replaces a volume above the view's
+ * LOD threshold by its outline or surface. With the mapper's cell level of detail on
+ * (AutoAdjustCellFraction, the default) this representation keeps drawing the volume
+ * instead: the mapper draws a fraction of the cells to keep the rate the view asks for.
+ *
  * @sa vtkUnstructuredGridVolumeRepresentation vtkMultiThreadedProjectedTetrahedraMapper
  */
 #ifndef vtkMTPTUnstructuredGridVolumeRepresentation_h
@@ -54,7 +59,16 @@ public:
   double GetMaximumImageSampleDistance();
   void SetAutoAdjustSampleDistances(int adjust);
   int GetAutoAdjustSampleDistances();
+  void SetAutoAdjustCellFraction(int adjust);
+  int GetAutoAdjustCellFraction();
+  void SetMinimumCellFraction(double fraction);
+  double GetMinimumCellFraction();
   ///@}
+
+  /// As the superclass; a render keeps the volume while the view moves when the mapper's
+  /// cell level of detail is on (see the class comment).
+  int ProcessViewRequest(vtkInformationRequestKey* requestType, vtkInformation* inInfo,
+    vtkInformation* outInfo) override;
 
   /// The mapper this representation draws with.
   vtkMultiThreadedProjectedTetrahedraMapper* GetMTPTMapper();
