@@ -318,8 +318,11 @@ Detail ChooseDetail(const MeasuredFrame& last, double allottedSeconds, const Det
     return full;
   }
   const double cell = std::min(std::max(last.cellSeconds, 0.0), last.seconds);
-  const double Z = std::min(std::max(last.viewportSeconds, 0.0), last.seconds - cell);
-  const double C = cell / f0, R = (last.seconds - cell - Z) * d0 * d0 / f0;
+  const double samples = last.sampleSeconds >= 0
+    ? std::min(last.sampleSeconds, last.seconds - cell)
+    : last.seconds - cell - std::min(std::max(last.viewportSeconds, 0.0), last.seconds - cell);
+  const double Z = last.seconds - cell - samples;
+  const double C = cell / f0, R = samples * d0 * d0 / f0;
   // The part that follows the detail (f * (C + R / d^2)) gets what the viewport's work
   // leaves; at least half the allotment, where the viewport's work alone would nearly fill
   // it (the frame then runs over rather than dropping nearly every cell).

@@ -657,10 +657,18 @@ double vtkMultiThreadedProjectedTetrahedraMapper::RetrieveFrameInterval()
 }
 
 void vtkMultiThreadedProjectedTetrahedraMapper::RetrieveFrameCosts(
-  double& cellSeconds, double& viewportSeconds)
+  double& cellSeconds, double& sampleSeconds, double& viewportSeconds)
 {
-  cellSeconds = this->Internal->Pipeline.Times().Total();
-  viewportSeconds = this->Internal->Times.viewport;
+  const Internals& in = *this->Internal;
+  const mtpt::StageTimes& stages = in.Pipeline.Times();
+  cellSeconds = stages.keys + stages.order + stages.decompose;
+  sampleSeconds = -1;
+  if (in.LastBackend == CPU_BACKEND && !in.Times.imageReused)
+  {
+    const mtpt::CompositorStats& compositor = in.CPU.Stats();
+    sampleSeconds = compositor.binSeconds + compositor.rasterSeconds;
+  }
+  viewportSeconds = in.Times.viewport;
 }
 
 void vtkMultiThreadedProjectedTetrahedraMapper::AdjustDetail(
@@ -686,7 +694,8 @@ void vtkMultiThreadedProjectedTetrahedraMapper::AdjustDetail(
   limits.maximumDistance = this->MaximumImageSampleDistance;
   mtpt::MeasuredFrame measured = this->Internal->LastDetail;
   measured.seconds = last;
-  this->RetrieveFrameCosts(measured.cellSeconds, measured.viewportSeconds);
+  this->RetrieveFrameCosts(
+    measured.cellSeconds, measured.sampleSeconds, measured.viewportSeconds);
   const mtpt::Detail next =
     mtpt::ChooseDetail(measured, mtpt::VolumeBudget(allotted, this->RetrieveFrameInterval(), last),
       limits, { this->CellFraction, this->ImageSampleDistance });

@@ -85,12 +85,15 @@
  * backend filters and blends on the CPU; the OpenGL backend draws into an off-screen target
  * of that size and blends it over the window with linear filtering). Every other stage is
  * the same; cells covering no pixel centre of the smaller image are culled. With
- * AutoAdjustSampleDistances on (the default) each Render scales the distance by
- * sqrt(last frame's time / the time the renderer allots the volume), within [minimum,
- * maximum]: VTK's interactors ask for 15 frames a second while the user drags
- * (vtkRenderWindowInteractor::DesiredUpdateRate), and the volume is then drawn coarser; a
- * still frame (StillUpdateRate, 0.0001 frames a second) allots so much time that the distance
- * returns to the minimum, 1 by default, which is the full-resolution image.
+ * AutoAdjustSampleDistances on alone, each Render scales the distance by sqrt(last frame's
+ * time / the time the renderer allots the volume), within [minimum, maximum], as VTK's ray
+ * caster does. With AutoAdjustCellFraction on as well (the default), each Render also draws
+ * an evenly spread fraction of the cells, their opacity compensated, and one rule splits the
+ * time between the two (Documentation/level-of-detail.md): VTK's interactors ask for 15
+ * frames a second while the user drags (vtkRenderWindowInteractor::DesiredUpdateRate), and
+ * the volume is then drawn with fewer cells and coarser; a still frame (StillUpdateRate,
+ * 0.0001 frames a second) allots so much time that every cell is drawn at the minimum
+ * distance, 1 by default: the full image, the same as a fresh mapper's.
  *
  * Cells other than tetrahedra (hexahedra, voxels, wedges, pyramids, polyhedra, higher-order
  * cells, mixed grids) are split into tetrahedra with vtkDataSetTriangleFilter once per input
@@ -509,12 +512,15 @@ protected:
   ///@}
 
   /**
-   * Seconds the last frame spent in the per-cell CPU stages (transform to decomposition)
-   * and in work that follows the viewport alone (read-back, magnification, write-back), from
-   * which automatic adjustment splits the time between cell fraction and image sample
-   * distance (mtpt::ChooseDetail). Virtual so that a test can supply simulated times.
+   * Seconds the last frame spent in the CPU stages that follow the cells drawn (depth keys,
+   * order, decomposition), in compositing (the CPU compositor's binning and rasterization;
+   * -1 where not measured apart: OpenGL's drawing) and in work that follows the viewport
+   * alone (read-back, magnification, write-back), from which automatic adjustment splits the
+   * time between cell fraction and image sample distance (mtpt::ChooseDetail). Virtual so
+   * that a test can supply simulated times.
    */
-  virtual void RetrieveFrameCosts(double& cellSeconds, double& viewportSeconds);
+  virtual void RetrieveFrameCosts(
+    double& cellSeconds, double& sampleSeconds, double& viewportSeconds);
 
   /// Seconds from the start of the last frame this mapper drew to the start of this one (0
   /// before the second), from which automatic adjustment estimates what the rest of each

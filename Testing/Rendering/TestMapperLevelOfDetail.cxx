@@ -75,9 +75,11 @@ protected:
   SimulatedMapper() = default;
   ~SimulatedMapper() override = default;
   double RetrieveRenderTime(vtkRenderer*, vtkVolume*) override { return this->LastSeconds(); }
-  void RetrieveFrameCosts(double& cellSeconds, double& viewportSeconds) override
+  void RetrieveFrameCosts(
+    double& cellSeconds, double& sampleSeconds, double& viewportSeconds) override
   {
     cellSeconds = this->Timed ? this->CellSeconds(this->Last) : 0;
+    sampleSeconds = this->Timed ? this->LastSeconds() - this->fixed - cellSeconds : -1;
     viewportSeconds = this->Timed ? this->fixed : 0;
   }
   double RetrieveFrameInterval() override { return this->Timed ? this->LastSeconds() + this->window : 0; }
@@ -149,8 +151,9 @@ TEST_F(MapperLevelOfDetail, MovingFramesKeepTheBudgetAndTheStillFrameIsFresh)
       {
         const mtpt::Detail last = mapper->LastDetail();
         const bool timed = mapper->LastSeconds() > 0;
-        const mtpt::MeasuredFrame measured{ last, mapper->LastSeconds(),
-          timed ? mapper->CellSeconds(last) : 0, timed ? mapper->fixed : 0 };
+        const double cells = timed ? mapper->CellSeconds(last) : 0;
+        const mtpt::MeasuredFrame measured{ last, mapper->LastSeconds(), cells,
+          timed ? mapper->LastSeconds() - mapper->fixed - cells : -1, timed ? mapper->fixed : 0 };
         const double interval = measured.seconds + mapper->window;
         stage.renderer->GetActiveCamera()->Azimuth(7);
         stage.window->Render();

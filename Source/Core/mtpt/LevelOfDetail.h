@@ -132,9 +132,16 @@ struct DetailLimits
 struct MeasuredFrame
 {
   Detail detail;
-  double seconds = 0;         ///< the whole frame; 0: never timed
-  double cellSeconds = 0;     ///< the per-cell CPU stages (StageTimes::Total)
-  double viewportSeconds = 0; ///< work that follows the viewport alone (read-back, write-back)
+  double seconds = 0; ///< the whole frame; 0: never timed
+  /// The CPU stages that follow the cells drawn (depth keys, order, decomposition).
+  double cellSeconds = 0;
+  /// Work that follows the cells drawn and the samples composited (the CPU compositor's
+  /// binning and rasterization); negative when it is not measured apart (OpenGL's drawing
+  /// is asynchronous): it is then the rest of the frame less `viewportSeconds`.
+  double sampleSeconds = -1;
+  /// With `sampleSeconds` unmeasured: work that follows the viewport alone (read-back,
+  /// magnification, write-back).
+  double viewportSeconds = 0;
 };
 
 /**
@@ -152,11 +159,13 @@ double VolumeBudget(double allottedSeconds, double intervalSeconds, double lastS
 /**
  * The level of detail of the next frame given the last one and the seconds the renderer
  * allots. Model: a frame takes Z + f * (C + R / d^2) at cell fraction f and image sample
- * distance d, with Z = viewportSeconds, C = cellSeconds / f and R = (seconds - cellSeconds
- * - Z) * d^2 / f measured on the last frame: the viewport's work is fixed, the per-cell
- * stages scale with the cells, the rest with the cells and the samples. The rest shrinks
- * less than that in truth (per-cell set-up), so the model never overshoots: each frame
- * closes part of the gap from the same side. The variable part gets the allotment less Z,
+ * distance d, with C = cellSeconds / f and R = sampleSeconds * d^2 / f measured on the last
+ * frame, and Z the rest of it: the per-cell stages scale with the cells, the compositing
+ * with the cells and the samples, everything else (the transform of every point, the
+ * selection, the viewport's read-back and write-back) is fixed. Without sampleSeconds, Z is
+ * viewportSeconds and R the rest. The compositing shrinks less than 1 / d^2 in truth (the
+ * set-up of every triangle), so the model never overshoots: each frame closes part of the
+ * gap from the same side. The variable part gets the allotment less Z,
  * and at least half the allotment: where the viewport's work nearly fills the allotment, the
  * frame runs over it rather than dropping nearly every cell. Among the details the model says fit, it takes the first of: every cell at the
  * smallest distance; every cell at a distance up to the preferred one; the preferred
