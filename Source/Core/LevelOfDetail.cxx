@@ -324,13 +324,13 @@ Detail ChooseDetail(const MeasuredFrame& last, double allottedSeconds, const Det
   const double Z = last.seconds - cell - samples;
   const double C = cell / f0, R = samples * d0 * d0 / f0;
   // The part that follows the detail (f * (C + R / d^2)) gets what the viewport's work
-  // leaves; at least half the allotment, where the viewport's work alone would nearly fill
+  // leaves; at least a quarter of the allotment, where the fixed work alone would nearly fill
   // it (the frame then runs over rather than dropping nearly every cell).
   if (Z + C + R / (full.sampleDistance * full.sampleDistance) <= allottedSeconds)
   {
     return full;
   }
-  const double A = std::max(allottedSeconds - Z, 0.5 * allottedSeconds);
+  const double A = std::max(allottedSeconds - Z, 0.25 * allottedSeconds);
   const auto time = [&](double f, double d) { return f * (C + R / (d * d)); };
   // The distance at which fraction f takes the variable budget (infinite if none does).
   const auto distanceFor = [&](double f)

@@ -166,7 +166,7 @@ double VolumeBudget(double allottedSeconds, double intervalSeconds, double lastS
  * viewportSeconds and R the rest. The compositing shrinks less than 1 / d^2 in truth (the
  * set-up of every triangle), so the model never overshoots: each frame closes part of the
  * gap from the same side. The variable part gets the allotment less Z,
- * and at least half the allotment: where the viewport's work nearly fills the allotment, the
+ * and at least a quarter of the allotment: where the fixed work nearly fills the allotment, the
  * frame runs over it rather than dropping nearly every cell. Among the details the model says fit, it takes the first of: every cell at the
  * smallest distance; every cell at a distance up to the preferred one; the preferred
  * distance and the largest fraction level; the smallest fraction and the smallest distance
