@@ -250,7 +250,7 @@ bool CellSelectionStage::Update(const Key& key, const PointsView& points, const 
       }
       return count;
     });
-  this->List.resize(kept);
+  this->Count = kept; // the list keeps its size: no refill when the next subset is larger
   this->Passed = false;
   this->Record.Store(key);
   return true;
@@ -284,6 +284,7 @@ void CellSelectionStage::Release()
   this->ImportanceRecord.Forget();
   std::vector<std::uint32_t>().swap(this->Importance);
   std::vector<std::uint32_t>().swap(this->List);
+  this->Count = 0;
 }
 
 std::size_t CellSelectionStage::MemoryBytes() const
@@ -324,13 +325,13 @@ Detail ChooseDetail(const MeasuredFrame& last, double allottedSeconds, const Det
   const double Z = last.seconds - cell - samples;
   const double C = cell / f0, R = samples * d0 * d0 / f0;
   // The part that follows the detail (f * (C + R / d^2)) gets what the viewport's work
-  // leaves; at least a quarter of the allotment, where the fixed work alone would nearly fill
+  // leaves; at least 40% of the allotment, where the fixed work alone would nearly fill
   // it (the frame then runs over rather than dropping nearly every cell).
   if (Z + C + R / (full.sampleDistance * full.sampleDistance) <= allottedSeconds)
   {
     return full;
   }
-  const double A = std::max(allottedSeconds - Z, 0.25 * allottedSeconds);
+  const double A = std::max(allottedSeconds - Z, 0.4 * allottedSeconds);
   const auto time = [&](double f, double d) { return f * (C + R / (d * d)); };
   // The distance at which fraction f takes the variable budget (infinite if none does).
   const auto distanceFor = [&](double f)

@@ -92,7 +92,7 @@ public:
 
   /// The cells to draw in ascending order (null: every cell, as the visible list's null).
   const std::uint32_t* Selected() const { return this->Passed ? this->Visible : this->List.data(); }
-  std::size_t SelectedCount() const { return this->Passed ? this->VisibleCount : this->List.size(); }
+  std::size_t SelectedCount() const { return this->Passed ? this->VisibleCount : this->Count; }
   /// Visible cells left out of this frame.
   std::size_t LeftOut() const { return this->VisibleCount - this->SelectedCount(); }
   /// Changes whenever the subset changes.
@@ -104,9 +104,9 @@ public:
 private:
   StageRecord<MeshKey> ImportanceRecord;
   StageRecord<Key> Record;
-  std::vector<std::uint32_t> Importance, List;
+  std::vector<std::uint32_t> Importance, List; ///< List: Count cells of the subset
   const std::uint32_t* Visible = nullptr;
-  std::size_t VisibleCount = 0;
+  std::size_t VisibleCount = 0, Count = 0;
   bool Passed = true;
 };
 
@@ -166,7 +166,7 @@ double VolumeBudget(double allottedSeconds, double intervalSeconds, double lastS
  * viewportSeconds and R the rest. The compositing shrinks less than 1 / d^2 in truth (the
  * set-up of every triangle), so the model never overshoots: each frame closes part of the
  * gap from the same side. The variable part gets the allotment less Z,
- * and at least a quarter of the allotment: where the fixed work nearly fills the allotment, the
+ * and at least 40% of the allotment: where the fixed work nearly fills the allotment, the
  * frame runs over it rather than dropping nearly every cell. Among the details the model says fit, it takes the first of: every cell at the
  * smallest distance; every cell at a distance up to the preferred one; the preferred
  * distance and the largest fraction level; the smallest fraction and the smallest distance

@@ -83,9 +83,9 @@ def add_volume(plotter, volume, *, backend=None, shading_mode=None, image_sample
         integrated exactly along each ray segment).
     image_sample_distance
         Composite at 1/d of the window's resolution on each side and stretch the image. A
-        number turns automatic adjustment off; ``None`` keeps the mapper's default, which
-        adjusts the distance to the frame rate the interactor asks for while the view moves
-        and renders still frames in full.
+        number turns its automatic adjustment off; ``None`` keeps the mapper's default, which
+        adjusts the distance, with the fraction of the cells drawn, to the frame rate the
+        interactor asks for while the view moves and renders still frames in full.
     number_of_threads
         Threads of the CPU stages; ``None`` or 0: every core.
     **kwargs
