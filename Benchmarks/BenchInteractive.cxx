@@ -5,12 +5,13 @@
 // then timed frames with the camera turning before each (7 degrees by default); the median
 // moving frame against the time the renderer allots (1 / rate), and the images of the last 5
 // moving frames against the still frames of the same views (the window then asks for VTK's
-// still rate, 0.0001 frames a second), the median of their covered RMSEs. Contenders: MTPT with its defaults
-// (cell level of detail and image sample distance adjusted together), MTPT adjusting the
-// image sample distance alone (VTK's rule, AutoAdjustCellFraction off), and VTK's
-// unstructured ray caster adjusting its image sample distance (its default). --plot draws
-// moving-frame time against image error for every contender and rate; --csv appends
-// every figure. The peak resident memory of the process ends the output.
+// still rate, 0.0001 frames a second), the median of their covered RMSEs. Contenders: MTPT
+// with its defaults (cell level of detail and image sample distance adjusted together), MTPT
+// adjusting the image sample distance alone (VTK's rule, AutoAdjustCellFraction off), and
+// VTK's unstructured ray caster adjusting its image sample distance (its default). --plot
+// draws moving-frame time against image error for every contender and rate (--plot-from
+// draws it from a CSV that --csv wrote); --csv appends every figure. The peak resident
+// memory of the process ends the output.
 #include "Harness.h"
 #include "Plot.h"
 
@@ -80,6 +81,18 @@ vtkSmartPointer<vtkUnstructuredGridVolumeMapper> MakeContender(
   return mapper;
 }
 
+/// A contender as the plot's legend names it.
+std::string ContenderLabel(const std::string& name)
+{
+  const bool distanceOnly = name.size() > 9 && name.substr(name.size() - 9) == "-distance";
+  const std::string backend = name.rfind("mtpt-gl", 0) == 0 ? " (OpenGL)" : "";
+  if (name == "raycast")
+  {
+    return "VTK's ray caster";
+  }
+  return (distanceOnly ? "MTPT, image sample distance alone" : "MTPT") + backend;
+}
+
 /// RMSE over RGB of the pixels either image covers (differs from `background` by more
 /// than 2/255 in a channel), in 255ths.
 double CoveredRmse(vtkImageData* a, vtkImageData* b, const double background[3])
@@ -121,7 +134,9 @@ constexpr int ComparedFrames = 5;
 struct Result
 {
   double medianMs = 0, volumeMs = 0, rmse = 0;
-  double fraction = 1, distance = 1; ///< of the median moving frame (MTPT; distance: ray caster too)
+  /// Of the median moving frame: MTPT's cell fraction, the image sample distance (MTPT's or
+  /// the ray caster's).
+  double fraction = 1, distance = 1;
 };
 
 Result Run(const Scene& scene, vtkVolumeProperty* property, const std::string& name, int width,
@@ -222,6 +237,9 @@ int main(int argc, char* argv[])
   app.add_option("--data", o.dataFolder, "folder of real meshes (default $MTPT_DATA_DIR)");
   app.add_option("--csv", o.csv, "append every figure to this CSV file");
   app.add_option("--plot", o.plot, "write moving-frame time against image error to this PNG");
+  std::string fromCsv;
+  app.add_option("--plot-from", fromCsv,
+    "with --plot: draw the figures of this CSV (written by --csv) instead of measuring");
   CLI11_PARSE(app, argc, argv);
   o.multisampling = multisampling == "on";
   if (o.dataFolder.empty())
@@ -241,13 +259,32 @@ int main(int argc, char* argv[])
       return 2;
     }
   }
+  std::map<std::string, Series> series;
+  if (!fromCsv.empty())
+  {
+    std::ifstream in(fromCsv);
+    std::string line;
+    while (std::getline(in, line))
+    {
+      // scene, cells, size, contender, rate, allotted ms, moving ms, volume ms, RMSE, ...
+      const std::vector<std::string> f = SplitList(line);
+      if (f.size() >= 9)
+      {
+        Series& s = series[f[0] + " " + f[3]];
+        s.label = f[0] + ", " + ContenderLabel(f[3]);
+        s.x.push_back(std::stod(f[6]));
+        s.y.push_back(std::max(std::stod(f[8]), 0.1));
+      }
+    }
+  }
   std::ofstream csv;
   if (!o.csv.empty())
   {
     csv.open(o.csv, std::ios::app);
   }
-  std::map<std::string, Series> series;
-  for (const std::string& meshName : SplitList(o.meshes))
+  const std::vector<std::string> meshes =
+    fromCsv.empty() ? SplitList(o.meshes) : std::vector<std::string>{};
+  for (const std::string& meshName : meshes)
   {
     Scene scene;
     std::string error;
@@ -270,7 +307,8 @@ int main(int argc, char* argv[])
         scene.name.c_str(), static_cast<long long>(scene.grid->GetNumberOfCells()), width, height,
         WindowName(o.multisampling), o.step, o.frames, o.warmUp);
       std::printf("| contender | asked (frames/s) | allotted ms | moving ms | moving / allotted "
-                  "| of which the volume, ms | RMSE vs still (of 255) | cell fraction | image sample distance |\n"
+                  "| of which the volume, ms | RMSE vs still (of 255) | cell fraction "
+                  "| image sample distance |\n"
                   "|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
       for (const std::string& name : SplitList(o.contenders))
       {
@@ -290,21 +328,26 @@ int main(int argc, char* argv[])
                 << '\n';
           }
           Series& s = series[scene.name + " " + name];
-          s.label = scene.name + ", " + name;
+          s.label = scene.name + ", " + ContenderLabel(name);
           s.x.push_back(r.medianMs);
           s.y.push_back(std::max(r.rmse, 0.1));
         }
       }
     }
   }
-  std::printf("\npeak resident memory: %.0f MiB\n", PeakResidentMiB());
+  if (fromCsv.empty())
+  {
+    std::printf("\npeak resident memory: %.0f MiB\n", PeakResidentMiB());
+  }
   if (!o.plot.empty())
   {
     Chart chart;
-    chart.title = "Moving frames: time against error (one point per asked rate)";
+    chart.title = "Moving frames: time against error, one point per rate asked (" + o.rates +
+      " frames a second)";
     chart.xTitle = "median moving frame, ms";
     chart.yTitle = "covered RMSE against the still frame, of 255";
-    chart.headroom = 1.3;
+    chart.headroom = 4; // room for the legend above the points
+    chart.legendRight = true;
     std::vector<Series> all;
     for (auto& entry : series)
     {

@@ -112,7 +112,8 @@ struct MapperSettings
   std::string shading = "vtk";   ///< "vtk" or "pre-integrated"
   std::string order = "radix";   ///< "radix" or "partition"
   float imageSampleDistance = 1; ///< fixed, unless autoAdjust
-  bool autoAdjust = false; ///< AutoAdjustSampleDistances and AutoAdjustCellFraction (off: all drawn)
+  /// AutoAdjustSampleDistances and AutoAdjustCellFraction (off: every pixel and cell drawn)
+  bool autoAdjust = false;
 };
 
 /**

@@ -59,7 +59,8 @@ bool WritePlot(const std::string& path, const Chart& spec, const std::vector<Ser
   vtkNew<vtkChartXY> chart;
   view->GetScene()->AddItem(chart);
   chart->SetShowLegend(true);
-  chart->GetLegend()->SetHorizontalAlignment(vtkChartLegend::LEFT);
+  chart->GetLegend()->SetHorizontalAlignment(
+    spec.legendRight ? vtkChartLegend::RIGHT : vtkChartLegend::LEFT);
   chart->GetLegend()->SetVerticalAlignment(vtkChartLegend::TOP);
   chart->SetTitle(spec.title);
   vtkAxis* x = chart->GetAxis(vtkAxis::BOTTOM);

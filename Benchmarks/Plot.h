@@ -29,6 +29,7 @@ struct Chart
   bool logX = true, logY = true;
   bool lines = true;      ///< points joined by lines (false: points only)
   double headroom = 1.5;  ///< the y range reaches this factor above the largest value
+  bool legendRight = false; ///< the legend in the top right corner (default: top left)
   int width = 900, height = 600;
 };
 

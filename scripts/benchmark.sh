@@ -10,6 +10,7 @@
 #   scaling   mtpt_bench_scaling: frame time against mesh size or window size, with a plot
 #   accuracy  mtpt_bench_accuracy: speed against error, every mapper against the exact integral
 #   work      mtpt_bench_work: culling, reuse, batching, peak memory
+#   interactive  mtpt_bench_interactive: moving frames at an asked rate, time and error
 # Real meshes beyond the repository's (comb, kiefer, pulley, fire_ug, ironProt) come from
 # the folder in MTPT_DATA_DIR, when set; `--help` after the program name lists its options.
 set -euo pipefail
@@ -17,9 +18,9 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${MTPT_BUILD_DIR:-$here/build}"
 program="${1:-}"
 case "$program" in
-  core | frames | scaling | accuracy | work) shift ;;
+  core | frames | scaling | accuracy | work | interactive) shift ;;
   *)
-    sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//' >&2
+    sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//' >&2
     exit 2
     ;;
 esac

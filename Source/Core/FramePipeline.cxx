@@ -61,8 +61,9 @@ bool FramePipeline::Timed(double& seconds, Body&& stage)
 std::size_t FramePipeline::MemoryBytes() const
 {
   return this->Transform.MemoryBytes() + this->Culling.MemoryBytes() +
-    this->Selection.MemoryBytes() + this->DepthKeys.MemoryBytes() + this->NearPlaneCut.MemoryBytes() + this->Order.MemoryBytes() +
-    this->Slots.MemoryBytes() + this->FanBuffers.MemoryBytes();
+    this->Selection.MemoryBytes() + this->DepthKeys.MemoryBytes() +
+    this->NearPlaneCut.MemoryBytes() + this->Order.MemoryBytes() + this->Slots.MemoryBytes() +
+    this->FanBuffers.MemoryBytes();
 }
 
 void FramePipeline::ForgetAll()
@@ -103,7 +104,8 @@ bool FramePipeline::Run(const FrameInput& input, int threads)
 void FramePipeline::PrepareLevelOfDetail(const FrameInput& input, int threads)
 {
   const std::size_t n = input.cells.cellCount;
-  if (n > MaxTetrahedra() || ImportanceThreshold(input.cellFraction, n) >= (std::uint64_t{ 1 } << ImportanceBits(n)))
+  const std::uint64_t all = std::uint64_t{ 1 } << ImportanceBits(n);
+  if (n > MaxTetrahedra() || ImportanceThreshold(input.cellFraction, n) >= all)
   {
     return;
   }

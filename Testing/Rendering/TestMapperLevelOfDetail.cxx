@@ -82,7 +82,10 @@ protected:
     sampleSeconds = this->Timed ? this->LastSeconds() - this->fixed - cellSeconds : -1;
     viewportSeconds = this->Timed ? this->fixed : 0;
   }
-  double RetrieveFrameInterval() override { return this->Timed ? this->LastSeconds() + this->window : 0; }
+  double RetrieveFrameInterval() override
+  {
+    return this->Timed ? this->LastSeconds() + this->window : 0;
+  }
 
 private:
   SimulatedMapper(const SimulatedMapper&) = delete;

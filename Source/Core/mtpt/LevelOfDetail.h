@@ -165,15 +165,16 @@ double VolumeBudget(double allottedSeconds, double intervalSeconds, double lastS
  * selection, the viewport's read-back and write-back) is fixed. Without sampleSeconds, Z is
  * viewportSeconds and R the rest. The compositing shrinks less than 1 / d^2 in truth (the
  * set-up of every triangle), so the model never overshoots: each frame closes part of the
- * gap from the same side. The variable part gets the allotment less Z,
- * and at least 40% of the allotment: where the fixed work nearly fills the allotment, the
- * frame runs over it rather than dropping nearly every cell. Among the details the model says fit, it takes the first of: every cell at the
- * smallest distance; every cell at a distance up to the preferred one; the preferred
- * distance and the largest fraction level; the smallest fraction and the smallest distance
- * that fits, up to the largest. A frame never timed, or an allotment that is not a positive
- * finite number, gives every cell at the smallest distance, as does an allotment the full
- * frame fits: a still frame is always the full image. Settings that the limits do not let
- * it adjust keep the value in `fixed`. Pure function.
+ * gap from the same side. The variable part gets the allotment less Z, and at least 40% of
+ * the allotment: where the fixed work nearly fills the allotment, the frame runs over it
+ * rather than dropping nearly every cell. Among the details the model says fit, it takes
+ * the first of: every cell at the smallest distance; every cell at a distance up to the
+ * preferred one; the preferred distance and the largest fraction level; the smallest
+ * fraction and the smallest distance that fits, up to the largest. A frame never timed, or
+ * an allotment that is not a positive finite number, gives every cell at the smallest
+ * distance, as does an allotment the full frame fits: a still frame is always the full
+ * image. Settings that the limits do not let it adjust keep the value in `fixed`. Pure
+ * function.
  */
 Detail ChooseDetail(const MeasuredFrame& last, double allottedSeconds, const DetailLimits& limits,
   const Detail& fixed);
