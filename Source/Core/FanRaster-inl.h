@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Internal: the fan path of the compositor's per-tile rasterizer. A part of TileRaster.cxx,
-// included inside its per-instruction-set namespace (HWY_NAMESPACE) after the helpers it
-// uses (TileRow, RowOf, OpacityOfDensity, FragmentTag, MaxLanes, T and the fixed-point
-// constants), so that it is compiled once per instruction set with them; it has no include
-// guard for that reason (foreach_target.h includes TileRaster.cxx once per target).
+// Internal: the fan path of the compositor's per-tile rasterizer. A fragment of
+// TileRaster.cxx, beside it, included inside its per-instruction-set namespace
+// (HWY_NAMESPACE) after the helpers it uses (TileRow, RowOf, OpacityOfDensity, FragmentTag,
+// MaxLanes, T and the fixed-point constants), so that it is compiled once per instruction set
+// with them; it has no include guard for that reason (foreach_target.h includes
+// TileRaster.cxx once per target).
 //
 // VTK-compatible shading of a whole fan at once. The triangle path sets up every triangle of
 // a tetrahedron's fan on its own and shades its short spans, a vector each; at 512x512 a
@@ -486,7 +487,7 @@ class FanPath
 public:
   FanPath(const RasterFrame& f, const TileTarget& tile)
     : Frame(f)
-    , Tile(tile)
+    , Target(tile)
     , Lookup(f.transferFunction)
     , Applies(f.fanPath && !f.vertexColours && !f.clipToRange &&
         hn::Lanes(FragmentTag()) >= MaxFanTriangles)
@@ -497,7 +498,7 @@ public:
       this->Opaque[j] = 0;
       for (int x = 0; x < T; x += static_cast<int>(hn::Lanes(FragmentTag())))
       {
-        this->MarkOpaque(j, x, hn::LoadU(FragmentTag(), this->Tile.rgba + 3 * T * T + j * T + x));
+        this->MarkOpaque(j, x, hn::LoadU(FragmentTag(), this->Target.rgba + 3 * T * T + j * T + x));
       }
     }
   }
@@ -511,7 +512,7 @@ public:
   {
     FanGeometry g;
     if (!this->Applies || !fan.closed || fan.count < 3 ||
-      !PlaceFan(this->Frame, this->Tile, fan, g))
+      !PlaceFan(this->Frame, this->Target, fan, g))
     {
       return false;
     }
@@ -538,7 +539,7 @@ private:
   {
     const FragmentTag d;
     const int lanes = static_cast<int>(hn::Lanes(d));
-    const TileTarget& tile = this->Tile;
+    const TileTarget& tile = this->Target;
     const int first = g.x0 - tile.x0, last = g.x1 - tile.x0;
     // Vectors start at the box's first column, the last moved back so as not to reach past
     // the row's end (see ShadeCompatible); the edges are evaluated from the first one.
@@ -614,12 +615,12 @@ private:
   /// the fan path marks what it makes opaque, besides what was opaque when it started).
   bool Hidden(const FanGeometry& g) const
   {
-    const int first = g.x0 - this->Tile.x0, width = g.x1 - g.x0 + 1;
+    const int first = g.x0 - this->Target.x0, width = g.x1 - g.x0 + 1;
     const std::uint64_t span =
       (width >= T ? ~std::uint64_t{ 0 } : ((std::uint64_t{ 1 } << width) - 1)) << first;
     for (int y = g.y0; y <= g.y1; ++y)
     {
-      if ((this->Opaque[y - this->Tile.y0] & span) != span)
+      if ((this->Opaque[y - this->Target.y0] & span) != span)
       {
         return false;
       }
@@ -632,11 +633,11 @@ private:
   {
     hn::Vec<CornerTag> value[6], centre[6];
     FanValues(this->Lookup, fan, value, centre);
-    this->Planes.SetUp(this->Tile, g, value, centre);
+    this->Planes.SetUp(this->Target, g, value, centre);
   }
 
   const RasterFrame& Frame;
-  const TileTarget& Tile;
+  const TileTarget& Target;
   const TableLookup Lookup;
   const bool Applies;
   FanPlanes Planes;

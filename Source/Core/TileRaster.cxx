@@ -1157,7 +1157,7 @@ void DrawTriangle(const RasterFrame& f, const TileTarget& tile, Mode mode, Corne
   }
 }
 
-#include "detail/FanRaster-inl.h" // FanPath: this namespace's fan path
+#include "FanRaster-inl.h" // FanPath: this namespace's fan path (a fragment of this file)
 
 void RasterizeTileImpl(const RasterFrame& f, const TileTarget& tile, const Fan* fans,
   std::size_t count, RasterCounts& counts)
