@@ -124,13 +124,6 @@ struct CompositorStats
   double resolveSeconds = 0;  ///< Resolve
 };
 
-/// A rectangle of pixels: [x0, x1) x [y0, y1) (empty when x0 >= x1 or y0 >= y1).
-struct PixelRegion
-{
-  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
-  bool Empty() const { return x0 >= x1 || y0 >= y1; }
-};
-
 /**
  * Composites fans into an image, frame after frame; its buffers are kept and reused.
  * Thread safety: one object per thread of control; the work inside uses OpenMP threads.

@@ -22,7 +22,7 @@
 #ifndef mtpt_ImageSampling_h
 #define mtpt_ImageSampling_h
 
-#include "mtpt/Compositor.h"
+#include "mtpt/Records.h"
 
 #include <cstdint>
 

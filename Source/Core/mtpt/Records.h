@@ -3,8 +3,9 @@
  * @file Records.h
  * @brief The records that pass from one stage of a frame to the next: projected points
  * (stage 1), sort keys (stages 3 and 4), the decomposition's vertex records and fans
- * (stage 5), and the size of the CPU compositor's tiles (stage 6). The lowest floor of the
- * core with MeshView.h: every stage reads these, none of them includes a stage.
+ * (stage 5), and the size of the CPU compositor's tiles and its pixel regions (stage 6).
+ * The lowest floor of the core with MeshView.h: every stage reads these, none of them
+ * includes a stage.
  *
  * Conventions: see MeshView.h (row-major matrices on column vectors, OpenGL NDC, the
  * camera looking down -z in eye space) and the stage headers.
@@ -163,6 +164,14 @@ constexpr std::uint32_t NotInOrder = 0xffffffffu;
 /// Pixels per side of a tile of the CPU compositor (Compositor.h): tiles are binned,
 /// rasterized and kept in cache one at a time.
 constexpr int TileSize = 64;
+
+/// A rectangle of pixels of an image: [x0, x1) x [y0, y1) (empty when x0 >= x1 or y0 >= y1),
+/// the compositor's touched region and the regions the image sampling reads and writes.
+struct PixelRegion
+{
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  bool Empty() const { return x0 >= x1 || y0 >= y1; }
+};
 
 } // namespace mtpt
 
