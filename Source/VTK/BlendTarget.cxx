@@ -92,11 +92,8 @@ bool BlendTarget::Capture(
     size[0], size[1], GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT, GL_NEAREST);
   this->Framebuffer->Bind(vtkOpenGLFramebufferObject::GetReadMode());
   this->Framebuffer->ActivateReadBuffer(0);
-  const std::string failed = TakeOpenGLErrors();
-  if (!failed.empty())
+  if (!OpenGLSucceeded("copying the window's colour and depth into a float framebuffer", error))
   {
-    error =
-      "copying the window's colour and depth into a float framebuffer failed (" + failed + ")";
     state->PopFramebufferBindings();
     return false;
   }
@@ -142,10 +139,8 @@ bool BlendTarget::CaptureSampled(vtkOpenGLRenderWindow* window, const int origin
   }
   this->Framebuffer->Bind(vtkOpenGLFramebufferObject::GetReadMode());
   this->Framebuffer->ActivateReadBuffer(0);
-  const std::string failed = TakeOpenGLErrors();
-  if (!failed.empty())
+  if (!OpenGLSucceeded("copying the window's depth into a sampled framebuffer", error))
   {
-    error = "copying the window's depth into a sampled framebuffer failed (" + failed + ")";
     state->PopFramebufferBindings();
     return false;
   }
@@ -218,13 +213,7 @@ bool BlendTarget::DrawTexture(vtkOpenGLRenderWindow* window, vtkTextureObject* t
   this->Quad->Program->SetUniformi("image", texture->GetTextureUnit());
   this->Quad->Render();
   texture->Deactivate();
-  const std::string failed = TakeOpenGLErrors();
-  if (!failed.empty())
-  {
-    error = "writing the image into the window failed (" + failed + ")";
-    return false;
-  }
-  return true;
+  return OpenGLSucceeded("writing the image into the window", error);
 }
 
 bool BlendTarget::Read(vtkOpenGLRenderWindow* window, int x, int y, int width, int height,
@@ -241,13 +230,7 @@ bool BlendTarget::Read(vtkOpenGLRenderWindow* window, int x, int y, int width, i
   {
     glReadPixels(x, y, width, height, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
   }
-  const std::string failed = TakeOpenGLErrors();
-  if (!failed.empty())
-  {
-    error = "reading the window's colour and depth back failed (" + failed + ")";
-    return false;
-  }
-  return true;
+  return OpenGLSucceeded("reading the window's colour and depth back", error);
 }
 
 void BlendTarget::ReleaseGraphicsResources(vtkWindow* window)

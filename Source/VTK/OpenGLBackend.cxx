@@ -316,13 +316,7 @@ bool OpenGLBackend::DrawBatches(
         glFinish();
       }
       times.draw += SecondsSince(start);
-      const std::string failed = TakeOpenGLErrors();
-      if (!failed.empty())
-      {
-        this->ErrorMessage = "drawing the tetrahedra failed (" + failed + ")";
-        return false;
-      }
-      return true;
+      return OpenGLSucceeded("drawing the tetrahedra", this->ErrorMessage);
     });
   this->TransferFunction->Deactivate();
   this->IntegralsHigh->Deactivate();

@@ -53,6 +53,17 @@ std::string TakeOpenGLErrors()
   return names;
 }
 
+bool OpenGLSucceeded(const std::string& what, std::string& error)
+{
+  const std::string failed = TakeOpenGLErrors();
+  if (failed.empty())
+  {
+    return true;
+  }
+  error = what + " failed (" + failed + ")";
+  return false;
+}
+
 bool DrawFramebufferIsMultisampled()
 {
   GLint sampleBuffers = 0;

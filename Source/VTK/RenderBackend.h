@@ -158,6 +158,12 @@ protected:
  */
 std::string TakeOpenGLErrors();
 
+/**
+ * Takes the pending OpenGL errors (TakeOpenGLErrors): true when there was none; else sets
+ * `error` to "<what> failed (<their names>)" and returns false.
+ */
+bool OpenGLSucceeded(const std::string& what, std::string& error);
+
 /// Whether the framebuffer bound for drawing is multisampled.
 bool DrawFramebufferIsMultisampled();
 

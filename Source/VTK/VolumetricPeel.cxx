@@ -188,14 +188,9 @@ bool VolumetricPeel::RunQuad(vtkOpenGLRenderWindow* window, vtkOpenGLRenderPass*
   {
     texture->Deactivate();
   }
-  const std::string failed = TakeOpenGLErrors();
-  if (!failed.empty())
-  {
-    error = std::string(answer == 0 ? "recording" : "answering") +
-      " the depth-peeling pass's ranges failed (" + failed + ")";
-    return false;
-  }
-  return true;
+  return OpenGLSucceeded(std::string(answer == 0 ? "recording" : "answering") +
+      " the depth-peeling pass's ranges",
+    error);
 }
 
 bool VolumetricPeel::RecordRanges(vtkOpenGLRenderWindow* window, vtkOpenGLRenderPass* pass,
@@ -262,13 +257,7 @@ bool VolumetricPeel::ReadRanges(vtkOpenGLRenderWindow* window, std::vector<float
     }
   }
   state->PopReadFramebufferBinding();
-  const std::string failed = TakeOpenGLErrors();
-  if (!failed.empty())
-  {
-    error = "reading the depth-peeling pass's ranges back failed (" + failed + ")";
-    return false;
-  }
-  return true;
+  return OpenGLSucceeded("reading the depth-peeling pass's ranges back", error);
 }
 
 bool VolumetricPeel::BindColourTarget(vtkOpenGLRenderWindow* window, std::string& error)
@@ -307,13 +296,7 @@ bool VolumetricPeel::UploadColours(
       const_cast<float*>(texture == this->FrontUpload.Get() ? front : back));
   }
   this->UploadedColours = true;
-  const std::string failed = TakeOpenGLErrors();
-  if (!failed.empty())
-  {
-    error = "uploading the volume's peel failed (" + failed + ")";
-    return false;
-  }
-  return true;
+  return OpenGLSucceeded("uploading the volume's peel", error);
 }
 
 bool VolumetricPeel::Answer(vtkOpenGLRenderWindow* window, vtkOpenGLRenderPass* pass,
