@@ -192,18 +192,13 @@ bool FramePipeline::Prepare(const FrameInput& input, int threads)
 bool FramePipeline::UpdateOrder(const FrameInput& input, const MeshKey& mesh, int threads)
 {
   // 3. Depth keys, and the near plane's cut.
-  DepthKeyStage::Key keyKey;
-  keyKey.points = this->Transform.Version();
-  keyKey.visible = this->Selection.Version();
-  keyKey.perspective = input.perspective;
-  keyKey.culling.frustum = input.cullFrustum;
-  keyKey.culling.viewportWidth = input.viewportWidth;
-  keyKey.culling.viewportHeight = input.viewportHeight;
+  const DepthKeyStage::Key keysKey{ this->Transform.Version(), this->Selection.Version(),
+    input.perspective, { input.cullFrustum, input.viewportWidth, input.viewportHeight } };
   const ProjectedPoint* points = this->Transform.Points().data();
   const bool keyed = Timed(this->LastTimes.keys,
     [&]
     {
-      const bool computed = this->DepthKeys.Update(keyKey, points, input.points.count, input.cells,
+      const bool computed = this->DepthKeys.Update(keysKey, points, input.points.count, input.cells,
         this->Selection.Selected(), this->Selection.SelectedCount(), threads);
       return this->NearPlaneCut.Update({ this->DepthKeys.Version() }, this->DepthKeys.Keys(),
                points, input.points.count, input.cells, input.scalars, input.colours,
@@ -280,37 +275,33 @@ DecompositionStage::Key FramePipeline::WindowKey(std::size_t& first, std::size_t
   return { this->Order.Version(), first, count, in.viewportWidth, in.viewportHeight };
 }
 
-void FramePipeline::DecomposeBatch(std::size_t first, std::size_t count, int threads)
+template <typename Buffers>
+void FramePipeline::DecomposeWindow(
+  Buffers& buffers, std::size_t first, std::size_t count, int threads, std::size_t& decomposed)
 {
   const DecompositionStage::Key key = this->WindowKey(first, count);
-  // The decomposition by rank visits every cell of the mesh (DecomposeTetrahedraByRank).
+  // The decomposition by rank visits the candidate cells (DecomposeInput::cellList).
   threads = ThreadsForWork(this->LastStats.cells + count, detail::CellsPerThread, threads);
-  const bool decomposed = Timed(this->LastTimes.decompose,
+  const bool computed = Timed(this->LastTimes.decompose,
     [&]
     {
-      return this->Slots.Update(
+      return buffers.Update(
         key, this->DecomposeState, this->Order.Rank(), this->NearPlaneCut.Pieces(), threads);
     });
-  this->LastStats.decompositionReused |= !decomposed;
-  this->LastStats.pixelCulled += this->Slots.PixelCulled();
-  this->LastStats.notDrawable += this->Slots.NotDrawable();
-  this->BatchCount = count;
+  this->LastStats.decompositionReused |= !computed;
+  this->LastStats.pixelCulled += buffers.PixelCulled();
+  this->LastStats.notDrawable += buffers.NotDrawable();
+  decomposed = count;
+}
+
+void FramePipeline::DecomposeBatch(std::size_t first, std::size_t count, int threads)
+{
+  this->DecomposeWindow(this->Slots, first, count, threads, this->BatchCount);
 }
 
 void FramePipeline::DecomposeFans(std::size_t first, std::size_t count, int threads)
 {
-  const DecompositionStage::Key key = this->WindowKey(first, count);
-  threads = ThreadsForWork(this->LastStats.cells + count, detail::CellsPerThread, threads);
-  const bool decomposed = Timed(this->LastTimes.decompose,
-    [&]
-    {
-      return this->FanBuffers.Update(
-        key, this->DecomposeState, this->Order.Rank(), this->NearPlaneCut.Pieces(), threads);
-    });
-  this->LastStats.decompositionReused |= !decomposed;
-  this->LastStats.pixelCulled += this->FanBuffers.PixelCulled();
-  this->LastStats.notDrawable += this->FanBuffers.NotDrawable();
-  this->FanBatchCount = count;
+  this->DecomposeWindow(this->FanBuffers, first, count, threads, this->FanBatchCount);
 }
 
 } // namespace mtpt

@@ -112,15 +112,6 @@ struct FrameInput
   std::uint64_t dataVersion = 0, opacityVersion = 0;
 };
 
-/// Stages of a frame, as reported to a StageCallback.
-enum class Stage
-{
-  Transform,
-  Cull,
-  DepthKeys,
-  Order,
-};
-
 /**
  * Called after each stage of Prepare with the stage just finished; returning false stops
  * the frame there (Prepare then returns false and nothing is sorted). The mapper reports
@@ -244,6 +235,11 @@ private:
   /// Stages 3 and 4 (keys, near plane, order); false when the callback stopped the frame.
   bool UpdateOrder(const FrameInput& input, const MeshKey& mesh, int threads);
   DecompositionStage::Key WindowKey(std::size_t& first, std::size_t& count);
+  /// DecomposeBatch and DecomposeFans: the window into `buffers` (Slots or FanBuffers), its
+  /// size into `decomposed`.
+  template <typename Buffers>
+  void DecomposeWindow(
+    Buffers& buffers, std::size_t first, std::size_t count, int threads, std::size_t& decomposed);
   void ForgetAll();
 
   // The stages, in the order they run (Documentation/architecture.md, "The stages").

@@ -64,6 +64,16 @@ private:
   std::uint64_t Number = 0;
 };
 
+/// The stages of a frame after which FramePipeline reports progress (a StageCallback,
+/// FramePipeline.h); Cull includes the level of detail's subset.
+enum class Stage
+{
+  Transform,
+  Cull,
+  DepthKeys,
+  Order,
+};
+
 } // namespace mtpt
 
 #endif
