@@ -60,34 +60,29 @@ bool FramePipeline::Timed(double& seconds, Body&& stage)
 
 std::size_t FramePipeline::MemoryBytes() const
 {
-  return this->Transform.MemoryBytes() + this->Culling.MemoryBytes() +
-    this->Selection.MemoryBytes() + this->DepthKeys.MemoryBytes() +
-    this->NearPlaneCut.MemoryBytes() + this->Order.MemoryBytes() + this->Slots.MemoryBytes() +
-    this->FanBuffers.MemoryBytes();
+  std::size_t bytes = 0;
+  for (const StageBase* stage : StagesOf(*this))
+  {
+    bytes += stage->MemoryBytes();
+  }
+  return bytes;
 }
 
-void FramePipeline::ForgetAll()
+void FramePipeline::ForgetFrom(std::size_t first)
 {
-  this->Transform.Forget();
-  this->Culling.Forget();
-  this->Selection.Forget();
-  this->DepthKeys.Forget();
-  this->NearPlaneCut.Forget();
-  this->Order.Forget();
-  this->Slots.Forget();
-  this->FanBuffers.Forget();
+  const auto stages = StagesOf(*this);
+  for (std::size_t i = first; i < stages.size(); ++i)
+  {
+    stages[i]->Forget();
+  }
 }
 
 void FramePipeline::Release()
 {
-  this->Transform.Release();
-  this->Culling.Release();
-  this->Selection.Release();
-  this->DepthKeys.Release();
-  this->NearPlaneCut.Release();
-  this->Order.Release();
-  this->Slots.Release();
-  this->FanBuffers.Release();
+  for (StageBase* stage : StagesOf(*this))
+  {
+    stage->Release();
+  }
   this->SortedSize = this->BatchCount = this->FanBatchCount = 0;
 }
 
@@ -130,7 +125,7 @@ bool FramePipeline::Prepare(const FrameInput& input, int threads)
   }
   if (!this->Reuse)
   {
-    this->ForgetAll();
+    this->ForgetFrom(0);
   }
   const MeshKey mesh =
     MeshKey::Of(input.points, input.cells, input.scalars, input.colours, input.dataVersion);
@@ -254,12 +249,8 @@ bool FramePipeline::Continue(Stage finished)
   if (this->Callback && !this->Callback(finished))
   {
     this->WasStopped = true;
-    // Whatever was kept after the transform may be incomplete: the next frame redoes it.
-    this->DepthKeys.Forget();
-    this->NearPlaneCut.Forget();
-    this->Order.Forget();
-    this->Slots.Forget();
-    this->FanBuffers.Forget();
+    // Whatever was kept from the depth keys on may be incomplete: the next frame redoes it.
+    this->ForgetFrom(3);
     this->SortedSize = 0;
     return false;
   }

@@ -77,7 +77,7 @@ private:
  * the culling mode or the opacity table change. A new table that leaves the same cells
  * visible (a colour change) keeps the version, so the later stages keep their results.
  */
-class CullingStage
+class CullingStage : public StageBase
 {
 public:
   enum class Mode
@@ -124,9 +124,9 @@ public:
   /// Cells culled as transparent.
   std::size_t Culled() const { return this->Record.Inputs().mesh.cellCount - this->VisibleCount(); }
   std::uint64_t Version() const { return this->Record.Version(); }
-  void Forget();
-  void Release();
-  std::size_t MemoryBytes() const;
+  void Forget() override;
+  void Release() override;
+  std::size_t MemoryBytes() const override;
 
 private:
   StageRecord<MeshKey> RangesRecord;

@@ -210,7 +210,7 @@ void DecomposeTetrahedraByRank(const DecomposeInput& input, const std::uint32_t*
  * buffer (SlotStage for OpenGL, FanStage for the CPU compositor); with several batches each
  * batch is decomposed again every frame, as the buffers hold only the last one.
  */
-class DecompositionStage
+class DecompositionStage : public StageBase
 {
 public:
   struct Key
@@ -231,7 +231,7 @@ public:
   /// Slots or fans of the held window that cover no pixel centre, or cannot be drawn.
   std::size_t PixelCulled() const { return this->CoversNoPixel; }
   std::size_t NotDrawable() const { return this->Undrawable; }
-  void Forget() { this->Record.Forget(); }
+  void Forget() override { this->Record.Forget(); }
 
 protected:
   /// The window of `key` through `cells(input, first, count, classes, threads)` (the cells by
@@ -255,8 +255,8 @@ public:
     const std::vector<NearPiece>& pieces, int threads);
   const std::vector<TetVertex>& Vertices() const { return this->VertexBuffer; }
   const std::vector<std::uint32_t>& Indices() const { return this->IndexBuffer; }
-  void Release();
-  std::size_t MemoryBytes() const;
+  void Release() override;
+  std::size_t MemoryBytes() const override;
 
 private:
   std::vector<TetVertex> VertexBuffer;
@@ -270,8 +270,8 @@ public:
   bool Update(const Key& key, const DecomposeInput& input, const std::uint32_t* rank,
     const std::vector<NearPiece>& pieces, int threads);
   const std::vector<Fan>& Fans() const { return this->FanBuffer; }
-  void Release();
-  std::size_t MemoryBytes() const;
+  void Release() override;
+  std::size_t MemoryBytes() const override;
 
 private:
   std::vector<Fan> FanBuffer;

@@ -75,7 +75,7 @@ KeyCounts ComputeVisibleDepthKeys(const ProjectedPoint* points, std::size_t poin
  * by ComputeVisibleDepthKeys, in ascending cell id order, kept until the projected points,
  * the visible cells or the culling settings change.
  */
-class DepthKeyStage
+class DepthKeyStage : public StageBase
 {
 public:
   struct Key
@@ -101,9 +101,9 @@ public:
   /// How many cells the keys left out, and why.
   const KeyCounts& Counts() const { return this->Count; }
   std::uint64_t Version() const { return this->Record.Version(); }
-  void Forget() { this->Record.Forget(); }
-  void Release();
-  std::size_t MemoryBytes() const { return this->Kept.capacity() * sizeof(SortKey); }
+  void Forget() override { this->Record.Forget(); }
+  void Release() override;
+  std::size_t MemoryBytes() const override { return this->Kept.capacity() * sizeof(SortKey); }
 
 private:
   StageRecord<Key> Record;

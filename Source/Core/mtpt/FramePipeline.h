@@ -41,9 +41,11 @@
 #include "mtpt/Transform.h"
 #include "mtpt/VisibilityOrder.h"
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <type_traits>
 #include <vector>
 
 namespace mtpt
@@ -240,7 +242,17 @@ private:
   template <typename Buffers>
   void DecomposeWindow(
     Buffers& buffers, std::size_t first, std::size_t count, int threads, std::size_t& decomposed);
-  void ForgetAll();
+  /// The stages in the order a frame runs them (the first three: transform, culling,
+  /// selection); ForgetFrom(k) forgets the results of stages k and later.
+  static constexpr std::size_t StageCount = 8;
+  template <typename Self>
+  static auto StagesOf(Self& self)
+  {
+    using Pointer = std::conditional_t<std::is_const_v<Self>, const StageBase*, StageBase*>;
+    return std::array<Pointer, StageCount>{ &self.Transform, &self.Culling, &self.Selection,
+      &self.DepthKeys, &self.NearPlaneCut, &self.Order, &self.Slots, &self.FanBuffers };
+  }
+  void ForgetFrom(std::size_t first);
 
   // The stages, in the order they run (Documentation/architecture.md, "The stages").
   TransformStage Transform;

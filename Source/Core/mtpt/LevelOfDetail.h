@@ -61,7 +61,7 @@ double CellFractionLevel(double fraction, double minimum);
  * until the mesh changes; the subset until the mesh, the visible list or the threshold
  * change. With every cell kept it passes the visible list through, computing nothing.
  */
-class CellSelectionStage
+class CellSelectionStage : public StageBase
 {
 public:
   struct Key
@@ -97,9 +97,9 @@ public:
   std::size_t LeftOut() const { return this->VisibleCount - this->SelectedCount(); }
   /// Changes whenever the subset changes.
   std::uint64_t Version() const { return this->Record.Version(); }
-  void Forget();
-  void Release();
-  std::size_t MemoryBytes() const;
+  void Forget() override;
+  void Release() override;
+  std::size_t MemoryBytes() const override;
 
 private:
   StageRecord<MeshKey> ImportanceRecord;

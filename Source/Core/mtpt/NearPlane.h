@@ -79,7 +79,7 @@ int CutTetrahedron(const ProjectedPoint* const corners[4], const float scalars[4
  * and so the data and the matrices, for the cells kept and the kind of projection).
  * Most frames have no point in front of the plane and cut nothing.
  */
-class NearPlaneStage
+class NearPlaneStage : public StageBase
 {
 public:
   struct Key
@@ -105,9 +105,9 @@ public:
   /// Cells cut by the plane.
   std::size_t Clipped() const { return this->ClippedCells; }
   std::uint64_t Version() const { return this->Record.Version(); }
-  void Forget() { this->Record.Forget(); }
-  void Release();
-  std::size_t MemoryBytes() const;
+  void Forget() override { this->Record.Forget(); }
+  void Release() override;
+  std::size_t MemoryBytes() const override;
 
 private:
   enum Verdict : std::uint8_t

@@ -14,6 +14,7 @@
 #ifndef mtpt_Stage_h
 #define mtpt_Stage_h
 
+#include <cstddef>
 #include <cstdint>
 
 namespace mtpt
@@ -62,6 +63,20 @@ private:
   Key Computed{};
   bool Current = false;
   std::uint64_t Number = 0;
+};
+
+/**
+ * What every stage of a frame offers the pipeline that runs it (FramePipeline), which keeps
+ * them in one list: forget the result (the next frame recomputes it and gives it a new
+ * version), free every buffer, and count the bytes the buffers hold (capacity, not size).
+ */
+class StageBase
+{
+public:
+  virtual ~StageBase() = default;
+  virtual void Forget() = 0;
+  virtual void Release() = 0;
+  virtual std::size_t MemoryBytes() const = 0;
 };
 
 /// The stages of a frame after which FramePipeline reports progress (a StageCallback,

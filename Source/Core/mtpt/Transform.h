@@ -45,7 +45,7 @@ void ProjectPoints(const PointsView& points, const ScalarsView& scalars, const M
  * Stage 1 as a stage of FramePipeline (Stage.h): the projected points of the mesh, kept
  * until the data or a matrix changes.
  */
-class TransformStage
+class TransformStage : public StageBase
 {
 public:
   struct Key
@@ -64,10 +64,13 @@ public:
   /// One record per point (valid after Update; the vector may be longer than the mesh).
   const std::vector<ProjectedPoint>& Points() const { return this->Projected; }
   std::uint64_t Version() const { return this->Record.Version(); }
-  void Forget() { this->Record.Forget(); }
+  void Forget() override { this->Record.Forget(); }
   /// Frees the records.
-  void Release();
-  std::size_t MemoryBytes() const { return this->Projected.capacity() * sizeof(ProjectedPoint); }
+  void Release() override;
+  std::size_t MemoryBytes() const override
+  {
+    return this->Projected.capacity() * sizeof(ProjectedPoint);
+  }
 
 private:
   StageRecord<Key> Record;

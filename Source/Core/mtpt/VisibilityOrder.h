@@ -111,7 +111,7 @@ enum class OrderMutation
  * near plane, in this frame and the previous one), the new keys are placed in the previous
  * order and SortNearlySorted finishes; it gives up past a move budget and the full sort runs.
  */
-class OrderStage
+class OrderStage : public StageBase
 {
 public:
   struct Key
@@ -165,9 +165,9 @@ public:
   bool FromPrevious() const { return this->SortedFromPrevious; }
   std::uint64_t Version() const { return this->Record.Version(); }
   OrderMethod Method() const { return this->Sorter->Method(); }
-  void Forget() { this->Record.Forget(); }
-  void Release();
-  std::size_t MemoryBytes() const;
+  void Forget() override { this->Record.Forget(); }
+  void Release() override;
+  std::size_t MemoryBytes() const override;
 
 private:
   bool SortFromPrevious(int threads);
