@@ -627,7 +627,11 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
   // analysis for the level of detail, are not part of the frame.
   const float distance = this->ImageSampleDistance, fraction = this->CellFraction;
   this->AdjustDetail(renderer, volume);
-  frame.cellFraction = mtpt::CellFractionLevel(this->CellFraction, 0.0);
+  // Inside a depth-peeling pass every cell is drawn, as every pixel is: the several volume
+  // passes of one peeled frame must draw the same cells.
+  frame.cellFraction = mtpt::VolumetricPeel::ActivePass(volume, this)
+    ? 1.0
+    : mtpt::CellFractionLevel(this->CellFraction, 0.0);
   in.Pipeline.PrepareLevelOfDetail(frame, this->NumberOfThreads);
   const auto start = mtpt::Clock::now();
   if (!this->DrawPrepared(renderer, volume, window, frame))

@@ -364,6 +364,7 @@ public:
    * order computed once per input change, and scales every drawn cell's attenuation by the
    * inverse of the fraction drawn, so that the volume keeps its look at a fraction of the
    * per-cell work (Documentation/level-of-detail.md). Rounded down to a level 2^(-k/4).
+   * Inside a depth-peeling pass every cell is drawn (as the image sample distance is 1).
    * With AutoAdjustCellFraction on (the default) every Render sets it from the time the
    * renderer allots: set it with automatic adjustment off for a fixed fraction.
    */

@@ -169,6 +169,27 @@ TEST_F(MapperDepthPeeling, EachPeelReusesTheFramesOrderAndAnUnchangedViewItsImag
   }
 }
 
+TEST_F(MapperDepthPeeling, EveryCellIsDrawnInsideThePass)
+{
+  // The several volume passes of a peeled frame must draw the same cells: inside the pass a
+  // cell fraction below 1 is not applied, and the image is that of every cell.
+  for (int backend : { Mapper::OPENGL_BACKEND, Mapper::CPU_BACKEND })
+  {
+    auto all = MakeMapper(backend);
+    const Stage full = Peeled(all, Views[2], Place::Inside, true);
+    const auto expected = Grab(full.window, false);
+    all->ReleaseGraphicsResources(full.window);
+    auto mapper = MakeMapper(backend);
+    mapper->AutoAdjustCellFractionOff();
+    mapper->SetCellFraction(0.25f);
+    const Stage stage = Peeled(mapper, Views[2], Place::Inside, true);
+    EXPECT_EQ(mapper->GetNumberOfCellsLeftOut(), 0) << ShortBackendName(backend);
+    EXPECT_EQ(Compare(Grab(stage.window, false), expected).worst, 0.0)
+      << ShortBackendName(backend);
+    mapper->ReleaseGraphicsResources(stage.window);
+  }
+}
+
 TEST_F(MapperDepthPeeling, WithoutPeelingTheVolumeIsDrawnAsVTKsPTDrawsIt)
 {
   // No depth peeling for volumes: the volume is drawn after the translucent geometry, over
