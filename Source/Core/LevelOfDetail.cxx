@@ -7,9 +7,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#if defined(__GLIBCXX__)
-#include <parallel/algorithm>
-#endif
 
 namespace mtpt
 {
@@ -167,12 +164,8 @@ void ComputeImportance(
   const int nthreads = detail::ResolveThreads(threads);
   std::vector<std::uint64_t> keys(n);
   MortonKeys(points, cells, keys.data(), nthreads);
-  // Keys are distinct (the cell id is in the low half): any sort gives the same order.
-#if defined(__GLIBCXX__)
-  __gnu_parallel::sort(keys.begin(), keys.end(), __gnu_parallel::multiway_mergesort_tag(nthreads));
-#else
-  std::sort(keys.begin(), keys.end());
-#endif
+  // Keys are distinct (the cell id is in the low half): one sorted order, any thread count.
+  detail::ParallelSort(keys.data(), n, nthreads);
   const int bits = ImportanceBits(n);
   const auto count = static_cast<std::int64_t>(n);
 #pragma omp parallel for num_threads(nthreads) schedule(static)

@@ -9,6 +9,7 @@
 #include "mtpt/LevelOfDetail.h"
 
 #include "TestHelpers.h"
+#include "detail/Parallel.h"
 
 #include <gtest/gtest.h>
 
@@ -17,6 +18,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <random>
 #include <vector>
 
 namespace
@@ -47,6 +49,28 @@ std::vector<mtpt::test::Vec3> Centroids(const TetMesh& mesh)
     }
   }
   return centres;
+}
+
+TEST(LevelOfDetail, TheParallelSortIsStdSortForAnyThreadCount)
+{
+  // The importance order's sort (detail::ParallelSort): blocks sorted at once, merged pairwise.
+  std::mt19937_64 random(17);
+  for (const std::size_t n : { 0, 1, 2, 7, 1000, 100003 })
+  {
+    std::vector<std::uint64_t> keys(n);
+    for (std::uint64_t& key : keys)
+    {
+      key = random() % 5000; // ties too
+    }
+    std::vector<std::uint64_t> expected = keys;
+    std::sort(expected.begin(), expected.end());
+    for (const int threads : { 1, 2, 3, 5, 8 })
+    {
+      std::vector<std::uint64_t> sorted = keys;
+      mtpt::detail::ParallelSort(sorted.data(), sorted.size(), threads);
+      EXPECT_EQ(sorted, expected) << n << " keys, " << threads << " threads";
+    }
+  }
 }
 
 TEST(LevelOfDetail, ImportanceIsDistinctAndIndependentOfThreads)

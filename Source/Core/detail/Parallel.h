@@ -10,7 +10,9 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <cstddef>
+#include <cstdint>
 #include <cstring>
 #include <vector>
 
@@ -66,6 +68,34 @@ std::size_t CompactInOrder(std::size_t n, int threads, T* items, Body&& body)
     total += kept[b];
   }
   return total;
+}
+
+/**
+ * Sorts [items, items + n) ascending with operator<: `threads` blocks sorted at once
+ * (std::sort), then merged pairwise (std::inplace_merge), the pairs of a round at once.
+ * For keys that are all distinct the result is the one sorted order, for any thread count.
+ */
+template <typename T>
+void ParallelSort(T* items, std::size_t n, int threads)
+{
+  const std::size_t blocks = static_cast<std::size_t>(threads > 1 ? threads : 1);
+  const auto bound = [&](std::size_t b) { return items + n * std::min(b, blocks) / blocks; };
+  const auto count = static_cast<std::int64_t>(blocks);
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (std::int64_t b = 0; b < count; ++b)
+  {
+    std::sort(bound(static_cast<std::size_t>(b)), bound(static_cast<std::size_t>(b) + 1));
+  }
+  for (std::size_t width = 1; width < blocks; width *= 2)
+  {
+    const auto pairs = static_cast<std::int64_t>((blocks + 2 * width - 1) / (2 * width));
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (std::int64_t p = 0; p < pairs; ++p)
+    {
+      const std::size_t first = 2 * width * static_cast<std::size_t>(p);
+      std::inplace_merge(bound(first), bound(first + width), bound(first + 2 * width));
+    }
+  }
 }
 
 } // namespace detail
