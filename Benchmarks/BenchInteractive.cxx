@@ -31,6 +31,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -58,6 +59,20 @@ struct Options
   std::string csv, plot;
 };
 
+/// Whether `name` is an MTPT contender that adjusts the image sample distance alone
+/// ("mtpt-cpu-distance"), and its name without that suffix.
+bool DistanceOnly(const std::string& name, std::string* base = nullptr)
+{
+  const std::string suffix = "-distance";
+  const bool alone = name.size() > suffix.size() &&
+    name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
+  if (base)
+  {
+    *base = alone ? name.substr(0, name.size() - suffix.size()) : name;
+  }
+  return alone;
+}
+
 /// The contenders of this benchmark, each as a user gets it with the rate asked for.
 vtkSmartPointer<vtkUnstructuredGridVolumeMapper> MakeContender(
   const std::string& name, int threads)
@@ -68,8 +83,8 @@ vtkSmartPointer<vtkUnstructuredGridVolumeMapper> MakeContender(
     mapper->AutoAdjustSampleDistancesOn(); // its default
     return mapper;
   }
-  const bool distanceOnly = name.size() > 9 && name.substr(name.size() - 9) == "-distance";
-  const std::string base = distanceOnly ? name.substr(0, name.size() - 9) : name;
+  std::string base;
+  const bool distanceOnly = DistanceOnly(name, &base);
   if (base != "mtpt-cpu" && base != "mtpt-gl")
   {
     return nullptr;
@@ -84,13 +99,12 @@ vtkSmartPointer<vtkUnstructuredGridVolumeMapper> MakeContender(
 /// A contender as the plot's legend names it.
 std::string ContenderLabel(const std::string& name)
 {
-  const bool distanceOnly = name.size() > 9 && name.substr(name.size() - 9) == "-distance";
-  const std::string backend = name.rfind("mtpt-gl", 0) == 0 ? " (OpenGL)" : "";
   if (name == "raycast")
   {
     return "VTK's ray caster";
   }
-  return (distanceOnly ? "MTPT, image sample distance alone" : "MTPT") + backend;
+  const std::string backend = name.rfind("mtpt-gl", 0) == 0 ? " (OpenGL)" : "";
+  return (DistanceOnly(name) ? "MTPT, image sample distance alone" : "MTPT") + backend;
 }
 
 /// RMSE over RGB of the pixels either image covers (differs from `background` by more
@@ -198,20 +212,6 @@ Result Run(const Scene& scene, vtkVolumeProperty* property, const std::string& n
   }
   r.rmse = errors.empty() ? 0.0 : errors[MedianIndex(errors)];
   return r;
-}
-
-double PeakResidentMiB()
-{
-  std::ifstream status("/proc/self/status");
-  std::string line;
-  while (std::getline(status, line))
-  {
-    if (line.rfind("VmHWM:", 0) == 0)
-    {
-      return std::stod(line.substr(6)) / 1024.0;
-    }
-  }
-  return 0;
 }
 
 } // namespace
@@ -337,7 +337,7 @@ int main(int argc, char* argv[])
   }
   if (fromCsv.empty())
   {
-    std::printf("\npeak resident memory: %.0f MiB\n", PeakResidentMiB());
+    std::printf("\npeak resident memory: %.0f MiB\n", StatusKiB("VmHWM") / 1024.0);
   }
   if (!o.plot.empty())
   {
@@ -348,6 +348,8 @@ int main(int argc, char* argv[])
     chart.yTitle = "covered RMSE against the still frame, of 255";
     chart.headroom = 4; // room for the legend above the points
     chart.legendRight = true;
+    chart.lines = std::any_of(series.begin(), series.end(),
+      [](const auto& entry) { return entry.second.x.size() > 1; }); // a line needs 2 points
     std::vector<Series> all;
     for (auto& entry : series)
     {

@@ -28,7 +28,6 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <cstdlib>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -54,22 +53,6 @@ StageOptions Window(const Options& o)
   StageOptions look;
   look.multisampling = o.common.windows.front();
   return look;
-}
-
-/// Kilobytes from a /proc/self/status line ("VmRSS", "VmHWM").
-long StatusKiB(const char* field)
-{
-  std::ifstream in("/proc/self/status");
-  std::string line;
-  const std::string prefix = std::string(field) + ":";
-  while (std::getline(in, line))
-  {
-    if (line.compare(0, prefix.size(), prefix) == 0)
-    {
-      return std::atol(line.c_str() + prefix.size());
-    }
-  }
-  return -1;
 }
 
 /// "grid" (the generated grid of --tets) or a harness scene name.

@@ -44,6 +44,8 @@
 #include <algorithm>
 #include <cstdio>
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
 #include <memory>
 #include <sstream>
 
@@ -830,6 +832,21 @@ std::vector<std::string> SplitList(const std::string& list)
     }
   }
   return items;
+}
+
+long StatusKiB(const char* field)
+{
+  std::ifstream in("/proc/self/status");
+  std::string line;
+  const std::string prefix = std::string(field) + ":";
+  while (std::getline(in, line))
+  {
+    if (line.compare(0, prefix.size(), prefix) == 0)
+    {
+      return std::atol(line.c_str() + prefix.size());
+    }
+  }
+  return -1;
 }
 
 } // namespace bench

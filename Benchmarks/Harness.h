@@ -316,6 +316,9 @@ void ApplyImageSamplingOptions(CLI::App& app, CommonOptions& options);
 /// A comma-separated list as its items ("a,b" -> {"a", "b"}).
 std::vector<std::string> SplitList(const std::string& list);
 
+/// Kilobytes from a /proc/self/status line ("VmRSS", "VmHWM"); -1 when it has none.
+long StatusKiB(const char* field);
+
 } // namespace bench
 } // namespace mtpt
 

@@ -99,8 +99,8 @@ bool FramePipeline::Run(const FrameInput& input, int threads)
 void FramePipeline::PrepareLevelOfDetail(const FrameInput& input, int threads)
 {
   const std::size_t n = input.cells.cellCount;
-  const std::uint64_t all = std::uint64_t{ 1 } << ImportanceBits(n);
-  if (n > MaxTetrahedra() || ImportanceThreshold(input.cellFraction, n) >= all)
+  if (n > MaxTetrahedra() ||
+    CellSelectionStage::KeepsEveryCell(ImportanceThreshold(input.cellFraction, n), n))
   {
     return;
   }
@@ -160,10 +160,7 @@ bool FramePipeline::Prepare(const FrameInput& input, int threads)
         threads);
     });
   this->LastStats.leftOut = this->Selection.LeftOut();
-  this->LastStats.attenuationScale = this->Selection.LeftOut() > 0
-    ? static_cast<double>(this->Culling.VisibleCount()) /
-      static_cast<double>(std::max<std::size_t>(this->Selection.SelectedCount(), 1))
-    : 1.0;
+  this->LastStats.attenuationScale = this->Selection.AttenuationScale();
   if (!this->Continue(Stage::Cull) || !this->UpdateOrder(input, mesh, threads))
   {
     return false;
@@ -250,7 +247,7 @@ bool FramePipeline::Continue(Stage finished)
   {
     this->WasStopped = true;
     // Whatever was kept from the depth keys on may be incomplete: the next frame redoes it.
-    this->ForgetFrom(3);
+    this->ForgetFrom(DepthKeysStage);
     this->SortedSize = 0;
     return false;
   }

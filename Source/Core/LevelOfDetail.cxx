@@ -212,8 +212,7 @@ bool CellSelectionStage::Update(const Key& key, const PointsView& points, const 
     return false;
   }
   const std::size_t n = cells.cellCount;
-  const bool all = key.threshold >= (std::uint64_t{ 1 } << ImportanceBits(n));
-  if (all)
+  if (KeepsEveryCell(key.threshold, n))
   {
     // Every visible cell: the visible list itself, a new result only if it was a subset.
     this->Record.Store(key, !this->Passed || !this->Record.Valid() ||

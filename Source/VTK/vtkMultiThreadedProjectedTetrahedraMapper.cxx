@@ -120,11 +120,10 @@ public:
   };
   std::vector<RenderTime> RenderTimes;
 
-  /// The level of detail of the last frame drawn and what it cost (automatic adjustment).
-  mtpt::MeasuredFrame LastDetail;
-  /// When the current and the last frame started (Render's entry).
+  /// The level of detail of the last frame drawn (automatic adjustment).
+  mtpt::Detail LastDetail;
+  /// When the current and the last frame started (Render's entry; none before the first).
   mtpt::Clock::time_point FrameStart, LastFrameStart;
-  bool Started = false;
 
   // The last frame.
   mtpt::BackendTimes Times;
@@ -604,7 +603,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
   in.Times = mtpt::BackendTimes{};
   in.Tetrahedra = 0;
   in.Stopped = false;
-  in.LastFrameStart = in.Started ? in.FrameStart : mtpt::Clock::time_point{};
+  in.LastFrameStart = in.FrameStart;
   in.FrameStart = mtpt::Clock::now();
   auto* window = vtkOpenGLRenderWindow::SafeDownCast(renderer->GetRenderWindow());
   if (!window)
@@ -648,8 +647,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
   }
   this->TimeToDraw = mtpt::SecondsSince(start);
   this->StoreRenderTime(renderer, volume, this->TimeToDraw);
-  in.LastDetail.detail = { frame.cellFraction, this->ImageSampleDistance };
-  in.Started = true;
+  in.LastDetail = { frame.cellFraction, this->ImageSampleDistance };
 }
 
 double vtkMultiThreadedProjectedTetrahedraMapper::RetrieveFrameInterval()
@@ -696,7 +694,8 @@ void vtkMultiThreadedProjectedTetrahedraMapper::AdjustDetail(
   limits.minimumFraction = this->MinimumCellFraction;
   limits.minimumDistance = this->MinimumImageSampleDistance;
   limits.maximumDistance = this->MaximumImageSampleDistance;
-  mtpt::MeasuredFrame measured = this->Internal->LastDetail;
+  mtpt::MeasuredFrame measured;
+  measured.detail = this->Internal->LastDetail;
   measured.seconds = last;
   this->RetrieveFrameCosts(
     measured.cellSeconds, measured.sampleSeconds, measured.viewportSeconds);

@@ -242,9 +242,10 @@ private:
   template <typename Buffers>
   void DecomposeWindow(
     Buffers& buffers, std::size_t first, std::size_t count, int threads, std::size_t& decomposed);
-  /// The stages in the order a frame runs them (the first three: transform, culling,
-  /// selection); ForgetFrom(k) forgets the results of stages k and later.
+  /// The stages in the order a frame runs them; ForgetFrom(k) forgets the results of stages
+  /// k and later.
   static constexpr std::size_t StageCount = 8;
+  static constexpr std::size_t DepthKeysStage = 3; ///< after transform, culling, selection
   template <typename Self>
   static auto StagesOf(Self& self)
   {

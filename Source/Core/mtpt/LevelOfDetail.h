@@ -95,6 +95,19 @@ public:
   std::size_t SelectedCount() const { return this->Passed ? this->VisibleCount : this->Count; }
   /// Visible cells left out of this frame.
   std::size_t LeftOut() const { return this->VisibleCount - this->SelectedCount(); }
+  /// The compensation the backends apply to every attenuation: visible / drawn cells, 1 when
+  /// none is left out (FrameStats::attenuationScale).
+  double AttenuationScale() const
+  {
+    return this->LeftOut() > 0 ? static_cast<double>(this->VisibleCount) /
+        static_cast<double>(this->SelectedCount() > 0 ? this->SelectedCount() : 1)
+                               : 1.0;
+  }
+  /// Whether `threshold` (ImportanceThreshold) keeps every cell of a mesh of `cellCount`.
+  static bool KeepsEveryCell(std::uint64_t threshold, std::size_t cellCount)
+  {
+    return threshold >= (std::uint64_t{ 1 } << ImportanceBits(cellCount));
+  }
   /// Changes whenever the subset changes.
   std::uint64_t Version() const { return this->Record.Version(); }
   void Forget() override;
