@@ -4,8 +4,8 @@
 "The stages of a frame" and "Layers").
 
 The core (Source/Core), from the lowest layer:
-  0  vocabulary: mtpt/MeshView.h, Records.h, Shading.h, Stage.h, Threads.h, Timing.h,
-     TransferFunctionTable.h
+  0  vocabulary: mtpt/MeshView.h, Records.h, SegmentShared.h, Shading.h, Stage.h, Threads.h,
+     Timing.h, TransferFunctionTable.h
   1  helpers: detail/*.h; a fragment of a source file (FanRaster-inl.h) lies beside it
   2  stages, in the order a frame runs them; a stage includes only earlier ones:
      mtpt/Transform.h, Culling.h, LevelOfDetail.h, DepthKeys.h, NearPlane.h,
@@ -37,7 +37,8 @@ STAGES = ["Transform", "Culling", "LevelOfDetail", "DepthKeys", "NearPlane", "Vi
           "Decompose"]
 CORE = {
     **{f"mtpt/{name}.h": (0, 0) for name in
-       ["MeshView", "Records", "Shading", "Stage", "Threads", "Timing", "TransferFunctionTable"]},
+       ["MeshView", "Records", "SegmentShared", "Shading", "Stage", "Threads", "Timing",
+        "TransferFunctionTable"]},
     **{f"mtpt/{name}.h": (2, rank) for rank, name in enumerate(STAGES)},
     **{f"mtpt/{name}.h": (3, 0) for name in
        ["Compositor", "FramePipeline", "ReferenceRenderer", "ImageSampling"]},

@@ -848,8 +848,8 @@ void SegmentsOfLanes(D d, const SegmentTable& t, float inverseUnit, const float*
     const V depthOfStep = hn::Div(hn::Mul(tau, depth), steps);
     const V a = hn::Neg(hn::Expm1(d, hn::Neg(depthOfStep)));
     // 1 / (e^d - 1) = (1 - a) / a, as in Segment.
-    const V h = hn::IfThenElse(hn::Lt(depthOfStep, hn::Set(d, 1e-3)),
-      hn::Sub(half, hn::Div(depthOfStep, hn::Set(d, 12.0))),
+    const V h = hn::IfThenElse(hn::Lt(depthOfStep, hn::Set(d, MTPT_SERIES_DEPTH)),
+      hn::Sub(half, hn::Div(depthOfStep, hn::Set(d, MTPT_WEIGHT_SERIES_DIVISOR))),
       hn::Sub(hn::Div(one, depthOfStep), hn::Div(hn::Sub(one, a), a)));
     V c0[3], c1[3];
     LookupLanes(d, t, u0, c0);

@@ -177,7 +177,7 @@ void PreIntegrationTable::Segment(const TransferFunctionTable& tf, float front, 
     // across the step from c0 to c1, the attenuation-weighted colour moves from the mean
     // by (c0 - c1) (1/2 - h(d)), h(d) = 1/d - 1/(e^d - 1) (exact for constant attenuation).
     // 1 / (e^d - 1) = e^-d / (1 - e^-d) = (1 - a) / a: no second exponential.
-    const double h = d < 1e-3 ? 0.5 - d / 12.0 : 1.0 / d - (1.0 - a) / a;
+    const double h = d < MTPT_SERIES_DEPTH ? WeightSeries(d) : 1.0 / d - (1.0 - a) / a;
     float c0[4], c1[4];
     LookupEntry(tf, u0, c0);
     LookupEntry(tf, u1, c1);

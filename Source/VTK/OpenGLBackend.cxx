@@ -3,6 +3,7 @@
 
 #include "TransferFunctionTables.h"
 #include "VolumetricPeel.h"
+#include "vtkMTPTSegmentShared.h"
 #include "vtkMTPTTetrahedraFS.h"
 #include "vtkMTPTTetrahedraVS.h"
 
@@ -23,6 +24,7 @@
 #include <algorithm>
 #include <climits>
 #include <cstddef>
+#include <string>
 #include <vector>
 
 namespace mtpt
@@ -81,8 +83,11 @@ vtkShaderProgram* OpenGLBackend::ReadyProgram(vtkOpenGLRenderWindow* window)
     window->GetShaderCache()->ReadyShaderProgram(program);
     return program;
   }
-  program =
-    window->GetShaderCache()->ReadyShaderProgram(vtkMTPTTetrahedraVS, vtkMTPTTetrahedraFS, "");
+  // The fragment shader computes segments with the core's constants and series.
+  std::string fragment = vtkMTPTTetrahedraFS;
+  vtkShaderProgram::Substitute(fragment, "//MTPT::SegmentShared", vtkMTPTSegmentShared);
+  program = window->GetShaderCache()->ReadyShaderProgram(
+    vtkMTPTTetrahedraVS, fragment.c_str(), "");
   if (program)
   {
     this->Triangles.Program = program;

@@ -8,6 +8,8 @@
 #ifndef mtpt_TransferFunctionTable_h
 #define mtpt_TransferFunctionTable_h
 
+#include "mtpt/SegmentShared.h"
+
 #include <cstddef>
 #include <vector>
 
@@ -76,9 +78,9 @@ struct PreIntegrationTable
 };
 
 /// At most this many compositing steps per segment (pre-integrated shading).
-constexpr int MaxPreIntegrationSteps = 8;
+constexpr int MaxPreIntegrationSteps = MTPT_MAX_SEGMENT_STEPS;
 /// One compositing step per this many table entries crossed (pre-integrated shading).
-constexpr double PreIntegrationStepEntries = 32.0;
+constexpr double PreIntegrationStepEntries = MTPT_STEP_ENTRIES;
 
 } // namespace mtpt
 

@@ -4,6 +4,8 @@
 // MTPT fragment shader: emission-absorption over the interpolated ray segment. The
 // pre-integrated branch evaluates mtpt::PreIntegrationTable::Segment
 // (Source/Core/TransferFunctionTable.cxx) with the same formulas: keep the two in step.
+// Their constants and series are mtpt/SegmentShared.h, which the backend inserts here:
+//MTPT::SegmentShared
 in vec4 classified;
 in vec3 preIntegration; // front and back scalar (table entry units), segment length
 in vec4 exactFrontBack;  // perspective-exact: see the vertex shader
@@ -22,7 +24,7 @@ uniform sampler2D integralsLow;
 // 1 - exp(-d) without cancellation for small d.
 float Opacity(float d)
 {
-  return d < 1e-3 ? d * (1.0 - d * (0.5 - d / 6.0)) : 1.0 - exp(-d);
+  return d < MTPT_SERIES_DEPTH ? OpacitySeries(d) : 1.0 - exp(-d);
 }
 
 vec4 Entry(int i)
@@ -91,8 +93,8 @@ vec4 PreIntegrated(float ua, float ub, float len)
   float tau;
   vec3 e;
   SpanMeans(ua, ub, tau, e);
-  float wanted = max(abs(ub - ua) / 32.0, tau * depth);
-  int steps = int(min(8.0, max(1.0, ceil(wanted))));
+  float wanted = max(abs(ub - ua) / MTPT_STEP_ENTRIES, tau * depth);
+  int steps = int(min(float(MTPT_MAX_SEGMENT_STEPS), max(1.0, ceil(wanted))));
   vec3 colour = vec3(0.0);
   float alpha = 0.0;
   for (int s = 0; s < steps; ++s)
@@ -109,7 +111,7 @@ vec4 PreIntegrated(float ua, float ub, float len)
     }
     float d = tau * depth / float(steps);
     float a = Opacity(d);
-    float h = d < 1e-3 ? 0.5 - d / 12.0 : 1.0 / d - 1.0 / (exp(d) - 1.0);
+    float h = d < MTPT_SERIES_DEPTH ? WeightSeries(d) : 1.0 / d - 1.0 / (exp(d) - 1.0);
     vec3 c0 = EntryAt(u0).rgb;
     vec3 c1 = EntryAt(u1).rgb;
     vec3 mean = clamp(e / tau, 0.0, 1.0); // as the CPU compositor: rounding kept in [0, 1]
