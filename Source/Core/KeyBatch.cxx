@@ -37,6 +37,36 @@ static_assert(offsetof(ProjectedPoint, eyeX) == KeyEyeX * sizeof(double) &&
     sizeof(ProjectedPoint) == 8 * sizeof(double),
   "KeyField is ProjectedPoint's layout");
 
+/// Whether each lane's four corners (x[i], y[i], z[i]: NDC) all lie beyond one and the same
+/// plane of the view frustum.
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE hn::Mask<D> OutsideFrustum(D d, const V x[4], const V y[4], const V z[4])
+{
+  const auto one = hn::Set(d, 1.0), minusOne = hn::Set(d, -1.0);
+  hn::Mask<D> beyond[6];
+  beyond[0] = hn::Lt(x[0], minusOne);
+  beyond[1] = hn::Gt(x[0], one);
+  beyond[2] = hn::Lt(y[0], minusOne);
+  beyond[3] = hn::Gt(y[0], one);
+  beyond[4] = hn::Lt(z[0], minusOne);
+  beyond[5] = hn::Gt(z[0], one);
+  for (int i = 1; i < 4; ++i)
+  {
+    beyond[0] = hn::And(beyond[0], hn::Lt(x[i], minusOne));
+    beyond[1] = hn::And(beyond[1], hn::Gt(x[i], one));
+    beyond[2] = hn::And(beyond[2], hn::Lt(y[i], minusOne));
+    beyond[3] = hn::And(beyond[3], hn::Gt(y[i], one));
+    beyond[4] = hn::And(beyond[4], hn::Lt(z[i], minusOne));
+    beyond[5] = hn::And(beyond[5], hn::Gt(z[i], one));
+  }
+  auto outside = beyond[0];
+  for (int p = 1; p < 6; ++p)
+  {
+    outside = hn::Or(outside, beyond[p]);
+  }
+  return outside;
+}
+
 /// CoversPixelCentre (detail/PixelCoverage.h) of the lanes' boxes [low, high] along one axis
 /// of `size` pixels: whether the box holds a pixel centre along it.
 template <class D>
@@ -59,7 +89,6 @@ void ComputeKeyBatchImpl(const ProjectedPoint* points, const KeyBatch& batch, in
   const hn::RebindToSigned<D> di;
   const auto* values = reinterpret_cast<const double*>(points);
   const auto* words = reinterpret_cast<const std::int64_t*>(points);
-  const auto one = hn::Set(d, 1.0), minusOne = hn::Set(d, -1.0);
   for (std::size_t base = 0; base < static_cast<std::size_t>(count); base += hn::Lanes(d))
   {
     hn::Vec<D> x[4], y[4], z[4], eye[3] = { hn::Zero(d), hn::Zero(d), hn::Zero(d) };
@@ -93,29 +122,8 @@ void ComputeKeyBatchImpl(const ProjectedPoint* points, const KeyBatch& batch, in
     const auto allUsable = hn::RebindMask(d, hn::Ne(usable, hn::Zero(di)));
     if (rules.frustum)
     {
-      hn::Mask<D> beyond[6];
-      beyond[0] = hn::Lt(x[0], minusOne);
-      beyond[1] = hn::Gt(x[0], one);
-      beyond[2] = hn::Lt(y[0], minusOne);
-      beyond[3] = hn::Gt(y[0], one);
-      beyond[4] = hn::Lt(z[0], minusOne);
-      beyond[5] = hn::Gt(z[0], one);
-      for (int i = 1; i < 4; ++i)
-      {
-        beyond[0] = hn::And(beyond[0], hn::Lt(x[i], minusOne));
-        beyond[1] = hn::And(beyond[1], hn::Gt(x[i], one));
-        beyond[2] = hn::And(beyond[2], hn::Lt(y[i], minusOne));
-        beyond[3] = hn::And(beyond[3], hn::Gt(y[i], one));
-        beyond[4] = hn::And(beyond[4], hn::Lt(z[i], minusOne));
-        beyond[5] = hn::And(beyond[5], hn::Gt(z[i], one));
-      }
-      auto outside = beyond[0];
-      for (int p = 1; p < 6; ++p)
-      {
-        outside = hn::Or(outside, beyond[p]);
-      }
-      verdict = hn::IfThenElse(
-        hn::RebindMask(di, hn::And(allUsable, outside)), hn::Set(di, KeyOutsideFrustum), verdict);
+      verdict = hn::IfThenElse(hn::RebindMask(di, hn::And(allUsable, OutsideFrustum(d, x, y, z))),
+        hn::Set(di, KeyOutsideFrustum), verdict);
     }
     if (rules.viewportWidth > 0 && rules.viewportHeight > 0)
     {

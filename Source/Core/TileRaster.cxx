@@ -788,6 +788,23 @@ HWY_INLINE V EntryCoordinates(D d, const TransferFunctionTable& tf, V scalar)
   return hn::IfThenElseZero(hn::Gt(u, hn::Zero(d)), hn::Min(u, hn::Set(d, tf.size - 1.0)));
 }
 
+/// Segment's result per lane from the premultiplied colour and the opacity: rgba[k][l] the
+/// colour (k < 3, not premultiplied; 0 where nothing was seen) and the opacity (k = 3).
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE void StoreSegmentLanes(D d, const V colour[3], V alpha, float rgba[4][SegmentLanes])
+{
+  const auto seen = hn::Gt(alpha, hn::Zero(d));
+  const hn::Rebind<float, D> df;
+  HWY_ALIGN float out[SegmentLanes] = {};
+  for (int k = 0; k < 3; ++k)
+  {
+    hn::Store(hn::DemoteTo(df, hn::IfThenElseZero(seen, hn::Div(colour[k], alpha))), df, out);
+    std::copy(out, out + hn::Lanes(d), rgba[k]);
+  }
+  hn::Store(hn::DemoteTo(df, hn::IfThenElseZero(seen, alpha)), df, out);
+  std::copy(out, out + hn::Lanes(d), rgba[3]);
+}
+
 /**
  * PreIntegrationTable::Segment for the fragments front[l], back[l], length[l], l < Lanes(d):
  * rgba[k][l] its colour (k < 3, not premultiplied) and opacity (k = 3). The caller checks
@@ -867,16 +884,7 @@ void SegmentsOfLanes(D d, const SegmentTable& t, float inverseUnit, const float*
     }
     alpha = hn::IfThenElse(active, hn::Add(alpha, hn::Mul(hn::Sub(one, alpha), a)), alpha);
   }
-  const auto seen = hn::Gt(alpha, zero);
-  const hn::Rebind<float, D> df;
-  HWY_ALIGN float out[SegmentLanes] = {};
-  for (int k = 0; k < 3; ++k)
-  {
-    hn::Store(hn::DemoteTo(df, hn::IfThenElseZero(seen, hn::Div(colour[k], alpha))), df, out);
-    std::copy(out, out + hn::Lanes(d), rgba[k]);
-  }
-  hn::Store(hn::DemoteTo(df, hn::IfThenElseZero(seen, alpha)), df, out);
-  std::copy(out, out + hn::Lanes(d), rgba[3]);
+  StoreSegmentLanes(d, colour, alpha, rgba);
 }
 
 /**
@@ -1057,6 +1065,44 @@ void ShadeClipped(const RasterFrame& f, const TileTarget& tile, Mode mode, const
   }
 }
 
+/// Shades the covered pixels lo..hi of row y by the mode's (and the depth range's) path.
+void ShadeSpan(const RasterFrame& f, const TileTarget& tile, Mode mode, const Planes& p, int y,
+  int lo, int hi, WaitingFragments& waiting)
+{
+  if (f.clipToRange)
+  {
+    ShadeClipped(f, tile, mode, p, y, lo, hi, waiting);
+  }
+  else if (mode == Mode::Compatible)
+  {
+    ShadeCompatible(f, tile, p, y, lo, hi);
+  }
+  else
+  {
+    ShadeIntegrated(f, tile, mode, p, y, lo, hi, waiting);
+  }
+}
+
+/// Covers a triangle (X, Y) beyond the fixed-point range (a near-plane piece far off
+/// screen): clipped to a guard band, as OpenGL does, and its pieces covered with `span`,
+/// whose planes stay those of the whole triangle.
+template <class Span>
+void CoverGuardBand(const RasterFrame& f, const double X[3], const double Y[3], int x0, int x1,
+  int y0, int y1, Span& span)
+{
+  double px[9], py[9];
+  const int n = ClipToBox(X, Y, -GuardBand, f.width + GuardBand, f.height + GuardBand, px, py);
+  Edges edges;
+  for (int k = 1; k + 1 < n; ++k)
+  {
+    const double fanX[3] = { px[0], px[k], px[k + 1] }, fanY[3] = { py[0], py[k], py[k + 1] };
+    if (SetUpEdges(fanX, fanY, edges))
+    {
+      CoverSpans(edges, x0, x1, y0, y1, span);
+    }
+  }
+}
+
 /**
  * Rasterizes the triangle of corners v into the tile. Coverage comes first: the corners'
  * values and the attribute planes are set up only once a pixel is known to be covered.
@@ -1104,23 +1150,10 @@ void DrawTriangle(const RasterFrame& f, const TileTarget& tile, Mode mode, Corne
   };
   auto span = [&](int y, int lo, int hi)
   {
-    const Planes* p = getPlanes();
-    if (!p)
+    if (const Planes* p = getPlanes())
     {
-      return;
-    }
-    counts.fragments += static_cast<std::size_t>(hi - lo + 1);
-    if (f.clipToRange)
-    {
-      ShadeClipped(f, tile, mode, *p, y, lo, hi, waiting);
-    }
-    else if (mode == Mode::Compatible)
-    {
-      ShadeCompatible(f, tile, *p, y, lo, hi);
-    }
-    else
-    {
-      ShadeIntegrated(f, tile, mode, *p, y, lo, hi, waiting);
+      counts.fragments += static_cast<std::size_t>(hi - lo + 1);
+      ShadeSpan(f, tile, mode, *p, y, lo, hi, waiting);
     }
   };
   const int x0 = static_cast<int>(bx0), x1 = static_cast<int>(bx1);
@@ -1143,18 +1176,7 @@ void DrawTriangle(const RasterFrame& f, const TileTarget& tile, Mode mode, Corne
     }
     return;
   }
-  // Beyond the fixed-point range (a near-plane piece far off screen): clip to a guard band,
-  // as OpenGL does, and cover the pieces; the planes stay those of the whole triangle.
-  double px[9], py[9];
-  const int n = ClipToBox(X, Y, -GuardBand, f.width + GuardBand, f.height + GuardBand, px, py);
-  for (int k = 1; k + 1 < n; ++k)
-  {
-    const double fanX[3] = { px[0], px[k], px[k + 1] }, fanY[3] = { py[0], py[k], py[k + 1] };
-    if (SetUpEdges(fanX, fanY, edges))
-    {
-      CoverSpans(edges, x0, x1, y0, y1, span);
-    }
-  }
+  CoverGuardBand(f, X, Y, x0, x1, y0, y1, span);
 }
 
 #include "FanRaster-inl.h" // FanPath: this namespace's fan path (a fragment of this file)

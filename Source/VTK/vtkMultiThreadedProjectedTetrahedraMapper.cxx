@@ -783,17 +783,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetUpFrame(vtkRenderer* renderer
   {
     frame.cullFrustum = false;
   }
-  in.Pipeline.SetOrderMethod(this->OrderMethod == PARTITION_SORT ? mtpt::OrderMethod::PartitionSort
-                                                                 : mtpt::OrderMethod::RadixSort,
-    static_cast<std::size_t>(this->MaxSubArraySize));
-  in.Pipeline.SetReuse(this->ReuseResults);
-  in.Pipeline.SetOrderMutationForTesting(OrderMutationFromEnvironment());
-  in.Pipeline.SetStageCallback(
-    [this, window](mtpt::Stage stage)
-    {
-      this->ReportProgress(window, StageProgress(stage));
-      return window->CheckAbortStatus() == 0;
-    });
+  this->ConfigurePipeline(window);
 
   std::string warning;
   draw.unitDistance = mtpt::UnitDistance(volume->GetProperty(), &warning);
@@ -827,6 +817,22 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetUpFrame(vtkRenderer* renderer
     this->ReportProgress(window, begin + (1.0 - begin) * fraction);
     return window->CheckAbortStatus() == 0;
   };
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::ConfigurePipeline(vtkOpenGLRenderWindow* window)
+{
+  mtpt::FramePipeline& pipeline = this->Internal->Pipeline;
+  pipeline.SetOrderMethod(this->OrderMethod == PARTITION_SORT ? mtpt::OrderMethod::PartitionSort
+                                                              : mtpt::OrderMethod::RadixSort,
+    static_cast<std::size_t>(this->MaxSubArraySize));
+  pipeline.SetReuse(this->ReuseResults);
+  pipeline.SetOrderMutationForTesting(OrderMutationFromEnvironment());
+  pipeline.SetStageCallback(
+    [this, window](mtpt::Stage stage)
+    {
+      this->ReportProgress(window, StageProgress(stage));
+      return window->CheckAbortStatus() == 0;
+    });
 }
 
 void vtkMultiThreadedProjectedTetrahedraMapper::ChooseImageSize(

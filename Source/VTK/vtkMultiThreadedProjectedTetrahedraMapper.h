@@ -547,6 +547,8 @@ private:
   void AdjustDetail(vtkRenderer* renderer, vtkVolume* volume);
   void SetUpFrame(vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window,
     mtpt::RenderBackend* backend, mtpt::FrameInput& frame, mtpt::BackendFrame& draw);
+  /// The pipeline's settings for the frame, and its progress and abort callback.
+  void ConfigurePipeline(vtkOpenGLRenderWindow* window);
   void DrawFrame(mtpt::RenderBackend* backend, mtpt::BackendFrame& draw);
   void ReportProgress(vtkOpenGLRenderWindow* window, double fraction);
 

@@ -65,6 +65,34 @@ def _choice(name, value, choices):
     raise ValueError(f"{name} must be one of {', '.join(repr(c) for c in choices)}, not {value!r}")
 
 
+def _mapper_like(plotter, pyvista_mapper):
+    """An MTPT mapper with the input, scalars and colouring of PyVista's mapper."""
+    mapper = MultiThreadedProjectedTetrahedraMapper(theme=getattr(plotter, "_theme", None))
+    if _BaseVolumeMapper is not None and isinstance(pyvista_mapper, _BaseVolumeMapper):
+        mapper.lookup_table = pyvista_mapper.lookup_table
+        mapper.scalar_range = pyvista_mapper.scalar_range
+    mapper.SetInputDataObject(0, pyvista_mapper.GetInputDataObject(0, 0))
+    mapper.SetScalarMode(pyvista_mapper.GetScalarMode())
+    mapper.SetArrayAccessMode(pyvista_mapper.GetArrayAccessMode())
+    if pyvista_mapper.GetArrayName():
+        mapper.SelectScalarArray(pyvista_mapper.GetArrayName())
+    else:
+        mapper.SelectScalarArray(pyvista_mapper.GetArrayId())
+    return mapper
+
+
+def _replace_mapper(plotter, actor, old, new):
+    """Every reference PyVista keeps to the mapper, from `old` to `new`: the actor, the
+    plotter's current mapper (its scalar bar), and the scalar bars' mapper lists
+    (update_scalar_bar_range)."""
+    actor.SetMapper(new)
+    if getattr(plotter, "mapper", None) is old:
+        plotter.mapper = new
+    scalar_bars = getattr(plotter, "scalar_bars", None)
+    for mappers in getattr(scalar_bars, "_scalar_bar_mappers", {}).values():
+        mappers[:] = [new if m is old else m for m in mappers]
+
+
 def add_volume(plotter, volume, *, backend=None, shading_mode=None, image_sample_distance=None,
                number_of_threads=None, **kwargs):
     """Add a volume rendered by MTPT to a PyVista plotter; returns the volume actor.
@@ -125,18 +153,7 @@ def add_volume(plotter, volume, *, backend=None, shading_mode=None, image_sample
     if isinstance(actor, (list, tuple)):  # pragma: no cover (multi-block input)
         raise TypeError("add_volume() takes one data set; add the blocks one by one")
     pyvista_mapper = actor.GetMapper()
-
-    mapper = MultiThreadedProjectedTetrahedraMapper(theme=getattr(plotter, "_theme", None))
-    if _BaseVolumeMapper is not None and isinstance(pyvista_mapper, _BaseVolumeMapper):
-        mapper.lookup_table = pyvista_mapper.lookup_table
-        mapper.scalar_range = pyvista_mapper.scalar_range
-    mapper.SetInputDataObject(0, pyvista_mapper.GetInputDataObject(0, 0))
-    mapper.SetScalarMode(pyvista_mapper.GetScalarMode())
-    mapper.SetArrayAccessMode(pyvista_mapper.GetArrayAccessMode())
-    if pyvista_mapper.GetArrayName():
-        mapper.SelectScalarArray(pyvista_mapper.GetArrayName())
-    else:
-        mapper.SelectScalarArray(pyvista_mapper.GetArrayId())
+    mapper = _mapper_like(plotter, pyvista_mapper)
     if backend is not None:
         mapper.SetBackend(backend)
     if shading_mode is not None:
@@ -147,14 +164,7 @@ def add_volume(plotter, volume, *, backend=None, shading_mode=None, image_sample
     if number_of_threads is not None:
         mapper.SetNumberOfThreads(int(number_of_threads))
 
-    # Every reference PyVista keeps to the mapper: the actor, the plotter's current mapper
-    # (its scalar bar), and the scalar bars' mapper lists (update_scalar_bar_range).
-    actor.SetMapper(mapper)
-    if getattr(plotter, "mapper", None) is pyvista_mapper:
-        plotter.mapper = mapper
-    scalar_bars = getattr(plotter, "scalar_bars", None)
-    for mappers in getattr(scalar_bars, "_scalar_bar_mappers", {}).values():
-        mappers[:] = [mapper if m is pyvista_mapper else m for m in mappers]
+    _replace_mapper(plotter, actor, pyvista_mapper, mapper)
     if render:
         plotter.render()
     return actor
