@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# Runs scripts/check-function-length.py (with its self-test) on Source/ with lizard, a
+# pinned version from PyPI in a virtual environment under WORK-DIR, made once and reused.
+# Usage: Testing/function-length.sh PYTHON SOURCE-DIR WORK-DIR
+set -euo pipefail
+python="${1:?usage: $0 PYTHON SOURCE-DIR WORK-DIR}"
+source="$(cd "${2:?usage: $0 PYTHON SOURCE-DIR WORK-DIR}" && pwd)"
+venv="${3:?usage: $0 PYTHON SOURCE-DIR WORK-DIR}/lizard-venv"
+lizard="lizard==1.24.3"
+if ! "$venv/bin/python" -m pip show --quiet "${lizard%%=*}" 2>/dev/null \
+  || [ "$("$venv/bin/python" -m pip show "${lizard%%=*}" | sed -n 's/^Version: //p')" != "${lizard##*=}" ]; then
+  rm -rf "$venv"
+  "$python" -m venv "$venv"
+  "$venv/bin/python" -m pip install --quiet --disable-pip-version-check "$lizard"
+fi
+exec "$venv/bin/python" "$source/scripts/check-function-length.py" --self-test "$source/Source"
