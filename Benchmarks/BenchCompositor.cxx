@@ -188,7 +188,7 @@ int main(int argc, char* argv[])
     const std::vector<float> depth(static_cast<std::size_t>(size) * size, 1.0f);
     settings.opaqueDepth = depth.data();
     std::vector<float> image(4 * static_cast<std::size_t>(size) * size);
-    input.viewportWidth = input.viewportHeight = size;
+    input.imageSize = { size, size };
     mtpt::FramePipeline pipeline;
     pipeline.SetReuse(true);
     mtpt::Compositor compositor;

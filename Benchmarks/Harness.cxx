@@ -585,8 +585,8 @@ StageFigures FiguresOf(vtkUnstructuredGridVolumeMapper* mapper)
   f.sorted = static_cast<long long>(ours->GetNumberOfTetrahedra());
   f.pixelCulled = static_cast<long long>(ours->GetNumberOfPixelCulledCells());
   f.imageSampleDistance = ours->GetImageSampleDistance();
-  f.imageSize[0] = ours->GetImageViewportSize()[0];
-  f.imageSize[1] = ours->GetImageViewportSize()[1];
+  f.imageSize[0] = ours->GetImageInUseSize()[0];
+  f.imageSize[1] = ours->GetImageInUseSize()[1];
   f.backend = ours->GetLastBackend() == vtkMultiThreadedProjectedTetrahedraMapper::CPU_BACKEND
     ? "CPU"
     : "OpenGL";

@@ -234,7 +234,7 @@ struct StageFigures
   double fragments = 0;
   long long sorted = 0, pixelCulled = 0;
   double imageSampleDistance = 1; ///< the distance the frame was composited at
-  int imageSize[2] = { 0, 0 };    ///< the composited image's size
+  int imageSize[2] = { 0, 0 };    ///< the composited image's size (ImageInUseSize)
   std::string backend;            ///< "CPU" or "OpenGL": the backend that drew
 };
 

@@ -498,8 +498,8 @@ inline Projection DecomposeToFan(
 /// viewport): all four corners usable and no pixel centre in their box.
 inline bool CoversNoPixel(const DecomposeInput& input, const ProjectedPoint* const corners[4])
 {
-  return input.viewportWidth > 0 && input.viewportHeight > 0 && AllUsable(corners) &&
-    !detail::CoversPixelCentre(corners, input.viewportWidth, input.viewportHeight);
+  return !input.imageSize.Empty() && AllUsable(corners) &&
+    !detail::CoversPixelCentre(corners, input.imageSize);
 }
 
 /// The tetrahedron `corners` into slot-local records with global index base `base`,
@@ -946,7 +946,7 @@ void DecomposeAllByRank(const Access& cells, const DecomposeInput& input, const 
   DecomposeInput cellInput = input;
   if (input.cellsCoverPixels)
   {
-    cellInput.viewportWidth = cellInput.viewportHeight = 0;
+    cellInput.imageSize = {};
   }
   const std::uint32_t* list = input.cellList;
   const auto n = static_cast<std::int64_t>(list ? input.cellListCount : input.cells.cellCount);

@@ -141,8 +141,7 @@ KeyCounts ComputeVisibleDepthKeys(const ProjectedPoint* points, std::size_t poin
   detail::DispatchCells(cells, pointCount,
     [&](const auto& access)
     {
-      const detail::KeyRules rules{ perspective, culling.frustum, culling.viewportWidth,
-        culling.viewportHeight };
+      const detail::KeyRules rules{ perspective, culling.frustum, culling.imageSize };
       counts.kept = detail::CompactInOrder(n, detail::ResolveThreads(threads), keys,
         [&](std::size_t begin, std::size_t end, SortKey* out)
         {

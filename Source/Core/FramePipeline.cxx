@@ -172,8 +172,7 @@ bool FramePipeline::Prepare(const FrameInput& input, int threads)
   d.cells = input.cells;
   d.scalars = input.scalars;
   d.colours = input.colours;
-  d.viewportWidth = input.viewportWidth;
-  d.viewportHeight = input.viewportHeight;
+  d.imageSize = input.imageSize;
   d.cellsCoverPixels = true; // the depth keys culled with this viewport (KeyCulling)
   d.cellList = this->Selection.Selected();
   d.cellListCount = this->Selection.SelectedCount();
@@ -185,7 +184,7 @@ bool FramePipeline::UpdateOrder(const FrameInput& input, const MeshKey& mesh, in
 {
   // 3. Depth keys, and the near plane's cut.
   const DepthKeyStage::Key keysKey{ this->Transform.Version(), this->Selection.Version(),
-    input.perspective, { input.cullFrustum, input.viewportWidth, input.viewportHeight } };
+    input.perspective, { input.cullFrustum, input.imageSize } };
   const ProjectedPoint* points = this->Transform.Points().data();
   const bool keyed = Timed(this->LastTimes.keys,
     [&]
@@ -260,7 +259,7 @@ DecompositionStage::Key FramePipeline::WindowKey(std::size_t& first, std::size_t
   count = std::min(count, this->SortedSize - first);
   ++this->LastStats.batches;
   const DecomposeInput& in = this->DecomposeState;
-  return { this->Order.Version(), first, count, in.viewportWidth, in.viewportHeight };
+  return { this->Order.Version(), first, count, in.imageSize };
 }
 
 template <typename Buffers>

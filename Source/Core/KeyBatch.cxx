@@ -125,7 +125,7 @@ void ComputeKeyBatchImpl(const ProjectedPoint* points, const KeyBatch& batch, in
       verdict = hn::IfThenElse(hn::RebindMask(di, hn::And(allUsable, OutsideFrustum(d, x, y, z))),
         hn::Set(di, KeyOutsideFrustum), verdict);
     }
-    if (rules.viewportWidth > 0 && rules.viewportHeight > 0)
+    if (!rules.imageSize.Empty())
     {
       auto minX = x[0], maxX = x[0], minY = y[0], maxY = y[0];
       for (int i = 1; i < 4; ++i)
@@ -135,8 +135,8 @@ void ComputeKeyBatchImpl(const ProjectedPoint* points, const KeyBatch& batch, in
         minY = hn::Min(minY, y[i]);
         maxY = hn::Max(maxY, y[i]);
       }
-      const auto covers = hn::And(HoldsCentre(d, minX, maxX, rules.viewportWidth),
-        HoldsCentre(d, minY, maxY, rules.viewportHeight));
+      const auto covers = hn::And(HoldsCentre(d, minX, maxX, rules.imageSize.width),
+        HoldsCentre(d, minY, maxY, rules.imageSize.height));
       const auto none = hn::AndNot(covers, allUsable);
       // The frustum test comes first (CellKey): only lanes it kept can cover no pixel.
       verdict =

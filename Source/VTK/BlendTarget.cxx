@@ -101,13 +101,14 @@ bool BlendTarget::Capture(
 }
 
 bool BlendTarget::CaptureSampled(vtkOpenGLRenderWindow* window, const int origin[2],
-  const int size[2], const int sampled[2], BlendTarget& viewport, std::string& error)
+  const int size[2], const ImageSize& sampled, BlendTarget& viewport, std::string& error)
 {
+  const int sampledSize[2] = { sampled.width, sampled.height };
   vtkOpenGLState* state = window->GetState();
   int windowFramebuffer = 0;
   state->vtkglGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &windowFramebuffer);
   state->PushFramebufferBindings();
-  if (!viewport.Allocate(window, size, error) || !this->Allocate(window, sampled, error))
+  if (!viewport.Allocate(window, size, error) || !this->Allocate(window, sampledSize, error))
   {
     state->PopFramebufferBindings();
     return false;
@@ -131,7 +132,7 @@ bool BlendTarget::CaptureSampled(vtkOpenGLRenderWindow* window, const int origin
     viewport.Framebuffer->Bind(vtkOpenGLFramebufferObject::GetReadMode());
     this->Framebuffer->Bind(vtkOpenGLFramebufferObject::GetDrawMode());
     this->Framebuffer->ActivateDrawBuffer(0);
-    state->vtkglBlitFramebuffer(0, 0, size[0], size[1], 0, 0, sampled[0], sampled[1],
+    state->vtkglBlitFramebuffer(0, 0, size[0], size[1], 0, 0, sampled.width, sampled.height,
       GL_DEPTH_BUFFER_BIT, GL_NEAREST);
     state->vtkglClearColor(0.0f, 0.0f, 0.0f, 0.0f);
     state->vtkglColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);

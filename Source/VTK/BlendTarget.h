@@ -26,6 +26,8 @@
 #include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
 #include "vtkNew.h"
 
+#include "mtpt/Records.h"
+
 #include <memory>
 #include <string>
 
@@ -66,7 +68,7 @@ public:
    * set when a target cannot be made or a copy fails; the bindings are then restored already.
    */
   bool CaptureSampled(vtkOpenGLRenderWindow* window, const int origin[2], const int size[2],
-    const int sampled[2], BlendTarget& viewport, std::string& error);
+    const ImageSize& sampled, BlendTarget& viewport, std::string& error);
 
   /// Pops the bindings Capture pushed: the window's framebuffer is bound again.
   void Restore(vtkOpenGLRenderWindow* window);

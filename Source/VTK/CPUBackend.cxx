@@ -93,7 +93,8 @@ bool CPUBackend::Draw(const BackendFrame& frame, BackendTimes& times)
   start = Clock::now();
   const PixelRegion region = this->Compositing.TouchedRegion();
   const PixelRegion target = frame.Sampled()
-    ? MagnifiedRegion(region, frame.imageSize[0], frame.imageSize[1], frame.size[0], frame.size[1])
+    ? MagnifiedRegion(
+        region, frame.imageSize.width, frame.imageSize.height, frame.size[0], frame.size[1])
     : region;
   const bool colourRead = target.Empty() || this->ReadColour(frame, target);
   this->Target.Restore(frame.window);
@@ -147,9 +148,9 @@ bool CPUBackend::ReadDepth(const BackendFrame& frame)
   if (sampled)
   {
     // Each sampled pixel is tested against the viewport pixel under its centre.
-    this->Depth.resize(static_cast<std::size_t>(frame.imageSize[0]) * frame.imageSize[1]);
+    this->Depth.resize(static_cast<std::size_t>(frame.imageSize.width) * frame.imageSize.height);
     SampleDepth(viewport.data(), frame.size[0], frame.size[1], this->Depth.data(),
-      frame.imageSize[0], frame.imageSize[1], frame.threads);
+      frame.imageSize.width, frame.imageSize.height, frame.threads);
   }
   return true;
 }
@@ -169,8 +170,7 @@ CPUBackend::ImageKey CPUBackend::ImageKey::Of(const BackendFrame& frame)
   key.order = frame.pipeline->OrderVersionNumber();
   key.tables = frame.tables->Version();
   key.batch = frame.batchSize;
-  key.size[0] = frame.imageSize[0];
-  key.size[1] = frame.imageSize[1];
+  key.size = frame.imageSize;
   key.shading = frame.shading;
   key.vertexColours = frame.vertexColours;
   key.unitDistance = frame.unitDistance;
@@ -182,7 +182,7 @@ bool CPUBackend::ImageKey::operator==(const ImageKey& o) const
 {
   const PerspectiveInterpolation &a = this->interpolation, &b = o.interpolation;
   return pipeline == o.pipeline && order == o.order && tables == o.tables && batch == o.batch &&
-    size[0] == o.size[0] && size[1] == o.size[1] && shading == o.shading &&
+    size == o.size && shading == o.shading &&
     vertexColours == o.vertexColours && unitDistance == o.unitDistance &&
     a.perspective == b.perspective && a.inverseWScale == b.inverseWScale &&
     a.inverseWOffset == b.inverseWOffset && a.scaleX == b.scaleX && a.shiftX == b.shiftX &&
@@ -233,8 +233,8 @@ void CPUBackend::Composite(const BackendFrame& frame, BackendTimes& times, const
 {
   CompositeSettings& settings = this->Settings;
   settings = CompositeSettings{};
-  settings.width = frame.imageSize[0];
-  settings.height = frame.imageSize[1];
+  settings.width = frame.imageSize.width;
+  settings.height = frame.imageSize.height;
   settings.transferFunction = frame.tables->Table();
   settings.unitDistance = frame.unitDistance;
   settings.opaqueDepth = this->Depth.empty() || ranges ? nullptr : this->Depth.data();
@@ -268,7 +268,8 @@ void CPUBackend::Magnify(
   const std::size_t width = static_cast<std::size_t>(region.x1 - region.x0);
   this->Sampled.resize(4 * width * static_cast<std::size_t>(region.y1 - region.y0));
   this->Compositing.Resolve(region, nullptr, this->Sampled.data(), frame.threads);
-  const SampledImage image{ this->Sampled.data(), region, frame.imageSize[0], frame.imageSize[1] };
+  const SampledImage image{ this->Sampled.data(), region, frame.imageSize.width,
+    frame.imageSize.height };
   MagnifyOver(image, frame.size[0], frame.size[1], target, this->Below.data(), this->Region.data(),
     frame.threads);
 }

@@ -78,7 +78,7 @@ private:
     const FramePipeline* pipeline = nullptr;
     std::uint64_t order = 0, tables = 0;
     std::size_t batch = 0;
-    int size[2] = { 0, 0 };
+    ImageSize size;
     Shading shading = Shading::VTKCompatible;
     bool vertexColours = false;
     double unitDistance = 0;

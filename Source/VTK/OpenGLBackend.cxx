@@ -274,9 +274,10 @@ bool OpenGLBackend::DrawBatches(
   vtkOpenGLState::ScopedglScissor scissor(state);
   if (this->SampledTargetUsed || this->FloatTargetUsed || this->PeelTargetUsed)
   {
-    const int* size = this->SampledTargetUsed ? frame.imageSize : frame.size;
-    state->vtkglViewport(0, 0, size[0], size[1]);
-    state->vtkglScissor(0, 0, size[0], size[1]);
+    const ImageSize size = this->SampledTargetUsed ? frame.imageSize
+                                                   : ImageSize{ frame.size[0], frame.size[1] };
+    state->vtkglViewport(0, 0, size.width, size.height);
+    state->vtkglScissor(0, 0, size.width, size.height);
   }
   // A peeling pass may have left another blend equation (GL_MAX).
   GLint equation[2] = { GL_FUNC_ADD, GL_FUNC_ADD };

@@ -17,6 +17,7 @@
 #define mtpt_RenderBackend_h
 
 #include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
+#include "mtpt/Records.h"
 #include "mtpt/Shading.h"
 
 #include <cstddef>
@@ -49,7 +50,7 @@ struct BackendFrame
    * mtpt/ImageSampling.h): `size` at distance 1, else fewer (or more) pixels, magnified (or
    * minified) onto the viewport with bilinear filtering. NDC span the viewport either way.
    */
-  int imageSize[2] = { 0, 0 };
+  ImageSize imageSize;
   FramePipeline* pipeline = nullptr;
   const TransferFunctionTables* tables = nullptr;
   Shading shading = Shading::VTKCompatible;
@@ -77,7 +78,7 @@ struct BackendFrame
   std::function<bool(double)> afterBatch;
 
   /// Whether the image is composited at another size than the viewport's.
-  bool Sampled() const { return imageSize[0] != size[0] || imageSize[1] != size[1]; }
+  bool Sampled() const { return imageSize.width != size[0] || imageSize.height != size[1]; }
 };
 
 /// Seconds spent by the last Draw, and how it ended.

@@ -762,8 +762,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetUpFrame(vtkRenderer* renderer
   {
     draw.peel = &in.Peel;
     draw.origin[0] = draw.origin[1] = 0;
-    draw.imageSize[0] = draw.size[0];
-    draw.imageSize[1] = draw.size[1];
+    draw.imageSize = { draw.size[0], draw.size[1] };
   }
   draw.clipping = mtpt::DepthClipping::FromProjection(frame.projection);
   if (this->CullInvisibleCells)
@@ -775,8 +774,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetUpFrame(vtkRenderer* renderer
     frame.opacityVersion = in.Tables.Version();
     if (backend->SamplesPixelCentresOnly(draw))
     {
-      frame.viewportWidth = draw.imageSize[0];
-      frame.viewportHeight = draw.imageSize[1];
+      frame.imageSize = draw.imageSize;
     }
   }
   else
@@ -838,30 +836,24 @@ void vtkMultiThreadedProjectedTetrahedraMapper::ConfigurePipeline(vtkOpenGLRende
 void vtkMultiThreadedProjectedTetrahedraMapper::ChooseImageSize(
   mtpt::RenderBackend* backend, vtkOpenGLRenderWindow* window, mtpt::BackendFrame& draw)
 {
-  int sampled[2];
-  for (int i = 0; i < 2; ++i)
-  {
-    draw.imageSize[i] = draw.size[i];
-    sampled[i] = mtpt::SampledImageSize(draw.size[i], this->ImageSampleDistance);
-  }
+  const int sampled[2] = { mtpt::SampledImageSize(draw.size[0], this->ImageSampleDistance),
+    mtpt::SampledImageSize(draw.size[1], this->ImageSampleDistance) };
+  draw.imageSize = { draw.size[0], draw.size[1] };
   const int limit = sampled[0] == draw.size[0] && sampled[1] == draw.size[1]
     ? 0 // distance 1, or close enough to give the viewport's size
     : backend->SampledImageLimit(window);
   if (limit > 0)
   {
-    bool capped = false;
-    for (int i = 0; i < 2; ++i)
-    {
-      const int most = std::min(limit, MaximumSamplesPerPixel * draw.size[i]);
-      capped = capped || sampled[i] > most;
-      draw.imageSize[i] = std::min(sampled[i], most);
-    }
-    if (capped)
+    const int most[2] = { std::min(limit, MaximumSamplesPerPixel * draw.size[0]),
+      std::min(limit, MaximumSamplesPerPixel * draw.size[1]) };
+    draw.imageSize = { std::min(sampled[0], most[0]), std::min(sampled[1], most[1]) };
+    if (sampled[0] > most[0] || sampled[1] > most[1])
     {
       std::ostringstream message;
       message << "ImageSampleDistance " << this->ImageSampleDistance << " asks for an image of "
-              << sampled[0] << " x " << sampled[1] << " pixels; drawing " << draw.imageSize[0]
-              << " x " << draw.imageSize[1] << " (at most " << MaximumSamplesPerPixel
+              << sampled[0] << " x " << sampled[1] << " pixels; drawing "
+              << draw.imageSize.width << " x " << draw.imageSize.height << " (at most "
+              << MaximumSamplesPerPixel
               << " samples per pixel side and " << limit << " pixels per side here)";
       if (this->Internal->Report(this, message.str()))
       {
@@ -869,8 +861,8 @@ void vtkMultiThreadedProjectedTetrahedraMapper::ChooseImageSize(
       }
     }
   }
-  this->ImageViewportSize[0] = draw.imageSize[0];
-  this->ImageViewportSize[1] = draw.imageSize[1];
+  this->ImageInUseSize[0] = draw.imageSize.width;
+  this->ImageInUseSize[1] = draw.imageSize.height;
 }
 
 void vtkMultiThreadedProjectedTetrahedraMapper::DrawFrame(
@@ -953,8 +945,8 @@ void vtkMultiThreadedProjectedTetrahedraMapper::PrintSelf(ostream& os, vtkIndent
   os << indent << "CellFraction: " << this->CellFraction << "\n";
   os << indent << "MinimumCellFraction: " << this->MinimumCellFraction << "\n";
   os << indent << "AutoAdjustCellFraction: " << this->AutoAdjustCellFraction << "\n";
-  os << indent << "ImageViewportSize (last frame): " << this->ImageViewportSize[0] << " x "
-     << this->ImageViewportSize[1] << "\n";
+  os << indent << "ImageInUseSize (last frame): " << this->ImageInUseSize[0] << " x "
+     << this->ImageInUseSize[1] << "\n";
   const mtpt::FrameStats& stats = this->Internal->Pipeline.Stats();
   os << indent << "Last frame culled: " << stats.opacityCulled << " transparent, "
      << stats.frustumCulled << " outside the view, " << stats.pixelCulled << " covering no pixel; "

@@ -399,7 +399,7 @@ public:
 
   /// The size of the image the last Render composited the volume at: the viewport's at
   /// image sample distance 1, else floor(viewport / ImageSampleDistance) (0, 0 before any).
-  vtkGetVectorMacro(ImageViewportSize, int, 2);
+  vtkGetVectorMacro(ImageInUseSize, int, 2);
 
   /// Tetrahedra sorted and decomposed by the last Render (after culling).
   vtkIdType GetNumberOfTetrahedra();
@@ -499,7 +499,7 @@ protected:
   float CellFraction = 1.0f;
   float MinimumCellFraction = 0.05f;
   vtkTypeBool AutoAdjustCellFraction = 1;
-  int ImageViewportSize[2] = { 0, 0 };
+  int ImageInUseSize[2] = { 0, 0 };
 
   ///@{
   /**

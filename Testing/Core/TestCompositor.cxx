@@ -394,9 +394,9 @@ TEST(Compositor, CullingCellsThatCoverNoPixelChangesNothing)
   {
     mtpt::FramePipeline full, culled;
     ASSERT_TRUE(full.Run(input, 2));
-    input.viewportWidth = input.viewportHeight = size;
+    input.imageSize = { size, size };
     ASSERT_TRUE(culled.Run(input, 2));
-    input.viewportWidth = input.viewportHeight = 0;
+    input.imageSize = {};
     const mtpt::FrameStats& stats = culled.Stats();
     EXPECT_EQ(full.SortedCount(), mesh.CellCount());
     EXPECT_EQ(stats.sorted + stats.pixelCulled, mesh.CellCount());

@@ -50,7 +50,7 @@ mtpt::FrameInput Frame(const TetMesh& mesh, double azimuth, bool perspective)
   input.projection =
     perspective ? mtpt::test::Perspective(45, 1.0, 1, 10) : mtpt::test::Ortho(-2, 2, -2, 2, 1, 10);
   input.perspective = perspective;
-  input.viewportWidth = input.viewportHeight = 48;
+  input.imageSize = { 48, 48 };
   return input;
 }
 
@@ -60,8 +60,8 @@ std::vector<float> Composite(mtpt::FramePipeline& pipeline, const mtpt::FrameInp
   const std::vector<float>& table, std::size_t batch = 0)
 {
   mtpt::CompositeSettings settings;
-  settings.width = input.viewportWidth;
-  settings.height = input.viewportHeight;
+  settings.width = input.imageSize.width;
+  settings.height = input.imageSize.height;
   settings.transferFunction = { table.data(), static_cast<int>(table.size() / 4), -2.0, 3.0 };
   settings.unitDistance = 0.3;
   mtpt::Compositor compositor;
@@ -170,7 +170,7 @@ TEST(FramePipeline, OpacityAndFrustumCullingLeaveTheImageUnchanged)
                                    : mtpt::test::Ortho(-1.2, 0.8, -1, 1, 1, 10); // crops
     mtpt::FrameInput unculled = input; // no culling of any kind
     unculled.cullFrustum = false;
-    unculled.viewportWidth = unculled.viewportHeight = 0;
+    unculled.imageSize = {};
     mtpt::FramePipeline all;
     ASSERT_TRUE(all.Prepare(unculled, 2));
     EXPECT_EQ(all.SortedCount(), mesh.CellCount());
@@ -283,7 +283,7 @@ TEST(FramePipeline, SmallRotationsSortFromThePreviousOrderWithTheSameResult)
     // No pixel culling: with it, cells that start or stop covering a pixel centre change the
     // set of sorted cells, and only the same set can be re-sorted from the previous order.
     mtpt::FrameInput input = Frame(mesh, azimuth, perspective);
-    input.viewportWidth = input.viewportHeight = 0;
+    input.imageSize = {};
     input.projection = perspective ? mtpt::test::Perspective(70, 1.0, 1, 10)
                                    : mtpt::test::Ortho(-3, 3, -3, 3, 1, 10); // all in view
     ASSERT_TRUE(pipeline.Prepare(input, 2));
@@ -293,7 +293,7 @@ TEST(FramePipeline, SmallRotationsSortFromThePreviousOrderWithTheSameResult)
       azimuth += step;
       const mtpt::Matrix4 projection = input.projection;
       input = Frame(mesh, azimuth, perspective);
-      input.viewportWidth = input.viewportHeight = 0;
+      input.imageSize = {};
       input.projection = projection;
       ASSERT_TRUE(pipeline.Prepare(input, 2));
       fromPrevious += pipeline.Stats().orderFromPrevious;

@@ -390,7 +390,7 @@ TEST_P(DecomposeSimd, BatchedDecompositionIsTheScalarOneBitForBit)
         input.pointCount = points;
         input.cells = mesh.Cells();
         input.scalars = scalars;
-        input.viewportWidth = input.viewportHeight = viewport;
+        input.imageSize = { viewport, viewport };
         // A rank per cell, shuffled; a window of them, not a multiple of any batch.
         std::vector<std::uint32_t> rank(n);
         for (std::size_t c = 0; c < n; ++c)

@@ -99,7 +99,7 @@ std::vector<double> RenderMTPT(const Mesh& mesh, const View& v, bool preIntegrat
   input.modelView = v.modelView;
   input.projection = v.projection;
   input.perspective = v.perspective;
-  input.viewportWidth = input.viewportHeight = v.size;
+  input.imageSize = { v.size, v.size };
   mtpt::FramePipeline pipeline;
   EXPECT_TRUE(pipeline.Run(input, 2));
   mtpt::CompositeSettings settings;

@@ -188,7 +188,7 @@ mtpt::FrameInput Frame(const TetMesh& mesh, double azimuth)
     { r * std::sin(azimuth), 1.2, r * std::cos(azimuth) }, { 0, 0, 0 }, { 0, 1, 0 });
   input.projection = mtpt::test::Perspective(45, 1.0, 1, 10);
   input.perspective = true;
-  input.viewportWidth = input.viewportHeight = 64;
+  input.imageSize = { 64, 64 };
   return input;
 }
 

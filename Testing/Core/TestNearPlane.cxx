@@ -155,7 +155,7 @@ struct InsideFrame
     input.projection = perspective ? mtpt::test::Perspective(70, 1.0, nearDistance, 10)
                                    : mtpt::test::Ortho(-0.7, 0.7, -0.7, 0.7, nearDistance, 10);
     input.perspective = perspective;
-    input.viewportWidth = input.viewportHeight = size;
+    input.imageSize = { size, size };
   }
 
   std::vector<float> Render(int threads, mtpt::FrameStats* stats = nullptr)

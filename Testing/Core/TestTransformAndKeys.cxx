@@ -250,7 +250,7 @@ TEST_P(KeySimd, VisibleKeysAreTheScalarKeysOfTheCellsKept)
       {
         SCOPED_TRACE(::testing::Message()
           << "perspective " << view.perspective << ", frustum " << culling.frustum << ", viewport "
-          << culling.viewportWidth << "x" << culling.viewportHeight << ", list "
+          << culling.imageSize.width << "x" << culling.imageSize.height << ", list "
           << (list != nullptr));
         std::vector<mtpt::SortKey> expected;
         mtpt::KeyCounts expectedCounts;
@@ -286,9 +286,8 @@ TEST_P(KeySimd, VisibleKeysAreTheScalarKeysOfTheCellsKept)
               ++expectedCounts.frustumCulled;
               continue;
             }
-            if (culling.viewportWidth > 0 && culling.viewportHeight > 0 &&
-              !mtpt::detail::CoversPixelCentre(
-                corners, culling.viewportWidth, culling.viewportHeight))
+            if (!culling.imageSize.Empty() &&
+              !mtpt::detail::CoversPixelCentre(corners, culling.imageSize))
             {
               ++expectedCounts.pixelCulled;
               continue;

@@ -386,9 +386,9 @@ void DecodeCamera(FuzzedDataProvider& in, mtpt::FrameInput& frame)
   }
   frame.modelView = view;
 
-  frame.viewportWidth = in.ConsumeIntegralInRange<int>(1, MaxViewport);
-  frame.viewportHeight = in.ConsumeIntegralInRange<int>(1, MaxViewport);
-  const double aspect = static_cast<double>(frame.viewportWidth) / frame.viewportHeight;
+  frame.imageSize.width = in.ConsumeIntegralInRange<int>(1, MaxViewport);
+  frame.imageSize.height = in.ConsumeIntegralInRange<int>(1, MaxViewport);
+  const double aspect = static_cast<double>(frame.imageSize.width) / frame.imageSize.height;
   const double nearZ = in.PickValueInArray({ 0.1, 1e-3, 1.0, 3.0, 1e-6 });
   const double farZ = nearZ + in.PickValueInArray({ 10.0, 1e-3, 100.0, 1e6, 3.0 });
   if (frame.perspective)
@@ -615,7 +615,7 @@ void Dump(const Mesh& mesh, const mtpt::FrameInput& frame, const mtpt::FramePipe
     }
   }
   std::fprintf(stderr, "viewport %dx%d, image %dx%d, cull frustum %d, opacity table %d\n",
-    frame.viewportWidth, frame.viewportHeight, settings.width, settings.height, frame.cullFrustum,
+    frame.imageSize.width, frame.imageSize.height, settings.width, settings.height, frame.cullFrustum,
     frame.opacity.size);
   std::fprintf(
     stderr, "colour table [%.9g, %.9g], %d entries:\n", table.low, table.high, table.size);
@@ -664,7 +664,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const bool cullPixels = in.ConsumeBool();
   if (!cullPixels)
   {
-    frame.viewportWidth = frame.viewportHeight = 0; // multisampled target: no pixel culling
+    frame.imageSize = {}; // multisampled target: no pixel culling
   }
   Table opacity, colour;
   if (in.ConsumeBool())
@@ -679,9 +679,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const int threadsB = in.ConsumeIntegralInRange<int>(1, 3);
   const int variant = in.ConsumeIntegralInRange<int>(0, 4);
   const int width =
-    frame.viewportWidth > 0 ? frame.viewportWidth : in.ConsumeIntegralInRange(1, 16);
+    frame.imageSize.width > 0 ? frame.imageSize.width : in.ConsumeIntegralInRange(1, 16);
   const int height =
-    frame.viewportHeight > 0 ? frame.viewportHeight : in.ConsumeIntegralInRange(1, 16);
+    frame.imageSize.height > 0 ? frame.imageSize.height : in.ConsumeIntegralInRange(1, 16);
 
   mtpt::FramePipeline a;
   if (partition)
@@ -713,7 +713,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   else if (variant == 3)
   {
-    previous.viewportWidth = frame.viewportWidth > 0 ? frame.viewportWidth + 1 : 0;
+    previous.imageSize.width = frame.imageSize.width > 0 ? frame.imageSize.width + 1 : 0;
   }
   Mesh twice; // variant 4: a larger mesh first (every cell twice), so buffers hold stale data
   if (variant == 4)

@@ -70,7 +70,7 @@ protected:
   ~SimulatedSlowMapper() override = default;
   double RetrieveRenderTime(vtkRenderer*, vtkVolume*) override
   {
-    const int* size = this->GetImageViewportSize();
+    const int* size = this->GetImageInUseSize();
     return size[0] > 0 ? this->FrameSeconds(size) : 0.0; // none before the first frame
   }
 
@@ -196,7 +196,7 @@ TEST_F(MapperImageSampleDistance, DefaultsAndRangesAreThoseOfVTKsRayCaster)
   std::ostringstream printed;
   mapper->Print(printed);
   for (const char* name : { "ImageSampleDistance: 2", "MinimumImageSampleDistance",
-         "MaximumImageSampleDistance", "AutoAdjustSampleDistances: 0", "ImageViewportSize" })
+         "MaximumImageSampleDistance", "AutoAdjustSampleDistances: 0", "ImageInUseSize" })
   {
     EXPECT_NE(printed.str().find(name), std::string::npos) << name;
   }
@@ -219,9 +219,9 @@ TEST_F(MapperImageSampleDistance, TheImageIsTheViewportOverTheDistanceRoundedDow
     {
       Fix(mapper, backend, c.distance);
       stage.window->Render();
-      EXPECT_EQ(mapper->GetImageViewportSize()[0], c.width)
+      EXPECT_EQ(mapper->GetImageInUseSize()[0], c.width)
         << BackendName(backend) << ", distance " << c.distance;
-      EXPECT_EQ(mapper->GetImageViewportSize()[1], c.height)
+      EXPECT_EQ(mapper->GetImageInUseSize()[1], c.height)
         << BackendName(backend) << ", distance " << c.distance;
     }
     // A renderer's viewport, not the window: 0.2 to 0.8 of 201 x 151 is 121 x 91 pixels.
@@ -230,8 +230,8 @@ TEST_F(MapperImageSampleDistance, TheImageIsTheViewportOverTheDistanceRoundedDow
     stage.window->Render();
     int size[2], origin[2];
     stage.renderer->GetTiledSizeAndOrigin(&size[0], &size[1], &origin[0], &origin[1]);
-    EXPECT_EQ(mapper->GetImageViewportSize()[0], size[0] / 2) << BackendName(backend);
-    EXPECT_EQ(mapper->GetImageViewportSize()[1], size[1] / 2) << BackendName(backend);
+    EXPECT_EQ(mapper->GetImageInUseSize()[0], size[0] / 2) << BackendName(backend);
+    EXPECT_EQ(mapper->GetImageInUseSize()[1], size[1] / 2) << BackendName(backend);
     mapper->ReleaseGraphicsResources(stage.window);
   }
 }
@@ -383,7 +383,7 @@ TEST_F(MapperImageSampleDistance, AutomaticAdjustmentConvergesToTheAllottedTime)
       const float expected = static_cast<float>(
         mtpt::AdjustImageSampleDistance(before, previous, allotted, 1.0, 10.0));
       EXPECT_EQ(mapper->GetImageSampleDistance(), expected) << label << ", frame " << frame;
-      const int* size = mapper->GetImageViewportSize();
+      const int* size = mapper->GetImageInUseSize();
       EXPECT_EQ(size[0], mtpt::SampledImageSize(400, expected)) << label << ", frame " << frame;
       EXPECT_EQ(size[1], mtpt::SampledImageSize(300, expected)) << label << ", frame " << frame;
       last[0] = size[0];
@@ -398,7 +398,7 @@ TEST_F(MapperImageSampleDistance, AutomaticAdjustmentConvergesToTheAllottedTime)
     stage.window->SetDesiredUpdateRate(0.0001);
     stage.window->Render();
     EXPECT_EQ(mapper->GetImageSampleDistance(), 1.0f) << label;
-    EXPECT_EQ(mapper->GetImageViewportSize()[0], 400) << label;
+    EXPECT_EQ(mapper->GetImageInUseSize()[0], 400) << label;
     const auto still = Grab(stage.window, false);
     EXPECT_EQ(Compare(still, FreshImage(stage, mapper)).worst, 0.0) << label;
     mapper->ReleaseGraphicsResources(stage.window);
@@ -617,7 +617,7 @@ TEST_F(MapperImageSampleDistance, EveryWindowKindDrawsTheSameImageWithoutOpenGLE
           << label << ": " << (messages->errors.empty() ? "" : messages->errors[0]);
         EXPECT_TRUE(messages->warnings.empty())
           << label << ": " << (messages->warnings.empty() ? "" : messages->warnings[0]);
-        EXPECT_EQ(mapper->GetImageViewportSize()[0], 120) << label;
+        EXPECT_EQ(mapper->GetImageInUseSize()[0], 120) << label;
         EXPECT_GT(CoveredFraction(image, Background), 0.2) << label;
         if (!first)
         {

@@ -64,7 +64,7 @@ public:
   {
     this->Last = { mtpt::CellFractionLevel(this->GetCellFraction(), 0.0),
       this->GetImageSampleDistance() };
-    const int* size = this->GetImageViewportSize();
+    const int* size = this->GetImageInUseSize();
     this->LastSize[0] = size[0];
     this->LastSize[1] = size[1];
     this->Timed = true;

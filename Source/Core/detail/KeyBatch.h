@@ -30,7 +30,7 @@ struct KeyRules
 {
   bool perspective = false;
   bool frustum = false;
-  int viewportWidth = 0, viewportHeight = 0; ///< both > 0: pixel-centre culling
+  ImageSize imageSize; ///< set: pixel-centre culling
 };
 
 /// The cells of one key batch: their corners' point ids, lane-major.

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Internal: whether a projected tetrahedron can produce a fragment in a viewport sampled at
+// Internal: whether a projected tetrahedron can produce a fragment in an image sampled at
 // pixel centres. Shared by the key stage (cells culled before the sort) and the
 // decomposition (near-plane pieces), so both cull by one rule.
 #ifndef mtpt_detail_PixelCoverage_h
@@ -17,12 +17,13 @@ namespace detail
 
 /**
  * Whether the window-space bounding box of the corners contains a pixel centre of the
- * width x height viewport. Conservative by 1/256 pixel: rasterizers snap vertices to a
+ * image. Conservative by 1/256 pixel: rasterizers snap vertices to a
  * 1/256-pixel grid (the CPU compositor, Mesa), which moves a vertex by up to 1/512 pixel,
  * so a cell this rejects covers no pixel centre after snapping either.
  */
-inline bool CoversPixelCentre(const ProjectedPoint* const c[4], int width, int height)
+inline bool CoversPixelCentre(const ProjectedPoint* const c[4], const ImageSize& image)
 {
+  const int width = image.width, height = image.height;
   double minX = c[0]->x, maxX = c[0]->x, minY = c[0]->y, maxY = c[0]->y;
   for (int i = 1; i < 4; ++i)
   {

@@ -53,8 +53,8 @@ enum class ProjectionClass : std::uint8_t
   Quadrilateral = 2,      ///< class 2: two opposite edges cross
   VertexOnEdge = 3,       ///< class 3: one point projects onto an edge of the other three
   CoincidentVertices = 4, ///< class 4: two points project onto the same position
-  /// Culled (only with DecomposeInput::viewportWidth/Height set): the projection's bounding
-  /// box contains no pixel centre of the viewport, so no rasterizer that samples at pixel
+  /// Culled (only with DecomposeInput::imageSize set): the projection's bounding box
+  /// contains no pixel centre of the image, so no rasterizer that samples at pixel
   /// centres (OpenGL without multisampling, the CPU compositor) would produce a fragment.
   /// The slot is degenerate, as for NotDrawable.
   CoversNoPixel = 5,
@@ -120,11 +120,11 @@ struct DecomposeInput
   /// and `scalars` must be the attenuations (a non-finite one marks a point or cell that
   /// cannot be drawn). Null: the records hold scalars.
   const float* colours = nullptr;
-  /// Viewport size in pixels. When both are > 0, cells whose projection covers no pixel
-  /// centre (sub-pixel cells, cells off screen) become CoversNoPixel slots: same image,
-  /// much less work for small images. 0: no culling.
-  int viewportWidth = 0, viewportHeight = 0;
-  /// Set when the cells of the order were already tested against this viewport (the depth
+  /// The composited image's size. When set, cells whose projection covers no pixel centre of
+  /// it (sub-pixel cells, cells off screen) become CoversNoPixel slots: same image, much
+  /// less work for small images. Empty: no culling.
+  ImageSize imageSize;
+  /// Set when the cells of the order were already tested against this image (the depth
   /// keys' culling, KeyCulling): the by-rank decompositions then skip the test for cells
   /// and keep it for near-plane pieces (DecomposeIntoSlot, DecomposeIntoFan).
   bool cellsCoverPixels = false;
@@ -217,11 +217,11 @@ public:
   {
     std::uint64_t order = 0; ///< OrderStage::Version()
     std::size_t first = 0, count = 0;
-    int viewportWidth = 0, viewportHeight = 0;
+    ImageSize imageSize;
     bool operator==(const Key& o) const
     {
       return order == o.order && first == o.first && count == o.count &&
-        viewportWidth == o.viewportWidth && viewportHeight == o.viewportHeight;
+        imageSize == o.imageSize;
     }
   };
   /// Changes whenever the buffers' content changes (never 0 once a window was decomposed).

@@ -46,10 +46,10 @@ struct KeyCulling
   /// Cells whose four points are usable and all beyond the same clip plane (NDC x, y or z
   /// outside [-1, 1]): they lie outside the view volume and cannot produce a fragment.
   bool frustum = false;
-  /// When both are > 0: cells whose four points are usable and whose window-space bounding
-  /// box holds no pixel centre of this viewport (detail/PixelCoverage.h); they produce no
+  /// When set: cells whose four points are usable and whose window-space bounding box holds
+  /// no pixel centre of the composited image (detail/PixelCoverage.h); they produce no
   /// fragment where every pixel is sampled at its centre only.
-  int viewportWidth = 0, viewportHeight = 0;
+  ImageSize imageSize;
 };
 
 /// How many keys ComputeVisibleDepthKeys wrote and how many cells it left out, and why.
@@ -87,8 +87,7 @@ public:
     bool operator==(const Key& o) const
     {
       return points == o.points && visible == o.visible && perspective == o.perspective &&
-        culling.frustum == o.culling.frustum && culling.viewportWidth == o.culling.viewportWidth &&
-        culling.viewportHeight == o.culling.viewportHeight;
+        culling.frustum == o.culling.frustum && culling.imageSize == o.culling.imageSize;
     }
   };
 

@@ -97,9 +97,9 @@ struct FrameInput
   Matrix4 modelView = IdentityMatrix();  ///< view * model
   Matrix4 projection = IdentityMatrix(); ///< eye to clip coordinates
   bool perspective = false;
-  /// Viewport in pixels; when set, cells covering no pixel centre are culled (see
-  /// DecomposeInput). Leave 0 for multisampled targets.
-  int viewportWidth = 0, viewportHeight = 0;
+  /// The composited image's size; when set, cells covering no pixel centre of it are culled
+  /// (see DecomposeInput). Leave it empty for multisampled targets.
+  ImageSize imageSize;
   /// Opacity culling: when `opacity.table` is set, cells whose opacity is zero over their
   /// scalar range under this table are skipped (exact for both backends, Culling.h).
   TransferFunctionTable opacity;

@@ -173,6 +173,19 @@ struct PixelRegion
   bool Empty() const { return x0 >= x1 || y0 >= y1; }
 };
 
+/**
+ * The size in pixels of the image a frame is composited into: the viewport's at image sample
+ * distance 1, else fewer (or more) pixels across the same view (ImageSampling.h). The one
+ * name of this size from the mapper (BackendFrame::imageSize) down to the stages, which cull
+ * the cells that cover none of its pixel centres; empty (0 x 0) culls none.
+ */
+struct ImageSize
+{
+  int width = 0, height = 0;
+  bool Empty() const { return width <= 0 || height <= 0; }
+  bool operator==(const ImageSize& o) const { return width == o.width && height == o.height; }
+};
+
 } // namespace mtpt
 
 #endif
