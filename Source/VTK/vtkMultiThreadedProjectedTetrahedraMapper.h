@@ -4,122 +4,25 @@
  * @brief   Multi-threaded projected tetrahedra: a drop-in replacement for
  *          vtkProjectedTetrahedraMapper.
  *
- * Renders an unstructured grid of tetrahedra with the projected tetrahedra (PT) algorithm
- * of Shirley and Tuchman as parallelized by Fan et al., "Multi-threaded parallel projection
- * tetrahedral algorithm for unstructured volume rendering", J. Visualization 24 (2021).
- * Per frame, on NumberOfThreads OpenMP threads: points are projected once, the cells are
- * sorted back to front by a parallel visibility order (radix sort or the paper's partition
- * sort), and every tetrahedron is decomposed, batch after batch (BatchSize), into exactly 4
- * triangles written at a fixed stride (race-free, identical for any thread count). Two
- * backends draw them: OpenGL decomposes each batch into one vertex and one index buffer,
- * uploads them and draws them blended back to front; the CPU compositor decomposes each
- * batch into one record per tetrahedron (a fan of its triangles), bins the records into
- * screen tiles and blends the triangles there with the per-fragment math of the OpenGL
- * shaders, then puts the image into the framebuffer over what is drawn, respecting the depth
- * of opaque geometry. The CPU compositor is chosen automatically where
- * OpenGL is itself a software rasterizer (Mesa llvmpipe, softpipe, SWR: machines without a
- * GPU), where it is the faster of the two. Both work in every window VTK makes, on-screen or
- * off-screen, multisampled (VTK's default) or not: the window's colour and opaque depth are
- * resolved into a single-sampled float target first, so both backends give the image they
- * give without multisampling. An OpenGL error in the mapper's own calls is reported once
- * with a VTK error, and a CPU backend that cannot read the window back draws nothing itself
- * and hands the frame to the OpenGL backend.
+ * Renders an unstructured grid, or a composite data set of them, with the projected
+ * tetrahedra algorithm as Fan et al. parallelize it (J. Visualization 24, 2021): per frame
+ * the cells are sorted back to front on NumberOfThreads OpenMP threads and each tetrahedron
+ * is decomposed into 4 triangles at a fixed stride, identical for any thread count. The
+ * OpenGL backend draws them blended; the CPU backend composites them in screen tiles with
+ * SIMD instructions, and is chosen automatically where OpenGL is a software rasterizer.
+ * Both work in every window VTK makes (multisampled or not, on- or off-screen) and in VTK's
+ * depth peeling of volumes.
  *
- * Input: an unstructured grid, or a composite data set (vtkMultiBlockDataSet,
- * vtkPartitionedDataSet, vtkPartitionedDataSetCollection) of them, so the mapper also
- * replaces vtkMultiBlockUnstructuredGridVolumeMapper. The cells of all blocks are sorted in
- * one visibility order and composited once, so blocks that interleave in depth (an inner part
- * seen through an outer one, touching parts seen obliquely) blend in the right order, where
- * VTK's multi-block mapper draws one block after another. Blocks are used in place; blocks
- * that are not unstructured grids, have no cells or lack the selected scalars are skipped
- * with one warning each, and a change to one block redoes only that block's preparation.
+ * Scalar selection and vtkVolumeProperty mean what they mean for
+ * vtkProjectedTetrahedraMapper; other cells are split into tetrahedra. Where the images
+ * differ, this mapper's is the more accurate (exact segment lengths, no 8-bit colours, cells
+ * cut at the near plane); PRE_INTEGRATED_SHADING integrates the transfer functions exactly
+ * along each fragment's segment. Cells that cannot show are culled before the sort, and
+ * results are reused while their inputs are unchanged. While the view moves, the image
+ * sample distance and the fraction of the cells drawn adjust to the time VTK allots; a
+ * still frame is the full image.
  *
- * Scalar selection (scalar mode, array by name or id, point or cell data, vector
- * component or magnitude as the colour transfer function's vector mode selects) and the
- * meaning of vtkVolumeProperty (colour and scalar-opacity transfer functions,
- * ScalarOpacityUnitDistance, IndependentComponents: with dependent components four are the
- * colour and opacity themselves and two a colour scalar and an opacity scalar) are those of
- * vtkProjectedTetrahedraMapper. Where the results
- * differ, this mapper is the more accurate one:
- * - the thickness at the thick vertex is the exact eye-space ray segment length (no square
- *   root table);
- * - the scalar at a quadrilateral's crossing is interpolated with alpha along one edge and
- *   beta along the other (VTK uses alpha for both);
- * - colours are not quantized to 8 bits; the transfer functions are evaluated at the front
- *   and back scalars of the thick vertex, from a 4096-entry float table over the data range;
- * - perspective views sort by distance from the eye, not along the view direction;
- * - cells that cross the near plane are cut by it and their visible part drawn (VTK's PT
- *   drops them, leaving holes when the camera is near or inside the mesh);
- * - ShadingMode PRE_INTEGRATED_SHADING integrates the transfer functions exactly over each
- *   fragment's ray segment, with perspective-exact interpolation, where the default
- *   VTK_COMPATIBLE_SHADING classifies at the vertices as VTK's PT does (a feature of the
- *   transfer functions between vertex values is then missed). Measured against the exact
- *   ray integral (vtkMTPTReferenceRenderer) in Documentation/accuracy.md.
- *
- * Per-frame work follows what the view shows, never changing the image:
- * - culling: cells whose opacity is zero over their whole scalar range (recomputed only
- *   when the opacity function or the data change) and cells entirely outside the view
- *   volume are left out before the sort, and so are cells whose projection covers no pixel
- *   centre (sub-pixel cells in a small image; not for multisampled OpenGL targets, which
- *   sample elsewhere too). The counts of each are available after every Render;
- * - the CPU backend's compositing work follows the covered pixels: each tetrahedron is
- *   binned into the 64x64 screen tiles it touches and rasterized there, several pixels at a
- *   time with the widest SIMD instructions of the processor (chosen at run time);
- * - reuse (ReuseResults, on by default): an unchanged view, volume matrix and input redraw
- *   without any CPU stage or buffer upload (the CPU backend reuses its composited image too
- *   while the opaque geometry's depth is unchanged); a colour-only change of the transfer
- *   functions skips the CPU stages; an opacity change redoes culling, sort and decomposition
- *   but not the transform; after a small rotation the cells are re-sorted from the previous
- *   order when that is cheaper than a full sort. Reuse relies on VTK's modification times:
- *   data changed in place must be marked Modified(), as for every VTK filter;
- * - bounded memory: BatchSize tetrahedra are decomposed and drawn at a time, so the
- *   buffers hold one batch (OpenGL: 168 bytes per tetrahedron; CPU: 128) instead of the
- *   whole mesh.
- *
- * Frames within the time VTK allots, as vtkUnstructuredGridVolumeRayCastMapper and
- * vtkUnstructuredGridVolumeZSweepMapper do it (ImageSampleDistance, Minimum/Maximum
- * ImageSampleDistance, AutoAdjustSampleDistances: the same names, meanings, defaults and
- * ranges): at an image sample distance d the volume is composited into an image of
- * floor(viewport / d) pixels on each side, against the opaque geometry's depth under each of
- * its pixels' centres, and stretched over the viewport with bilinear filtering (the CPU
- * backend filters and blends on the CPU; the OpenGL backend draws into an off-screen target
- * of that size and blends it over the window with linear filtering). Every other stage is
- * the same; cells covering no pixel centre of the smaller image are culled. With
- * AutoAdjustSampleDistances on alone, each Render scales the distance by sqrt(last frame's
- * time / the time the renderer allots the volume), within [minimum, maximum], as VTK's ray
- * caster does. With AutoAdjustCellFraction on as well (the default), each Render also draws
- * an evenly spread fraction of the cells, their opacity compensated, and one rule splits the
- * time between the two (Documentation/level-of-detail.md): VTK's interactors ask for 15
- * frames a second while the user drags (vtkRenderWindowInteractor::DesiredUpdateRate), and
- * the volume is then drawn with fewer cells and coarser; a still frame (StillUpdateRate,
- * 0.0001 frames a second) allots so much time that every cell is drawn at the minimum
- * distance, 1 by default: the full image, the same as a fresh mapper's.
- *
- * Cells other than tetrahedra (hexahedra, voxels, wedges, pyramids, polyhedra, higher-order
- * cells, mixed grids) are split into tetrahedra with vtkDataSetTriangleFilter once per input
- * change (point data passed, cell data copied to each piece); vertices, lines and polygons
- * are ignored with one warning.
- *
- * Limits: at most 858,993,459 tetrahedra (32-bit indices, 5 vertices each); composite
- * blending only; the visibility order is the cells' centroid order (as VTK's PT), exact for
- * most meshes but not for every one.
- *
- * After each Render the seconds spent in each stage are available from the Get...Seconds
- * methods. Upload and draw are asynchronous in OpenGL: turn SynchronizedTiming on to wait
- * for them (glFinish) so that their timers measure the work and not only its submission.
- *
- * Progress and abort, as VTK's PT: with a vtkCommand::ProgressEvent observer, progress is
- * reported after each CPU stage (transform, culling, keys, order) and after each batch;
- * between them the render window's abort check (vtkRenderWindow::CheckAbortStatus, which
- * fires AbortCheckEvent) is polled, and an abort stops the frame there, keeping what was
- * drawn (GetLastFrameStopped()).
- *
- * Threads: NumberOfThreads 0 (the default) takes OMP_NUM_THREADS when it is set; under an
- * MPI launcher that announces several ranks on the node (Open MPI, MPICH, Intel MPI,
- * MVAPICH2, Cray PALS) and binds none of them to its own cores, the node's hardware threads
- * divided by those ranks (pvbatch and pvserver under mpiexec do not oversubscribe the node);
- * otherwise every processor the process may run on. GetEffectiveNumberOfThreads() says
- * what the next frame uses.
+ * Composite blending only. Documentation/mapper.md explains each of these in full.
  *
  * @sa vtkProjectedTetrahedraMapper vtkUnstructuredGridVolumeMapper
  */
