@@ -27,6 +27,8 @@
 #include "vtkRenderWindowInteractor.h"
 #include "vtkRenderer.h"
 #include "vtkSmartPointer.h"
+#include "vtkTextProperty.h"
+#include "vtkTextRenderer.h"
 #include "vtkUnstructuredGrid.h"
 #include "vtkVolume.h"
 #include "vtkVolumeProperty.h"
@@ -209,7 +211,7 @@ void ReportInteraction(vtkObject*, unsigned long, void* clientData, void*)
               "(%d x %d pixels), %.0f ms per frame\n",
     static_cast<double>(mapper->GetCellFraction()),
     static_cast<long long>(mapper->GetNumberOfTetrahedra()), mapper->GetImageSampleDistance(),
-    mapper->GetImageViewportSize()[0], mapper->GetImageViewportSize()[1],
+    mapper->GetImageInUseSize()[0], mapper->GetImageInUseSize()[1],
     1e3 * mapper->GetTimeToDraw());
   std::fflush(stdout);
 }
@@ -239,6 +241,50 @@ void Interact(Stage& stage, Mapper* mapper, double rate)
   }
   stage.GetWindow()->Render();
   interactor->Start();
+}
+
+/**
+ * `image` (RGB) with a band above it holding `text`, for the side-by-side picture. Without a
+ * text renderer (VTK built without FreeType) the band stays empty and a warning says so.
+ */
+vtkSmartPointer<vtkImageData> Labelled(vtkImageData* image, const std::string& text)
+{
+  int size[3];
+  image->GetDimensions(size);
+  vtkNew<vtkTextProperty> style;
+  style->SetFontSize(std::max(12, size[0] / 40));
+  style->SetColor(1.0, 1.0, 1.0);
+  vtkNew<vtkImageData> label;
+  int textSize[2] = { 0, 0 };
+  vtkTextRenderer* renderer = vtkTextRenderer::GetInstance();
+  if (!renderer || !renderer->RenderString(style, text, label, textSize, 72))
+  {
+    std::fprintf(stderr, "mtpt_render: no text renderer; the picture has no labels\n");
+    textSize[0] = textSize[1] = 0;
+  }
+  const int margin = style->GetFontSize() / 2, band = style->GetFontSize() + 2 * margin;
+  auto out = vtkSmartPointer<vtkImageData>::New();
+  out->SetDimensions(size[0], size[1] + band, 1);
+  out->AllocateScalars(VTK_UNSIGNED_CHAR, 3);
+  auto* pixels = static_cast<unsigned char*>(out->GetScalarPointer());
+  std::fill(pixels, pixels + 3 * size[0] * (size[1] + band), static_cast<unsigned char>(0));
+  std::copy_n(static_cast<unsigned char*>(image->GetScalarPointer()), 3 * size[0] * size[1], pixels);
+  // The text's pixels, white blended by their alpha over the black band (row 0 at the bottom).
+  const int* extent = label->GetExtent();
+  for (int y = extent[2]; y <= extent[3] && textSize[0] > 0; ++y)
+  {
+    for (int x = extent[0]; x <= extent[1]; ++x)
+    {
+      const int px = margin + x - extent[0], py = size[1] + margin + y - extent[2];
+      if (px < size[0] && py < size[1] + band)
+      {
+        const double alpha = label->GetScalarComponentAsDouble(x, y, 0, 3) / 255.0;
+        unsigned char* p = pixels + 3 * (static_cast<std::size_t>(py) * size[0] + px);
+        std::fill(p, p + 3, static_cast<unsigned char>(std::lround(255 * alpha)));
+      }
+    }
+  }
+  return out;
 }
 
 /// "115" and "105 ms", or with --unchanged "115 (unchanged view 4.1)".
@@ -273,13 +319,16 @@ void CompareWithVTK(Stage& stage, const Scene& scene, vtkVolumeProperty* propert
   {
     PrintError(theirName, exact, stage.GetRenderer());
   }
+  const Timed theirsDefault = Time(stage, theirs, o);
+  // Side by side, each labelled with its median frame in VTK's default window.
   vtkNew<vtkImageAppend> side;
-  side->AddInputData(ourImage);
-  side->AddInputData(vtkImage);
+  side->AddInputData(Labelled(ourImage, "MTPT (" + ours.figures.backend + " backend): " +
+      FormatMs(ours.moving) + " ms a frame"));
+  side->AddInputData(Labelled(vtkImage,
+    std::string(theirName) + ": " + FormatMs(theirsDefault.moving) + " ms a frame"));
   side->SetAppendAxis(0);
   side->Update();
   WritePNG(side->GetOutput(), Sibling(o.output, "-side-by-side.png"));
-  const Timed theirsDefault = Time(stage, theirs, o);
   stage.SetMapper(mapper, input);
 
   // The same two mappers in a single-sampled window (the mapper's own kind: MTPT's backend
