@@ -133,8 +133,8 @@ bool CullingStage::Update(const Key& key, const CellsView& cells, std::size_t po
   {
     return false;
   }
-  const bool wasCulling = this->Record.Valid() && this->Record.Inputs().mode != Mode::None;
-  if (key.mode == Mode::None)
+  const bool wasCulling = this->Record.Valid() && this->Record.Inputs().mode != CullingMode::None;
+  if (key.mode == CullingMode::None)
   {
     // Every cell is a candidate: a new result only if cells were culled before.
     this->Record.Store(key, wasCulling || !this->Record.Valid());
@@ -150,7 +150,7 @@ bool CullingStage::Update(const Key& key, const CellsView& cells, std::size_t po
     ComputeCellScalarRanges(cells, pointCount, scalars, this->Ranges.data(), threads);
     this->RangesRecord.Store(key.mesh);
   }
-  if (key.mode == Mode::Attenuations)
+  if (key.mode == CullingMode::Attenuations)
   {
     this->Opacity.SetAttenuations();
   }
@@ -174,7 +174,7 @@ bool CullingStage::Update(const Key& key, const CellsView& cells, std::size_t po
 
 std::size_t CullingStage::VisibleCount() const
 {
-  return this->Record.Inputs().mode == Mode::None ? this->Record.Inputs().mesh.cellCount
+  return this->Record.Inputs().mode == CullingMode::None ? this->Record.Inputs().mesh.cellCount
                                                   : this->List.size();
 }
 

@@ -25,22 +25,88 @@ std::array<double, 3> ViewDirection(const Matrix4& m)
   return d;
 }
 
-/// The culling stage's key for this frame: by attenuations with dependent components, by
-/// the opacity table when one is given, else none.
-CullingStage::Key CullingKey(const FrameInput& input, const MeshKey& mesh)
+// The stages' keys for a frame, each built here and only here.
+
+TransformKey TransformKeyOf(const FrameInput& input, const MeshKey& mesh)
 {
-  CullingStage::Key key;
+  TransformKey key;
+  key.mesh = mesh;
+  key.modelView = input.modelView;
+  key.projection = input.projection;
+  return key;
+}
+
+/// By attenuations with dependent components, by the opacity table when one is given, else
+/// none.
+CullingKey CullingKeyOf(const FrameInput& input, const MeshKey& mesh)
+{
+  CullingKey key;
   key.mesh = mesh;
   if (input.colours)
   {
-    key.mode = CullingStage::Mode::Attenuations;
+    key.mode = CullingMode::Attenuations;
   }
   else if (input.opacity.table && input.opacity.size > 0)
   {
-    key.mode = CullingStage::Mode::Table;
-    key.table = { input.opacity.table, input.opacity.size, input.opacity.low, input.opacity.high,
-      input.opacityVersion };
+    key.mode = CullingMode::Table;
+    key.table.table = input.opacity.table;
+    key.table.size = input.opacity.size;
+    key.table.low = input.opacity.low;
+    key.table.high = input.opacity.high;
+    key.table.version = input.opacityVersion;
   }
+  return key;
+}
+
+CellSelectionKey CellSelectionKeyOf(
+  const FrameInput& input, const MeshKey& mesh, std::uint64_t visible)
+{
+  CellSelectionKey key;
+  key.mesh = mesh;
+  key.visible = visible;
+  key.threshold = ImportanceThreshold(input.cellFraction, input.cells.cellCount);
+  return key;
+}
+
+DepthKeyStageKey DepthKeyStageKeyOf(
+  const FrameInput& input, std::uint64_t points, std::uint64_t visible)
+{
+  DepthKeyStageKey key;
+  key.points = points;
+  key.visible = visible;
+  key.perspective = input.perspective;
+  key.culling.frustum = input.cullFrustum;
+  key.culling.imageSize = input.imageSize;
+  return key;
+}
+
+NearPlaneKey NearPlaneKeyOf(std::uint64_t keys)
+{
+  NearPlaneKey key;
+  key.keys = keys;
+  return key;
+}
+
+OrderKey OrderKeyOf(std::uint64_t keys, std::uint64_t nearPlane, OrderMethod method,
+  std::size_t maxSubArraySize, OrderMutation mutation)
+{
+  OrderKey key;
+  key.keys = keys;
+  key.nearPlane = nearPlane;
+  key.method = method;
+  key.maxSubArraySize = maxSubArraySize;
+  key.mutation = mutation;
+  return key;
+}
+
+DecompositionKey DecompositionKeyOf(
+  std::uint64_t order, std::size_t first, std::size_t count, const ImageSize& imageSize)
+{
+  DecompositionKey key;
+  key.order = order;
+  key.first = first;
+  key.count = count;
+  key.imageSize = imageSize;
   return key;
 }
 
@@ -135,7 +201,7 @@ bool FramePipeline::Prepare(const FrameInput& input, int threads)
     [&]
     {
       return this->Transform.Update(
-        { mesh, input.modelView, input.projection }, input.points, input.scalars, threads);
+        TransformKeyOf(input, mesh), input.points, input.scalars, threads);
     });
   this->LastStats.transformReused = !projected;
   if (!this->Continue(Stage::Transform))
@@ -146,7 +212,7 @@ bool FramePipeline::Prepare(const FrameInput& input, int threads)
   Timed(this->LastTimes.cull,
     [&]
     {
-      return this->Culling.Update(CullingKey(input, mesh), input.cells, input.points.count,
+      return this->Culling.Update(CullingKeyOf(input, mesh), input.cells, input.points.count,
         input.scalars, input.opacity, threads);
     });
   this->LastStats.opacityCulled = this->Culling.Culled();
@@ -154,8 +220,7 @@ bool FramePipeline::Prepare(const FrameInput& input, int threads)
   Timed(this->LastTimes.select,
     [&]
     {
-      return this->Selection.Update(
-        { mesh, this->Culling.Version(), ImportanceThreshold(input.cellFraction, n) },
+      return this->Selection.Update(CellSelectionKeyOf(input, mesh, this->Culling.Version()),
         input.points, input.cells, this->Culling.Visible(), this->Culling.VisibleCount(),
         threads);
     });
@@ -183,17 +248,17 @@ bool FramePipeline::Prepare(const FrameInput& input, int threads)
 bool FramePipeline::UpdateOrder(const FrameInput& input, const MeshKey& mesh, int threads)
 {
   // 3. Depth keys, and the near plane's cut.
-  const DepthKeyStage::Key keysKey{ this->Transform.Version(), this->Selection.Version(),
-    input.perspective, { input.cullFrustum, input.imageSize } };
   const ProjectedPoint* points = this->Transform.Points().data();
   const bool keyed = Timed(this->LastTimes.keys,
     [&]
     {
-      const bool computed = this->DepthKeys.Update(keysKey, points, input.points.count, input.cells,
-        this->Selection.Selected(), this->Selection.SelectedCount(), threads);
-      return this->NearPlaneCut.Update({ this->DepthKeys.Version() }, this->DepthKeys.Keys(),
-               points, input.points.count, input.cells, input.scalars, input.colours,
-               input.projection, input.perspective, threads) ||
+      const bool computed = this->DepthKeys.Update(
+        DepthKeyStageKeyOf(input, this->Transform.Version(), this->Selection.Version()), points,
+        input.points.count, input.cells, this->Selection.Selected(),
+        this->Selection.SelectedCount(), threads);
+      return this->NearPlaneCut.Update(NearPlaneKeyOf(this->DepthKeys.Version()),
+               this->DepthKeys.Keys(), points, input.points.count, input.cells, input.scalars,
+               input.colours, input.projection, input.perspective, threads) ||
         computed;
     });
   const KeyCounts& counts = this->DepthKeys.Counts();
@@ -215,13 +280,13 @@ bool FramePipeline::UpdateOrder(const FrameInput& input, const MeshKey& mesh, in
   cells.whole =
     counts.frustumCulled == 0 && counts.pixelCulled == 0 && this->NearPlaneCut.Clipped() == 0;
   cells.direction = ViewDirection(input.modelView);
-  const OrderStage::Key orderKey{ this->DepthKeys.Version(), this->NearPlaneCut.Version(),
-    this->Method, this->MaxSubArraySize, this->Mutation };
+  const OrderKey key = OrderKeyOf(this->DepthKeys.Version(), this->NearPlaneCut.Version(),
+    this->Method, this->MaxSubArraySize, this->Mutation);
   const bool sorted = Timed(this->LastTimes.order,
     [&]
     {
       return this->Order.Update(
-        orderKey, cells, this->Reuse, this->DepthKeys, this->NearPlaneCut, threads);
+        key, cells, this->Reuse, this->DepthKeys, this->NearPlaneCut, threads);
     });
   if (sorted)
   {
@@ -253,20 +318,19 @@ bool FramePipeline::Continue(Stage finished)
   return true;
 }
 
-DecompositionStage::Key FramePipeline::WindowKey(std::size_t& first, std::size_t& count)
+DecompositionKey FramePipeline::WindowKey(std::size_t& first, std::size_t& count)
 {
   first = std::min(first, this->SortedSize);
   count = std::min(count, this->SortedSize - first);
   ++this->LastStats.batches;
-  const DecomposeInput& in = this->DecomposeState;
-  return { this->Order.Version(), first, count, in.imageSize };
+  return DecompositionKeyOf(this->Order.Version(), first, count, this->DecomposeState.imageSize);
 }
 
 template <typename Buffers>
 void FramePipeline::DecomposeWindow(
   Buffers& buffers, std::size_t first, std::size_t count, int threads, std::size_t& decomposed)
 {
-  const DecompositionStage::Key key = this->WindowKey(first, count);
+  const DecompositionKey key = this->WindowKey(first, count);
   // The decomposition by rank visits the candidate cells (DecomposeInput::cellList).
   threads = ThreadsForWork(this->LastStats.cells + count, detail::CellsPerThread, threads);
   const bool computed = Timed(this->LastTimes.decompose,

@@ -71,66 +71,68 @@ private:
   float Low = 0, Scale = 0;
 };
 
+/// What the culling culls by.
+enum class CullingMode
+{
+  None,        ///< every cell is a candidate
+  Table,       ///< by the opacity table (OpacityCulling::SetTable)
+  Attenuations ///< the scalars are attenuations (OpacityCulling::SetAttenuations)
+};
+
+/// The opacity table as the culling's key sees it (CullingMode::Table only; zero otherwise).
+struct OpacityTableKey
+{
+  const float* table = nullptr;
+  int size = 0;
+  double low = 0, high = 0;
+  std::uint64_t version = 0; ///< FrameInput::opacityVersion
+  bool operator==(const OpacityTableKey& o) const
+  {
+    return table == o.table && size == o.size && low == o.low && high == o.high &&
+      version == o.version;
+  }
+};
+
+/// What the visible list depends on: CullingStage's key.
+struct CullingKey
+{
+  MeshKey mesh;
+  CullingMode mode = CullingMode::None;
+  OpacityTableKey table;
+  bool operator==(const CullingKey& o) const
+  {
+    return mesh == o.mesh && mode == o.mode && table == o.table;
+  }
+};
+
 /**
  * Stage 2 as a stage of FramePipeline (Stage.h): the cells left after opacity culling.
  * The cells' scalar ranges are kept until the data change; the visible list until the data,
  * the culling mode or the opacity table change. A new table that leaves the same cells
  * visible (a colour change) keeps the version, so the later stages keep their results.
  */
-class CullingStage : public StageBase
+class CullingStage : public StageOf<CullingKey>
 {
 public:
-  enum class Mode
-  {
-    None,        ///< every cell is a candidate
-    Table,       ///< by the opacity table (OpacityCulling::SetTable)
-    Attenuations ///< the scalars are attenuations (OpacityCulling::SetAttenuations)
-  };
-  /// The opacity table as the key sees it (Mode::Table only; zero otherwise).
-  struct TableKey
-  {
-    const float* table = nullptr;
-    int size = 0;
-    double low = 0, high = 0;
-    std::uint64_t version = 0; ///< FrameInput::opacityVersion
-    bool operator==(const TableKey& o) const
-    {
-      return table == o.table && size == o.size && low == o.low && high == o.high &&
-        version == o.version;
-    }
-  };
-  struct Key
-  {
-    MeshKey mesh;
-    Mode mode = Mode::None;
-    TableKey table;
-    bool operator==(const Key& o) const
-    {
-      return mesh == o.mesh && mode == o.mode && table == o.table;
-    }
-  };
-
   /// Brings the visible list up to date with `key`; true when it computed anything.
   bool Update(const Key& key, const CellsView& cells, std::size_t pointCount,
     const ScalarsView& scalars, const TransferFunctionTable& table, int threads);
 
-  /// The visible cells in ascending order, or null when nothing is culled (Mode::None).
+  /// The visible cells in ascending order, or null when nothing is culled (CullingMode::None).
   const std::uint32_t* Visible() const
   {
-    return this->Record.Inputs().mode == Mode::None ? nullptr : this->List.data();
+    return this->Record.Inputs().mode == CullingMode::None ? nullptr : this->List.data();
   }
   /// How many cells Visible() lists (every cell of the mesh without culling).
   std::size_t VisibleCount() const;
   /// Cells culled as transparent.
   std::size_t Culled() const { return this->Record.Inputs().mesh.cellCount - this->VisibleCount(); }
-  std::uint64_t Version() const { return this->Record.Version(); }
   void Forget() override;
   void Release() override;
   std::size_t MemoryBytes() const override;
 
 private:
   StageRecord<MeshKey> RangesRecord;
-  StageRecord<Key> Record;
   std::vector<float> Ranges; ///< 2 per cell: the cell's scalar range
   std::vector<std::uint32_t> List, NewList;
   OpacityCulling Opacity;

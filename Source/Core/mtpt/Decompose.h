@@ -60,14 +60,6 @@ enum class ProjectionClass : std::uint8_t
   CoversNoPixel = 5,
 };
 
-/**
- * The classification of one projected tetrahedron.
- * Quadrilateral: edges (vertex[0], vertex[1]) and (vertex[2], vertex[3]) cross at
- *   position alpha along the first and beta along the second (both in [0, 1]).
- * Triangle, VertexOnEdge, CoincidentVertices: vertex[3] is the thick (inner) point and
- *   vertex[0..2] the outer triangle; weights[0..2] are the screen-space barycentric
- *   coordinates of the inner point in that triangle (non-negative, sum 1).
- */
 struct Projection
 {
   ProjectionClass kind = ProjectionClass::NotDrawable;
@@ -210,28 +202,34 @@ void DecomposeTetrahedraByRank(const DecomposeInput& input, const std::uint32_t*
  * buffer (SlotStage for OpenGL, FanStage for the CPU compositor); with several batches each
  * batch is decomposed again every frame, as the buffers hold only the last one.
  */
-class DecompositionStage : public StageBase
+/// What a decomposed window depends on: DecompositionStage's key.
+struct DecompositionKey
+{
+  std::uint64_t order = 0; ///< OrderStage::Version()
+  std::size_t first = 0, count = 0;
+  ImageSize imageSize;
+  bool operator==(const DecompositionKey& o) const
+  {
+    return order == o.order && first == o.first && count == o.count && imageSize == o.imageSize;
+  }
+};
+
+/**
+ * The classification of one projected tetrahedron.
+ * Quadrilateral: edges (vertex[0], vertex[1]) and (vertex[2], vertex[3]) cross at
+ *   position alpha along the first and beta along the second (both in [0, 1]).
+ * Triangle, VertexOnEdge, CoincidentVertices: vertex[3] is the thick (inner) point and
+ *   vertex[0..2] the outer triangle; weights[0..2] are the screen-space barycentric
+ *   coordinates of the inner point in that triangle (non-negative, sum 1).
+ */
+class DecompositionStage : public StageOf<DecompositionKey>
 {
 public:
-  struct Key
-  {
-    std::uint64_t order = 0; ///< OrderStage::Version()
-    std::size_t first = 0, count = 0;
-    ImageSize imageSize;
-    bool operator==(const Key& o) const
-    {
-      return order == o.order && first == o.first && count == o.count &&
-        imageSize == o.imageSize;
-    }
-  };
-  /// Changes whenever the buffers' content changes (never 0 once a window was decomposed).
-  std::uint64_t Version() const { return this->Record.Version(); }
   /// Tetrahedra of the held window.
   std::size_t Count() const { return this->Record.Inputs().count; }
   /// Slots or fans of the held window that cover no pixel centre, or cannot be drawn.
   std::size_t PixelCulled() const { return this->CoversNoPixel; }
   std::size_t NotDrawable() const { return this->Undrawable; }
-  void Forget() override { this->Record.Forget(); }
 
 protected:
   /// The window of `key` through `cells(input, first, count, classes, threads)` (the cells by
@@ -241,7 +239,6 @@ protected:
   bool Run(const Key& key, const DecomposeInput& input, const std::uint32_t* rank,
     const std::vector<NearPiece>& pieces, int threads, Cells&& cells, Piece&& piece);
 
-  StageRecord<Key> Record;
   std::vector<ProjectionClass> Classes; ///< per slot of the window
   std::size_t CoversNoPixel = 0, Undrawable = 0;
 };

@@ -70,27 +70,28 @@ KeyCounts ComputeVisibleDepthKeys(const ProjectedPoint* points, std::size_t poin
   const CellsView& cells, const std::uint32_t* list, std::size_t listCount, bool perspective,
   const KeyCulling& culling, SortKey* keys, int threads);
 
+/// What the depth keys depend on: DepthKeyStage's key.
+struct DepthKeyStageKey
+{
+  std::uint64_t points = 0;  ///< TransformStage::Version()
+  std::uint64_t visible = 0; ///< CellSelectionStage::Version()
+  bool perspective = false;
+  KeyCulling culling;
+  bool operator==(const DepthKeyStageKey& o) const
+  {
+    return points == o.points && visible == o.visible && perspective == o.perspective &&
+      culling.frustum == o.culling.frustum && culling.imageSize == o.culling.imageSize;
+  }
+};
+
 /**
  * Stage 3 as a stage of FramePipeline (Stage.h): the keys of the cells left by culling and
  * by ComputeVisibleDepthKeys, in ascending cell id order, kept until the projected points,
  * the visible cells or the culling settings change.
  */
-class DepthKeyStage : public StageBase
+class DepthKeyStage : public StageOf<DepthKeyStageKey>
 {
 public:
-  struct Key
-  {
-    std::uint64_t points = 0;  ///< TransformStage::Version()
-    std::uint64_t visible = 0; ///< CellSelectionStage::Version()
-    bool perspective = false;
-    KeyCulling culling;
-    bool operator==(const Key& o) const
-    {
-      return points == o.points && visible == o.visible && perspective == o.perspective &&
-        culling.frustum == o.culling.frustum && culling.imageSize == o.culling.imageSize;
-    }
-  };
-
   /// Computes the keys of `list` (null: every cell) unless they were computed with `key`;
   /// true when it computed.
   bool Update(const Key& key, const ProjectedPoint* points, std::size_t pointCount,
@@ -99,13 +100,10 @@ public:
   const std::vector<SortKey>& Keys() const { return this->Kept; }
   /// How many cells the keys left out, and why.
   const KeyCounts& Counts() const { return this->Count; }
-  std::uint64_t Version() const { return this->Record.Version(); }
-  void Forget() override { this->Record.Forget(); }
   void Release() override;
   std::size_t MemoryBytes() const override { return this->Kept.capacity() * sizeof(SortKey); }
 
 private:
-  StageRecord<Key> Record;
   std::vector<SortKey> Kept;
   KeyCounts Count;
 };

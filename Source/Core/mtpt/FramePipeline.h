@@ -236,7 +236,7 @@ private:
   bool Continue(Stage finished);
   /// Stages 3 and 4 (keys, near plane, order); false when the callback stopped the frame.
   bool UpdateOrder(const FrameInput& input, const MeshKey& mesh, int threads);
-  DecompositionStage::Key WindowKey(std::size_t& first, std::size_t& count);
+  DecompositionKey WindowKey(std::size_t& first, std::size_t& count);
   /// DecomposeBatch and DecomposeFans: the window into `buffers` (Slots or FanBuffers), its
   /// size into `decomposed`.
   template <typename Buffers>

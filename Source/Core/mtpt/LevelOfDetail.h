@@ -55,26 +55,27 @@ std::uint64_t ImportanceThreshold(double fraction, std::size_t cellCount);
  */
 double CellFractionLevel(double fraction, double minimum);
 
+/// What the subset depends on: CellSelectionStage's key.
+struct CellSelectionKey
+{
+  MeshKey mesh;
+  std::uint64_t visible = 0;   ///< CullingStage::Version()
+  std::uint64_t threshold = 0; ///< ImportanceThreshold; 2^bits or more: every cell
+  bool operator==(const CellSelectionKey& o) const
+  {
+    return mesh == o.mesh && visible == o.visible && threshold == o.threshold;
+  }
+};
+
 /**
  * Stage 2b as a stage of FramePipeline (Stage.h): the cells of the visible list (Culling.h)
  * whose importance is below the threshold, in ascending order. The importance is kept
  * until the mesh changes; the subset until the mesh, the visible list or the threshold
  * change. With every cell kept it passes the visible list through, computing nothing.
  */
-class CellSelectionStage : public StageBase
+class CellSelectionStage : public StageOf<CellSelectionKey>
 {
 public:
-  struct Key
-  {
-    MeshKey mesh;
-    std::uint64_t visible = 0;   ///< CullingStage::Version()
-    std::uint64_t threshold = 0; ///< ImportanceThreshold; 2^bits or more: every cell
-    bool operator==(const Key& o) const
-    {
-      return mesh == o.mesh && visible == o.visible && threshold == o.threshold;
-    }
-  };
-
   /**
    * Brings the subset up to date with `key`, from the visible list `visible` (ascending;
    * null: every cell) of `visibleCount` cells. True when it computed anything.
@@ -108,15 +109,12 @@ public:
   {
     return threshold >= (std::uint64_t{ 1 } << ImportanceBits(cellCount));
   }
-  /// Changes whenever the subset changes.
-  std::uint64_t Version() const { return this->Record.Version(); }
   void Forget() override;
   void Release() override;
   std::size_t MemoryBytes() const override;
 
 private:
   StageRecord<MeshKey> ImportanceRecord;
-  StageRecord<Key> Record;
   std::vector<std::uint32_t> Importance, List; ///< List: Count cells of the subset
   const std::uint32_t* Visible = nullptr;
   std::size_t VisibleCount = 0, Count = 0;

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 /**
  * @file NearPlane.h
- * @brief Stage 3b of a frame: cells that cross the near plane are cut by it and their visible part drawn, where
- * VTK's PT drops the whole cell (holes when the camera is near or inside the mesh;
- * Documentation/algorithm.md, "Near-plane clipping").
+ * @brief Stage 3b of a frame: cells that cross the near plane are cut by it and their visible
+ * part drawn, where VTK's PT drops the whole cell (holes when the camera is near or inside
+ * the mesh; Documentation/algorithm.md, "Near-plane clipping").
  *
  * The cutting plane is NDC z = NearPlaneNdcZ, a hair behind the near plane, so that the
  * rasterizer's own near clipping (z < -1) never removes a fragment of a piece. The plane
@@ -70,6 +70,13 @@ int CutTetrahedron(const ProjectedPoint* const corners[4], const float scalars[4
   const NearPlane& plane, const Matrix4& projection, std::vector<NearPiece>& pieces,
   const float* const* colours = nullptr);
 
+/// What the cut depends on: NearPlaneStage's key.
+struct NearPlaneKey
+{
+  std::uint64_t keys = 0; ///< DepthKeyStage::Version()
+  bool operator==(const NearPlaneKey& o) const { return keys == o.keys; }
+};
+
 /**
  * Stage 3b as a stage of FramePipeline (Stage.h; Documentation/algorithm.md,
  * "Near-plane clipping"): of the depth keys, those of cells that cross the plane are
@@ -79,15 +86,9 @@ int CutTetrahedron(const ProjectedPoint* const corners[4], const float scalars[4
  * and so the data and the matrices, for the cells kept and the kind of projection).
  * Most frames have no point in front of the plane and cut nothing.
  */
-class NearPlaneStage : public StageBase
+class NearPlaneStage : public StageOf<NearPlaneKey>
 {
 public:
-  struct Key
-  {
-    std::uint64_t keys = 0; ///< DepthKeyStage::Version()
-    bool operator==(const Key& o) const { return keys == o.keys; }
-  };
-
   /// Cuts the cells of `keys` unless that was done for `key`; true when it computed.
   /// `colours`: FrameInput::colours (null without dependent components).
   bool Update(const Key& key, const std::vector<SortKey>& keys, const ProjectedPoint* points,
@@ -104,8 +105,6 @@ public:
   const std::vector<SortKey>& PieceKeys() const { return this->Keys; }
   /// Cells cut by the plane.
   std::size_t Clipped() const { return this->ClippedCells; }
-  std::uint64_t Version() const { return this->Record.Version(); }
-  void Forget() override { this->Record.Forget(); }
   void Release() override;
   std::size_t MemoryBytes() const override;
 
@@ -125,7 +124,6 @@ private:
     std::size_t pointCount, const CellsView& cells, const ScalarsView& scalars,
     const float* colours, const NearPlane& plane, const Matrix4& projection, bool perspective);
 
-  StageRecord<Key> Record;
   std::vector<std::uint8_t> Verdicts; ///< per depth key
   std::vector<NearPiece> Made;
   std::vector<SortKey> Keys;

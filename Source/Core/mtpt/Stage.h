@@ -5,11 +5,13 @@
  * and a version that changes whenever the result does (Documentation/architecture.md,
  * "The stages of a frame").
  *
- * A stage's Key is a small struct with operator== holding every input its result depends
- * on, inputs from earlier stages included as their versions. The stage recomputes exactly
- * when this frame's key differs from the one it holds (or it holds none), so adding an input
- * to a stage is one field in its key. Versions let a later stage, a backend or a cache
- * depend on a result without comparing it: equal versions mean an equal result.
+ * A stage's key is a small struct with operator== holding every input its result depends
+ * on, inputs from earlier stages included as their versions; it is defined beside the stage
+ * (TransformKey beside TransformStage), and FramePipeline builds each one in one function.
+ * The stage recomputes exactly when this frame's key differs from the one it holds (or it
+ * holds none), so adding an input to a stage is one field in its key. Versions let a later
+ * stage, a backend or a cache depend on a result without comparing it: equal versions mean
+ * an equal result.
  */
 #ifndef mtpt_Stage_h
 #define mtpt_Stage_h
@@ -77,6 +79,24 @@ public:
   virtual void Forget() = 0;
   virtual void Release() = 0;
   virtual std::size_t MemoryBytes() const = 0;
+};
+
+/**
+ * A stage whose result is computed from a Key (a struct with operator==, defined beside the
+ * stage): the one place that holds its record and gives its version and forgetting. A
+ * stage that keeps more than one result overrides Forget to forget them all.
+ */
+template <typename KeyType>
+class StageOf : public StageBase
+{
+public:
+  using Key = KeyType;
+  /// Changes whenever the result changes; 0 before the first.
+  std::uint64_t Version() const { return this->Record.Version(); }
+  void Forget() override { this->Record.Forget(); }
+
+protected:
+  StageRecord<Key> Record;
 };
 
 /// The stages of a frame after which FramePipeline reports progress (a StageCallback,

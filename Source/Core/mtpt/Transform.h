@@ -41,30 +41,29 @@ namespace mtpt
 void ProjectPoints(const PointsView& points, const ScalarsView& scalars, const Matrix4& modelView,
   const Matrix4& projection, ProjectedPoint* out, int threads);
 
+/// What the projected points depend on: TransformStage's key.
+struct TransformKey
+{
+  MeshKey mesh;
+  Matrix4 modelView{}, projection{};
+  bool operator==(const TransformKey& o) const
+  {
+    return mesh == o.mesh && modelView == o.modelView && projection == o.projection;
+  }
+};
+
 /**
  * Stage 1 as a stage of FramePipeline (Stage.h): the projected points of the mesh, kept
  * until the data or a matrix changes.
  */
-class TransformStage : public StageBase
+class TransformStage : public StageOf<TransformKey>
 {
 public:
-  struct Key
-  {
-    MeshKey mesh;
-    Matrix4 modelView{}, projection{};
-    bool operator==(const Key& o) const
-    {
-      return mesh == o.mesh && modelView == o.modelView && projection == o.projection;
-    }
-  };
-
   /// Projects the points unless they were projected with `key`; true when it projected.
   bool Update(const Key& key, const PointsView& points, const ScalarsView& scalars, int threads);
 
   /// One record per point (valid after Update; the vector may be longer than the mesh).
   const std::vector<ProjectedPoint>& Points() const { return this->Projected; }
-  std::uint64_t Version() const { return this->Record.Version(); }
-  void Forget() override { this->Record.Forget(); }
   /// Frees the records.
   void Release() override;
   std::size_t MemoryBytes() const override
@@ -73,7 +72,6 @@ public:
   }
 
 private:
-  StageRecord<Key> Record;
   std::vector<ProjectedPoint> Projected; ///< grows to the largest mesh and is reused
 };
 

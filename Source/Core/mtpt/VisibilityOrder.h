@@ -89,10 +89,6 @@ void InvertOrder(const SortKey* order, std::size_t count, std::size_t cellCount,
   std::uint32_t* rank, int threads, const std::uint32_t* candidates = nullptr,
   std::size_t candidateCount = 0, std::size_t meshCells = 0);
 
-/**
- * Deliberately wrong visibility orders, for testing that tests can see the order (a test
- * suite that passes with a reversed or unsorted order does not check it). Never for use.
- */
 enum class OrderMutation
 {
   None,     ///< the visibility order (default)
@@ -111,22 +107,28 @@ enum class OrderMutation
  * near plane, in this frame and the previous one), the new keys are placed in the previous
  * order and SortNearlySorted finishes; it gives up past a move budget and the full sort runs.
  */
-class OrderStage : public StageBase
+/// What the order depends on: OrderStage's key.
+struct OrderKey
+{
+  std::uint64_t keys = 0;      ///< DepthKeyStage::Version()
+  std::uint64_t nearPlane = 0; ///< NearPlaneStage::Version()
+  OrderMethod method = OrderMethod::RadixSort;
+  std::size_t maxSubArraySize = DefaultMaxSubArraySize;
+  OrderMutation mutation = OrderMutation::None;
+  bool operator==(const OrderKey& o) const
+  {
+    return keys == o.keys && nearPlane == o.nearPlane && method == o.method &&
+      maxSubArraySize == o.maxSubArraySize && mutation == o.mutation;
+  }
+};
+
+/**
+ * Deliberately wrong visibility orders, for testing that tests can see the order (a test
+ * suite that passes with a reversed or unsorted order does not check it). Never for use.
+ */
+class OrderStage : public StageOf<OrderKey>
 {
 public:
-  struct Key
-  {
-    std::uint64_t keys = 0;      ///< DepthKeyStage::Version()
-    std::uint64_t nearPlane = 0; ///< NearPlaneStage::Version()
-    OrderMethod method = OrderMethod::RadixSort;
-    std::size_t maxSubArraySize = DefaultMaxSubArraySize;
-    OrderMutation mutation = OrderMutation::None;
-    bool operator==(const Key& o) const
-    {
-      return keys == o.keys && nearPlane == o.nearPlane && method == o.method &&
-        maxSubArraySize == o.maxSubArraySize && mutation == o.mutation;
-    }
-  };
   /**
    * Which cells an order holds, for sorting the next one from it: every visible cell of the
    * same data (`whole`), seen the same way, from a view direction (unit, model space).
@@ -163,9 +165,7 @@ public:
   const std::uint32_t* Rank() const { return this->Ranks.data(); }
   /// Whether the last Update sorted from the previous order.
   bool FromPrevious() const { return this->SortedFromPrevious; }
-  std::uint64_t Version() const { return this->Record.Version(); }
   OrderMethod Method() const { return this->Sorter->Method(); }
-  void Forget() override { this->Record.Forget(); }
   void Release() override;
   std::size_t MemoryBytes() const override;
 
@@ -173,7 +173,6 @@ private:
   bool SortFromPrevious(int threads);
   void Mutate(OrderMutation mutation);
 
-  StageRecord<Key> Record;
   std::unique_ptr<VisibilityOrder> Sorter;
   std::size_t SorterMaxSubArraySize = DefaultMaxSubArraySize;
   Cells Held; ///< the cells of the held order
