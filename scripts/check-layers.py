@@ -11,16 +11,19 @@ The core (Source/Core), from the lowest layer:
      mtpt/Transform.h, Culling.h, LevelOfDetail.h, DepthKeys.h, NearPlane.h,
      VisibilityOrder.h, Decompose.h
   3  assemblies: mtpt/Compositor.h, FramePipeline.h, ReferenceRenderer.h, ImageSampling.h
-The VTK module (Source/VTK), in rooms; each includes the core's public headers (mtpt/, never
-detail/) and the rooms it lists, and inside a room a file includes only those before it:
-  basics     vtkMTPTVTKCompatibility.h, VTKCompatibility.h, OpenGLHeader.h
-  input      VolumeInput.h, Tetrahedralizer.h, MeshAdapter.h, MeshSource.h,
+The VTK module (Source/VTK), in rooms, each a folder; each includes the core's public headers
+(mtpt/, never detail/) and the rooms it lists, and inside a room a file includes only those
+before it:
+  basics     Basics/: VTKCompatibility.h, OpenGLHeader.h; and the public
+             vtkMTPTVTKCompatibility.h at the top
+  input      Input/: VolumeInput.h, Tetrahedralizer.h, MeshAdapter.h, MeshSource.h,
              TransferFunctionTables.h, DependentColours.h            (basics)
-  drawing    RenderBackend.h, BlendTarget.h, VolumetricPeel.h, CPUBackend.h and
+  drawing    Drawing/: RenderBackend.h, BlendTarget.h, VolumetricPeel.h, CPUBackend.h and
              OpenGLBackend.h (the two backends side by side)         (basics, input)
-  reference  vtkMTPTReferenceRenderer.h                              (basics, input)
-  mapper     vtkMultiThreadedProjectedTetrahedraMapper.h             (basics, input, drawing)
-A source file belongs to the place of the header it implements. Exit status 1 with one line
+  reference  Reference/: vtkMTPTReferenceRenderer.h                  (basics, input)
+  mapper     the top: vtkMultiThreadedProjectedTetrahedraMapper.h    (basics, input, drawing)
+A source file belongs to the place of the header it implements, and lies in its room's
+folder. Exit status 1 with one line
 per include that runs upward, sideways or into the core's internals; a header the tables do
 not know is an error too. --self-test injects such includes into a copy of the sources and
 checks that each is reported, and that the copy without them passes.
@@ -49,20 +52,30 @@ CORE_SOURCES = {"TileRaster.cxx": "detail/TileRaster.h",
                 "DecomposeBatch.cxx": "detail/DecomposeBatch.h",
                 "KeyBatch.cxx": "detail/KeyBatch.h"}
 
+# room -> (folder, its headers in order, the rooms it may include). Headers are named by
+# their path in Source/VTK, which is how the module includes them.
 ROOMS = {
-    "basics": (["vtkMTPTVTKCompatibility.h", "VTKCompatibility.h", "OpenGLHeader.h"], []),
-    "input": (["VolumeInput.h", "Tetrahedralizer.h", "MeshAdapter.h", "MeshSource.h",
-               "TransferFunctionTables.h", "DependentColours.h"], ["basics"]),
-    "drawing": (["RenderBackend.h", "BlendTarget.h", "VolumetricPeel.h",
-                 ("CPUBackend.h", "OpenGLBackend.h")], ["basics", "input"]),
-    "reference": (["vtkMTPTReferenceRenderer.h"], ["basics", "input"]),
-    "mapper": (["vtkMultiThreadedProjectedTetrahedraMapper.h"], ["basics", "input", "drawing"]),
+    "basics": ("Basics", ["vtkMTPTVTKCompatibility.h", "Basics/VTKCompatibility.h",
+                          "Basics/OpenGLHeader.h"], []),
+    "input": ("Input", ["Input/VolumeInput.h", "Input/Tetrahedralizer.h", "Input/MeshAdapter.h",
+                        "Input/MeshSource.h", "Input/TransferFunctionTables.h",
+                        "Input/DependentColours.h"], ["basics"]),
+    "drawing": ("Drawing", ["Drawing/RenderBackend.h", "Drawing/BlendTarget.h",
+                            "Drawing/VolumetricPeel.h",
+                            ("Drawing/CPUBackend.h", "Drawing/OpenGLBackend.h")],
+                ["basics", "input"]),
+    "reference": ("Reference", ["Reference/vtkMTPTReferenceRenderer.h"], ["basics", "input"]),
+    "mapper": ("", ["vtkMultiThreadedProjectedTetrahedraMapper.h"], ["basics", "input", "drawing"]),
 }
+# Public headers live at the top, whatever their room; other files in their room's folder.
+PUBLIC = {"vtkMTPTVTKCompatibility.h"}
 VTK = {}  # header -> (room, rank in the room)
-for room, (members, _) in ROOMS.items():
+for room, (_, members, _) in ROOMS.items():
     for rank, member in enumerate(members):
         for header in (member if isinstance(member, tuple) else (member,)):
             VTK[header] = (room, rank)
+# A public header in a folder of its own (vtkMTPT*.h) is also included by its name alone.
+BY_NAME = {os.path.basename(h): h for h in VTK if os.path.basename(h).startswith("vtk")}
 
 INCLUDE = re.compile(r'\s*#\s*include\s+"([^"]+)"')
 
@@ -106,15 +119,22 @@ def check_core(core, problems):
 
 
 def check_vtk(vtk, problems):
-    files = sorted(name for name in os.listdir(vtk) if name.endswith((".h", ".cxx")))
+    files = sorted(os.path.relpath(os.path.join(folder, name), vtk)
+                   for folder, _, names in os.walk(vtk) for name in names
+                   if name.endswith((".h", ".cxx")))
     for name in files:
         own = name[:-4] + ".h" if name.endswith(".cxx") else name
         if own not in VTK:
             problems.append(f"VTK/{name}: its room is unknown (add {own} to ROOMS)")
             continue
         room, rank = VTK[own]
+        folder = "" if own in PUBLIC else ROOMS[room][0]
+        if os.path.dirname(name) != folder:
+            problems.append(f"VTK/{name}: of the room {room}, outside its folder "
+                            f"{folder or 'Source/VTK'}")
         for number, included in includes(os.path.join(vtk, name)):
             where = f"VTK/{name}:{number}"
+            included = BY_NAME.get(included, included)
             if included.startswith("detail/"):
                 problems.append(f"{where}: includes the core's internal {included}")
             elif included == own or included.startswith("mtpt/") or included not in VTK:
@@ -123,7 +143,7 @@ def check_vtk(vtk, problems):
                 if VTK[included][1] >= rank:
                     problems.append(f"{where}: includes {included}, not before it in the room "
                                     f"{room}")
-            elif VTK[included][0] not in ROOMS[room][1]:
+            elif VTK[included][0] not in ROOMS[room][2]:
                 problems.append(f"{where}: the room {room} includes {included} of the room "
                                 f"{VTK[included][0]}")
     return len(files)
@@ -150,12 +170,16 @@ def self_test(source):
         ("Core/mtpt/DepthKeys.h", '#include "mtpt/Decompose.h"', "a later stage"),
         ("Core/mtpt/Transform.h", '#include "mtpt/FramePipeline.h"', "layer 3"),
         ("Core/Culling.cxx", '#include "mtpt/LevelOfDetail.h"', "a later stage"),
-        ("VTK/MeshSource.h", '#include "CPUBackend.h"', "the room input includes"),
-        ("VTK/BlendTarget.cxx", '#include "CPUBackend.h"', "not before it in the room"),
-        ("VTK/CPUBackend.h", '#include "OpenGLBackend.h"', "not before it in the room"),
-        ("VTK/vtkMTPTReferenceRenderer.cxx", '#include "RenderBackend.h"',
+        ("VTK/Input/MeshSource.h", '#include "Drawing/CPUBackend.h"', "the room input includes"),
+        ("VTK/Drawing/BlendTarget.cxx", '#include "Drawing/CPUBackend.h"',
+         "not before it in the room"),
+        ("VTK/Drawing/CPUBackend.h", '#include "Drawing/OpenGLBackend.h"',
+         "not before it in the room"),
+        ("VTK/Reference/vtkMTPTReferenceRenderer.cxx", '#include "Drawing/RenderBackend.h"',
          "the room reference includes"),
-        ("VTK/OpenGLBackend.cxx", '#include "detail/Parallel.h"', "internal"),
+        ("VTK/Drawing/RenderBackend.h", '#include "vtkMTPTReferenceRenderer.h"',
+         "the room drawing includes"),
+        ("VTK/Drawing/OpenGLBackend.cxx", '#include "detail/Parallel.h"', "internal"),
     ]
     ok = True
     with tempfile.TemporaryDirectory() as scratch:

@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
 
-#include "CPUBackend.h"
-#include "DependentColours.h"
-#include "MeshSource.h"
-#include "OpenGLBackend.h"
-#include "TransferFunctionTables.h"
-#include "VolumeInput.h"
-#include "VolumetricPeel.h"
+#include "Drawing/CPUBackend.h"
+#include "Drawing/OpenGLBackend.h"
+#include "Drawing/VolumetricPeel.h"
+#include "Input/DependentColours.h"
+#include "Input/MeshSource.h"
+#include "Input/TransferFunctionTables.h"
+#include "Input/VolumeInput.h"
 
 #include "mtpt/FramePipeline.h"
 #include "mtpt/ImageSampling.h"
@@ -30,7 +30,7 @@
 #include "vtkVolume.h"
 #include "vtkVolumeProperty.h"
 #include "vtkWeakPointer.h"
-#include "OpenGLHeader.h"
+#include "Basics/OpenGLHeader.h"
 
 #include <algorithm>
 #include <cmath>

@@ -30,8 +30,8 @@
 #define mtpt_CPUBackend_h
 
 #include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
-#include "BlendTarget.h"
-#include "RenderBackend.h"
+#include "Drawing/BlendTarget.h"
+#include "Drawing/RenderBackend.h"
 
 #include "mtpt/Compositor.h"
 

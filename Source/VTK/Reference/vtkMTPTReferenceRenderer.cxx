@@ -1,11 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkMTPTReferenceRenderer.h"
 
-#include "MeshSource.h"
-
-#include "MeshAdapter.h"
-#include "Tetrahedralizer.h"
-#include "VolumeInput.h"
+#include "Input/MeshAdapter.h"
+#include "Input/MeshSource.h"
+#include "Input/Tetrahedralizer.h"
+#include "Input/VolumeInput.h"
 
 #include "mtpt/ReferenceRenderer.h"
 

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "BlendTarget.h"
+#include "Drawing/BlendTarget.h"
 
-#include "RenderBackend.h"
+#include "Drawing/RenderBackend.h"
 #include "vtkMTPTCompositeFS.h"
 
 #include "vtkOpenGLFramebufferObject.h"
@@ -12,7 +12,7 @@
 #include "vtkOpenGLState.h"
 #include "vtkShaderProgram.h"
 #include "vtkTextureObject.h"
-#include "OpenGLHeader.h"
+#include "Basics/OpenGLHeader.h"
 
 namespace mtpt
 {

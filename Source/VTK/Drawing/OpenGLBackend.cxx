@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "OpenGLBackend.h"
+#include "Drawing/OpenGLBackend.h"
 
-#include "TransferFunctionTables.h"
-#include "VolumetricPeel.h"
+#include "Drawing/VolumetricPeel.h"
+#include "Input/TransferFunctionTables.h"
 #include "vtkMTPTSegmentShared.h"
 #include "vtkMTPTTetrahedraFS.h"
 #include "vtkMTPTTetrahedraVS.h"
@@ -19,7 +19,7 @@
 #include "vtkOpenGLVertexBufferObject.h"
 #include "vtkShaderProgram.h"
 #include "vtkTextureObject.h"
-#include "OpenGLHeader.h"
+#include "Basics/OpenGLHeader.h"
 
 #include <algorithm>
 #include <climits>

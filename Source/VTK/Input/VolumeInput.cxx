@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "VolumeInput.h"
+#include "Input/VolumeInput.h"
 
 #include "vtkAbstractVolumeMapper.h"
 #include "vtkCamera.h"

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "Tetrahedralizer.h"
+#include "Input/Tetrahedralizer.h"
 
-#include "VTKCompatibility.h"
+#include "Basics/VTKCompatibility.h"
 
 #include "vtkCellData.h"
 #include "vtkCellIterator.h"

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "CPUBackend.h"
+#include "Drawing/CPUBackend.h"
 
-#include "TransferFunctionTables.h"
-#include "VolumetricPeel.h"
+#include "Drawing/VolumetricPeel.h"
+#include "Input/TransferFunctionTables.h"
 
 #include "mtpt/FramePipeline.h"
 #include "mtpt/ImageSampling.h"
@@ -16,7 +16,7 @@
 #include "vtkOpenGLState.h"
 #include "vtkTextureObject.h"
 #include "vtkType.h"
-#include "OpenGLHeader.h"
+#include "Basics/OpenGLHeader.h"
 
 #include <algorithm>
 #include <climits>

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "MeshAdapter.h"
+#include "Input/MeshAdapter.h"
 
-#include "VTKCompatibility.h"
-#include "VolumeInput.h"
+#include "Basics/VTKCompatibility.h"
+#include "Input/VolumeInput.h"
 
 #include "vtkCellArray.h"
 #include "vtkCellType.h"

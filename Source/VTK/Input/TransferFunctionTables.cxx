@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "TransferFunctionTables.h"
+#include "Input/TransferFunctionTables.h"
 
 #include "vtkColorTransferFunction.h"
 #include "vtkPiecewiseFunction.h"

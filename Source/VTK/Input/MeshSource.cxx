@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "MeshSource.h"
+#include "Input/MeshSource.h"
 
-#include "MeshAdapter.h"
-#include "Tetrahedralizer.h"
-#include "VolumeInput.h"
+#include "Input/MeshAdapter.h"
+#include "Input/Tetrahedralizer.h"
+#include "Input/VolumeInput.h"
 
 #include "vtkCompositeDataSet.h"
 #include "vtkDataArray.h"

@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "RenderBackend.h"
+#include "Drawing/RenderBackend.h"
 
 #include "mtpt/FramePipeline.h"
 #include "mtpt/Timing.h"
 
-#include "OpenGLHeader.h"
+#include "Basics/OpenGLHeader.h"
 
 #include <algorithm>
 

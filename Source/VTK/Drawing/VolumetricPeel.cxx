@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "VolumetricPeel.h"
+#include "Drawing/VolumetricPeel.h"
 
-#include "RenderBackend.h"
+#include "Drawing/RenderBackend.h"
 #include "vtkMTPTPeelFS.h"
 
 #include "vtkAbstractVolumeMapper.h"
@@ -17,7 +17,7 @@
 #include "vtkShaderProgram.h"
 #include "vtkTextureObject.h"
 #include "vtkVolume.h"
-#include "OpenGLHeader.h"
+#include "Basics/OpenGLHeader.h"
 
 namespace mtpt
 {

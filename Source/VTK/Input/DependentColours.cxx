@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "DependentColours.h"
+#include "Input/DependentColours.h"
 
-#include "TransferFunctionTables.h"
+#include "Input/TransferFunctionTables.h"
 
 #include "vtkColorTransferFunction.h"
 #include "vtkPiecewiseFunction.h"

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "VTKCompatibility.h"
+#include "Basics/VTKCompatibility.h"
 
 #include "vtkCellIterator.h"
 #include "vtkCellType.h"

@@ -25,8 +25,8 @@
 #define mtpt_OpenGLBackend_h
 
 #include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
-#include "BlendTarget.h"
-#include "RenderBackend.h"
+#include "Drawing/BlendTarget.h"
+#include "Drawing/RenderBackend.h"
 
 #include "vtkNew.h"
 #include "vtkOpenGLHelper.h"
