@@ -18,8 +18,9 @@ before it:
              vtkMTPTVTKCompatibility.h at the top
   input      Input/: VolumeInput.h, Tetrahedralizer.h, MeshAdapter.h, MeshSource.h,
              TransferFunctionTables.h, DependentColours.h            (basics)
-  drawing    Drawing/: RenderBackend.h, BlendTarget.h, VolumetricPeel.h, CPUBackend.h and
-             OpenGLBackend.h (the two backends side by side)         (basics, input)
+  drawing    Drawing/: RenderBackend.h, BlendTarget.h, VolumetricPeel.h, ImagePath.h,
+             CPUBackend.h and OpenGLBackend.h (the two backends side by side)
+                                                                     (basics, input)
   reference  Reference/: vtkMTPTReferenceRenderer.h                  (basics, input)
   mapper     the top: vtkMultiThreadedProjectedTetrahedraMapper.h    (basics, input, drawing)
 A source file belongs to the place of the header it implements, and lies in its room's
@@ -61,7 +62,7 @@ ROOMS = {
                         "Input/MeshSource.h", "Input/TransferFunctionTables.h",
                         "Input/DependentColours.h"], ["basics"]),
     "drawing": ("Drawing", ["Drawing/RenderBackend.h", "Drawing/BlendTarget.h",
-                            "Drawing/VolumetricPeel.h",
+                            "Drawing/VolumetricPeel.h", "Drawing/ImagePath.h",
                             ("Drawing/CPUBackend.h", "Drawing/OpenGLBackend.h")],
                 ["basics", "input"]),
     "reference": ("Reference", ["Reference/vtkMTPTReferenceRenderer.h"], ["basics", "input"]),
