@@ -105,6 +105,50 @@ detail::TileTarget TargetOf(
   return target;
 }
 
+/// Where a fan lies against the clipping planes.
+enum class FanSide : std::uint8_t
+{
+  Kept,      ///< no plane cuts it
+  Straddles, ///< a plane cuts it: its fragments are cut
+  Clipped    ///< one plane clips all of it
+};
+
+/**
+ * The fan's side of the planes, from the eye points of its records' segment ends: the fan's
+ * fragments' segments lie in their convex hull.
+ */
+FanSide SideOfPlanes(const Fan& fan, const ClipPlanes& planes, const DepthClipping& view)
+{
+  double ends[10][3];
+  int n = 0;
+  auto add = [&](const TetVertex& v)
+  {
+    const double front = view.EyeDepth(0.5 * (v.z + 1.0));
+    view.EyePoint(v.x, v.y, front, ends[n++]);
+    view.EyePoint(v.x, v.y, front + v.thickness / view.RayLength(v.x, v.y), ends[n++]);
+  };
+  add(fan.centre);
+  for (int k = 0; k < fan.count && k < 4; ++k)
+  {
+    add(fan.boundary[k]);
+  }
+  bool cut = false;
+  for (int i = 0; i < planes.count; ++i)
+  {
+    int kept = 0;
+    for (int k = 0; k < n; ++k)
+    {
+      kept += planes.Distance(i, ends[k]) >= 0.0 ? 1 : 0;
+    }
+    if (kept == 0)
+    {
+      return FanSide::Clipped;
+    }
+    cut = cut || kept < n;
+  }
+  return cut ? FanSide::Straddles : FanSide::Kept;
+}
+
 /**
  * Depth peeling: copies the near and far window depths of tile `tile`'s pixels into `range`
  * (2 TileSize^2 floats). Returns whether any pixel asks for a range (near <= far).
@@ -130,9 +174,9 @@ bool CopyRanges(int tile, int tilesX, const CompositeSettings& s, std::vector<fl
  * Draws the fans listed in `list` (count of them, in visibility order: back to front) into
  * `target` front to back: gathered from the list's end, a chunk at a time.
  */
-void DrawFrontToBack(const Fan* fans, const std::uint32_t* list, std::size_t count,
-  const detail::RasterFrame& frame, const detail::TileTarget& target, std::vector<Fan>& chunk,
-  detail::RasterCounts& counts)
+void DrawFrontToBack(const Fan* fans, const std::uint8_t* straddles, const std::uint32_t* list,
+  std::size_t count, const detail::RasterFrame& frame, const detail::TileTarget& target,
+  std::vector<Fan>& chunk, detail::RasterCounts& counts)
 {
   for (std::size_t left = count; left > 0;)
   {
@@ -148,6 +192,7 @@ void DrawFrontToBack(const Fan* fans, const std::uint32_t* list, std::size_t cou
         __builtin_prefetch(ahead + 64);
       }
       chunk[k] = fans[list[at]];
+      chunk[k].straddles = straddles ? straddles[list[at]] : 0;
     }
     detail::RasterizeTile(frame, target, chunk.data(), n, counts);
   }
@@ -237,6 +282,11 @@ void Compositor::CountPairs(const Fan* fans, std::size_t count, int blocks)
   {
     this->Ranges.resize(count);
   }
+  const ClipPlanes& planes = this->Settings.clipPlanes;
+  if (planes.count > 0 && this->Straddles.size() < count)
+  {
+    this->Straddles.resize(count);
+  }
   const int width = this->Settings.width, height = this->Settings.height;
   std::vector<PixelRegion> touched(blocks, this->Touched);
   std::vector<std::size_t> binned(blocks, 0);
@@ -252,10 +302,18 @@ void Compositor::CountPairs(const Fan* fans, std::size_t count, int blocks)
       {
         int x0, x1, y0, y1;
         TileRange& range = this->Ranges[i];
-        if (fans[i].count < 2 || !FanPixels(fans[i], width, height, x0, x1, y0, y1))
+        const FanSide side = planes.count > 0 && fans[i].count >= 2
+          ? SideOfPlanes(fans[i], planes, this->Settings.clipping)
+          : FanSide::Kept;
+        if (fans[i].count < 2 || side == FanSide::Clipped ||
+          !FanPixels(fans[i], width, height, x0, x1, y0, y1))
         {
           range = TileRange{ 1, 0, 0, 0 };
           continue;
+        }
+        if (planes.count > 0)
+        {
+          this->Straddles[i] = side == FanSide::Straddles ? 1 : 0;
         }
         ++blockBinned;
         region = { std::min(region.x0, x0), std::min(region.y0, y0), std::max(region.x1, x1 + 1),
@@ -350,6 +408,8 @@ void Compositor::Rasterize(const Fan* fans, int threads)
   frame.inverseUnit = static_cast<float>(1.0 / s.unitDistance);
   frame.clipToRange = s.depthRange != nullptr;
   frame.clipping = s.clipping;
+  frame.planes = s.clipPlanes;
+  const std::uint8_t* straddles = s.clipPlanes.count > 0 ? this->Straddles.data() : nullptr;
   const auto jobs = static_cast<std::int64_t>(this->Tiles.size());
   std::size_t triangles = 0, fragments = 0, hidden = 0;
   // Threads take tiles: no more threads than tiles, nor than the binned fans are worth.
@@ -382,8 +442,8 @@ void Compositor::Rasterize(const Fan* fans, int threads)
       target.range = s.depthRange ? range.data() : nullptr;
       detail::RasterCounts counts;
       const std::size_t first = this->TileStart[tile];
-      DrawFrontToBack(fans, this->Entries.data() + first, this->TileStart[tile + 1] - first, frame,
-        target, chunk, counts);
+      DrawFrontToBack(fans, straddles, this->Entries.data() + first,
+        this->TileStart[tile + 1] - first, frame, target, chunk, counts);
       if (behind)
       {
         Over(batch.data(), pixels);

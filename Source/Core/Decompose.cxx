@@ -476,6 +476,7 @@ inline void FillFan(const ProjectedPoint* const c[4], const float scalars[4],
   }
   fan.count = static_cast<std::uint8_t>(g.count);
   fan.closed = 1;
+  fan.straddles = 0;
   std::memset(fan.padding, 0, sizeof(fan.padding));
 }
 

@@ -1013,6 +1013,62 @@ void IntegrateRay(const TransferFunctions& tf, double scale, const Segment<C>* b
   }
 }
 
+/**
+ * The stretch [low, high] of the ray origin + u direction that every clipping plane keeps;
+ * low > high when none does.
+ */
+void KeptStretch(const ClipPlanes& planes, const double origin[3], const double direction[3],
+  double& low, double& high)
+{
+  low = -std::numeric_limits<double>::infinity();
+  high = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < planes.count; ++i)
+  {
+    const double* p = planes.plane[i];
+    const double at = p[0] * origin[0] + p[1] * origin[1] + p[2] * origin[2] + p[3];
+    const double slope = p[0] * direction[0] + p[1] * direction[1] + p[2] * direction[2];
+    if (slope > 0.0)
+    {
+      low = std::max(low, -at / slope);
+    }
+    else if (slope < 0.0)
+    {
+      high = std::min(high, -at / slope);
+    }
+    else if (!(at >= 0.0))
+    {
+      low = 1.0; // parallel to the plane on its clipped side
+      high = 0.0;
+    }
+  }
+}
+
+/// Cuts the segments [begin, end) (sorted) to the stretch [low, high] of the ray: a part
+/// left out gets no length, a cut end the values interpolated there.
+template <int C>
+void CutSegments(Segment<C>* begin, Segment<C>* end, double low, double high)
+{
+  for (Segment<C>* s = begin; s != end; ++s)
+  {
+    const double from = std::max(s->enter, low), to = std::min(s->exit, high);
+    if (!(from < to))
+    {
+      s->exit = s->enter;
+      continue;
+    }
+    const double span = s->exit - s->enter;
+    const double f0 = (from - s->enter) / span, f1 = (to - s->enter) / span;
+    for (int k = 0; k < C; ++k)
+    {
+      const double front = s->front[k], difference = s->back[k] - s->front[k];
+      s->front[k] = from > s->enter ? front + f0 * difference : front;
+      s->back[k] = to < s->exit ? front + f1 * difference : s->back[k];
+    }
+    s->enter = from;
+    s->exit = to;
+  }
+}
+
 /// Per pixel of the band: its segments sorted by depth, integrated front to back with the
 /// translucent surfaces it crosses, then the background.
 template <int C>
@@ -1035,6 +1091,12 @@ void IntegratePixels(const Scene& scene, int bandStart, int bandEnd,
     double origin[3], direction[3];
     scene.ray(x, y, origin, direction);
     const double scale = std::sqrt(Dot(direction, direction));
+    if (scene.settings.clipPlanes.count > 0)
+    {
+      double low, high;
+      KeptStretch(scene.settings.clipPlanes, origin, direction, low, high);
+      CutSegments(begin, end, low, high);
+    }
     RayState state;
     IntegrateRay(scene.tf, scale, begin, end, hits.data() + hitOffsets[i],
       hits.data() + hitOffsets[i + 1], state);

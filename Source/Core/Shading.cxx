@@ -45,6 +45,14 @@ DepthClipping DepthClipping::FromProjection(const Matrix4& p)
     c.a = -1.0 / p[10];
     c.b = p[11] / p[10];
   }
+  if (!c.perspective && p[0] != 0.0 && p[5] != 0.0)
+  {
+    // x_ndc = p0 ex + p3, y_ndc = p5 ey + p7.
+    c.scaleX = 1.0 / p[0];
+    c.shiftX = -p[3];
+    c.scaleY = 1.0 / p[5];
+    c.shiftY = -p[7];
+  }
   return c;
 }
 

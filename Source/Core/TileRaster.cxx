@@ -1017,8 +1017,46 @@ FragmentSegment SegmentAt(
  * length; pre-integrated ones are queued with the part's scalars and length. One fragment
  * at a time: peeling frames are few, and their fragments straddle depth boundaries.
  */
+/**
+ * The part [t0, t1] of fragment `s` at tile column x, row y that is drawn: inside the
+ * pixel's depth range (depth peeling) or, without one, in front of the opaque depth; and,
+ * for a fan that straddles a clipping plane (`cut`), kept by every plane.
+ */
+bool DrawnPart(const RasterFrame& f, const TileTarget& tile, const TileRow& row,
+  const FragmentSegment& s, int x, int y, bool cut, double& t0, double& t1)
+{
+  if (s.z < -1.0 || s.z > 1.0)
+  {
+    return false; // clipped by the near or far plane
+  }
+  t0 = 0.0;
+  t1 = 1.0;
+  if (tile.range)
+  {
+    const float* range = tile.range + 2 * (static_cast<std::size_t>(y - tile.y0) * T + x);
+    if (!f.clipping.Part(s.front, s.back, range[0], range[1], t0, t1))
+    {
+      return false;
+    }
+  }
+  else if (row.depth && 0.5 * (s.z + 1.0) > row.depth[x])
+  {
+    return false; // behind opaque geometry, as every other fragment
+  }
+  if (!cut)
+  {
+    return true;
+  }
+  const double ndcX = 2.0 * (tile.x0 + x + 0.5) / f.width - 1.0;
+  const double ndcY = 2.0 * (y + 0.5) / f.height - 1.0;
+  double front[3], back[3];
+  f.clipping.EyePoint(ndcX, ndcY, s.front, front);
+  f.clipping.EyePoint(ndcX, ndcY, s.back, back);
+  return f.planes.Narrow(front, back, t0, t1);
+}
+
 void ShadeClipped(const RasterFrame& f, const TileTarget& tile, Mode mode, const Planes& p, int y,
-  int lo, int hi, WaitingFragments& waiting)
+  int lo, int hi, WaitingFragments& waiting, bool cut)
 {
   if (mode != Mode::Compatible && !f.preIntegration->Covers(f.transferFunction))
   {
@@ -1028,14 +1066,13 @@ void ShadeClipped(const RasterFrame& f, const TileTarget& tile, Mode mode, const
   const std::size_t lanes = hn::Lanes(SegmentTag());
   for (int x = lo - tile.x0; x <= hi - tile.x0; ++x)
   {
-    const float* range = tile.range + 2 * (static_cast<std::size_t>(y - tile.y0) * T + x);
-    if (!(range[0] <= range[1]) || (mode == Mode::Compatible && !(row.a[x] < OpaqueAlpha)))
+    if (mode == Mode::Compatible && !(row.a[x] < OpaqueAlpha))
     {
-      continue; // no range asked at this pixel, or (as ShadeVector) nothing behind can show
+      continue; // as ShadeVector: nothing behind can show
     }
     const FragmentSegment s = SegmentAt(f, tile, mode, p, x, y);
     double t0, t1;
-    if (s.z < -1.0 || s.z > 1.0 || !f.clipping.Part(s.front, s.back, range[0], range[1], t0, t1))
+    if (!DrawnPart(f, tile, row, s, x, y, cut, t0, t1))
     {
       continue;
     }
@@ -1065,13 +1102,14 @@ void ShadeClipped(const RasterFrame& f, const TileTarget& tile, Mode mode, const
   }
 }
 
-/// Shades the covered pixels lo..hi of row y by the mode's (and the depth range's) path.
+/// Shades the covered pixels lo..hi of row y by the mode's path, or cut by the depth range
+/// or (`cut`) the clipping planes.
 void ShadeSpan(const RasterFrame& f, const TileTarget& tile, Mode mode, const Planes& p, int y,
-  int lo, int hi, WaitingFragments& waiting)
+  int lo, int hi, WaitingFragments& waiting, bool cut)
 {
-  if (f.clipToRange)
+  if (f.clipToRange || cut)
   {
-    ShadeClipped(f, tile, mode, p, y, lo, hi, waiting);
+    ShadeClipped(f, tile, mode, p, y, lo, hi, waiting, cut);
   }
   else if (mode == Mode::Compatible)
   {
@@ -1108,7 +1146,7 @@ void CoverGuardBand(const RasterFrame& f, const double X[3], const double Y[3], 
  * values and the attribute planes are set up only once a pixel is known to be covered.
  */
 void DrawTriangle(const RasterFrame& f, const TileTarget& tile, Mode mode, Corner* const v[3],
-  WaitingFragments& waiting, RasterCounts& counts)
+  WaitingFragments& waiting, RasterCounts& counts, bool cut)
 {
   double minX = v[0]->X, maxX = minX, minY = v[0]->Y, maxY = minY;
   for (int k = 1; k < 3; ++k)
@@ -1153,7 +1191,7 @@ void DrawTriangle(const RasterFrame& f, const TileTarget& tile, Mode mode, Corne
     if (const Planes* p = getPlanes())
     {
       counts.fragments += static_cast<std::size_t>(hi - lo + 1);
-      ShadeSpan(f, tile, mode, *p, y, lo, hi, waiting);
+      ShadeSpan(f, tile, mode, *p, y, lo, hi, waiting, cut);
     }
   };
   const int x0 = static_cast<int>(bx0), x1 = static_cast<int>(bx1);
@@ -1166,7 +1204,7 @@ void DrawTriangle(const RasterFrame& f, const TileTarget& tile, Mode mode, Corne
     {
       return;
     }
-    if (mode == Mode::Compatible && edges.extent <= SmallTriangle && !f.clipToRange)
+    if (mode == Mode::Compatible && edges.extent <= SmallTriangle && !f.clipToRange && !cut)
     {
       ShadeSmall(f, tile, edges, getPlanes, x0, x1, y0, y1, counts);
     }
@@ -1192,7 +1230,8 @@ void RasterizeTileImpl(const RasterFrame& f, const TileTarget& tile, const Fan* 
   for (std::size_t e = 0; e < count; ++e)
   {
     const Fan& fan = fans[e];
-    if (mode == Mode::Compatible && fanPath.Draw(fan, counts))
+    const bool cut = fan.straddles != 0;
+    if (mode == Mode::Compatible && !cut && fanPath.Draw(fan, counts))
     {
       continue; // the fan as a whole, as its triangles would be drawn
     }
@@ -1214,7 +1253,7 @@ void RasterizeTileImpl(const RasterFrame& f, const TileTarget& tile, const Fan* 
     for (int k = triangles - 1; k >= 0; --k)
     {
       Corner* v[3] = { &corners[k], &corners[(k + 1) % n], &corners[n] };
-      DrawTriangle(f, tile, mode, v, waiting, counts);
+      DrawTriangle(f, tile, mode, v, waiting, counts, cut);
     }
   }
   ShadeWaiting(f, tile, waiting);

@@ -13,6 +13,7 @@
 #include <hwy/targets.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -434,48 +435,69 @@ std::vector<float> CompositeFans(mtpt::FramePipeline& pipeline, const mtpt::Comp
   return rgba;
 }
 
+/// The scene of the tests that split segments (by depth ranges, by planes): a jittered
+/// grid with a steep transfer function, seen from one point, in perspective or not.
+struct SplitScene
+{
+  static constexpr int Width = 72, Height = 60;
+  mtpt::test::TetMesh mesh = mtpt::test::JitteredGrid(10, 9);
+  std::vector<float> table;
+  mtpt::FrameInput input;
+  mtpt::FramePipeline pipeline;
+  mtpt::PreIntegrationTable integrals;
+
+  explicit SplitScene(bool perspective)
+  {
+    for (int i = 0; i < 64; ++i)
+    {
+      const float t = i / 63.0f;
+      this->table.insert(this->table.end(), { t, 1 - t, 0.5f, 3.0f * t * t });
+    }
+    this->input.points = this->mesh.Points();
+    this->input.cells = this->mesh.Cells();
+    this->input.scalars = { this->mesh.scalars.data(), mtpt::ScalarsView::Association::Points };
+    this->input.modelView = mtpt::test::LookAt({ 1.2, 1.5, 3.5 }, { 0, 0, 0 }, { 0, 1, 0 });
+    this->input.projection = perspective ? mtpt::test::Perspective(45, 1.2, 1.5, 6)
+                                         : mtpt::test::Ortho(-1.8, 1.8, -1.5, 1.5, 1.5, 6);
+    this->input.perspective = perspective;
+  }
+
+  /// The compositor's settings for `shading`, without ranges or planes.
+  mtpt::CompositeSettings SettingsFor(mtpt::Shading shading)
+  {
+    auto s = Settings(Width, Height, this->table);
+    s.transferFunction.low = -1.0;
+    s.transferFunction.high = 2.0;
+    s.unitDistance = 0.5;
+    this->integrals.Build(s.transferFunction);
+    if (shading == mtpt::Shading::PreIntegrated)
+    {
+      s.UsePreIntegration(
+        this->integrals, mtpt::PerspectiveInterpolation::FromProjection(this->input.projection));
+    }
+    return s;
+  }
+};
+
 TEST(Compositor, DepthRangesSplitSegmentsExactly)
 {
   // Depth peeling composites the volume between two window depths per pixel. The whole
   // range [0, 1] must give the unclipped image, and the part in front of a depth composited
   // over the part behind it must give it too: segments are cut where the depth crosses them,
   // with the length (and in pre-integrated shading the scalars) of each part.
-  const mtpt::test::TetMesh mesh = mtpt::test::JitteredGrid(10, 9);
-  std::vector<float> table;
-  for (int i = 0; i < 64; ++i)
-  {
-    const float t = i / 63.0f;
-    table.insert(table.end(), { t, 1 - t, 0.5f, 3.0f * t * t });
-  }
-  const int w = 72, h = 60;
-  mtpt::PreIntegrationTable integrals;
+  const int w = SplitScene::Width, h = SplitScene::Height;
   for (bool perspective : { false, true })
   {
-    mtpt::FrameInput input;
-    input.points = mesh.Points();
-    input.cells = mesh.Cells();
-    input.scalars = { mesh.scalars.data(), mtpt::ScalarsView::Association::Points };
-    input.modelView = mtpt::test::LookAt({ 1.2, 1.5, 3.5 }, { 0, 0, 0 }, { 0, 1, 0 });
-    input.projection = perspective ? mtpt::test::Perspective(45, 1.2, 1.5, 6)
-                                   : mtpt::test::Ortho(-1.8, 1.8, -1.5, 1.5, 1.5, 6);
-    input.perspective = perspective;
-    mtpt::FramePipeline pipeline;
-    ASSERT_TRUE(pipeline.Prepare(input, 2));
+    SplitScene scene(perspective);
+    ASSERT_TRUE(scene.pipeline.Prepare(scene.input, 2));
+    const mtpt::FrameInput& input = scene.input;
+    mtpt::FramePipeline& pipeline = scene.pipeline;
     for (auto shading : { mtpt::Shading::VTKCompatible, mtpt::Shading::PreIntegrated })
     {
       SCOPED_TRACE(::testing::Message()
         << (perspective ? "perspective" : "orthographic")
         << (shading == mtpt::Shading::PreIntegrated ? ", pre-integrated" : ""));
-      auto s = Settings(w, h, table);
-      s.transferFunction.low = -1.0;
-      s.transferFunction.high = 2.0;
-      s.unitDistance = 0.5;
-      integrals.Build(s.transferFunction);
-      if (shading == mtpt::Shading::PreIntegrated)
-      {
-        s.UsePreIntegration(
-          integrals, mtpt::PerspectiveInterpolation::FromProjection(input.projection));
-      }
+      auto s = scene.SettingsFor(shading);
       const std::vector<float> whole = CompositeFans(pipeline, s);
       s.clipping = mtpt::DepthClipping::FromProjection(input.projection);
       // The window depth of the mesh's centre splits it in two.
@@ -536,6 +558,95 @@ TEST(Compositor, DepthRangesSplitSegmentsExactly)
       // the centroid order, which is not exact for every pair of cells: measured 6.5e-4 and
       // 8e-5 (VTK-compatible), 2.2e-3 and 2.3e-3 (pre-integrated, whose steps also differ).
       EXPECT_LT(worstSplit, shading == mtpt::Shading::PreIntegrated ? 5e-3 : 2e-3);
+    }
+  }
+}
+
+
+TEST(Compositor, ClippingPlanesCutSegmentsExactly)
+{
+  // A clipping plane keeps the part of each fragment's segment on its normal's side. A plane
+  // that keeps everything changes nothing (bit for bit), one that keeps nothing leaves the
+  // image empty, and the part a plane keeps composited over the part its opposite keeps
+  // gives the whole image back, as a depth range split does. In an orthographic view a
+  // plane facing the eye is a depth range: the two cut alike.
+  const int w = SplitScene::Width, h = SplitScene::Height;
+  for (bool perspective : { false, true })
+  {
+    SplitScene scene(perspective);
+    ASSERT_TRUE(scene.pipeline.Prepare(scene.input, 2));
+    const mtpt::FrameInput& input = scene.input;
+    mtpt::FramePipeline& pipeline = scene.pipeline;
+    // An oblique plane through the mesh's centre, in eye coordinates, whose normal points
+    // away from the eye along every ray: it keeps the far part.
+    const mtpt::test::Vec3 centre = mtpt::test::Apply(input.modelView, { 0, 0, 0 });
+    const double n[3] = { 0.3, -0.2, -0.93 };
+    const double d = -(n[0] * centre[0] + n[1] * centre[1] + n[2] * centre[2]);
+    for (auto shading : { mtpt::Shading::VTKCompatible, mtpt::Shading::PreIntegrated })
+    {
+      SCOPED_TRACE(::testing::Message()
+        << (perspective ? "perspective" : "orthographic")
+        << (shading == mtpt::Shading::PreIntegrated ? ", pre-integrated" : ""));
+      auto s = scene.SettingsFor(shading);
+      s.clipping = mtpt::DepthClipping::FromProjection(input.projection);
+      const std::vector<float> whole = CompositeFans(pipeline, s);
+      auto clipped = [&](std::initializer_list<std::array<double, 4>> planes)
+      {
+        mtpt::CompositeSettings c = s;
+        for (const auto& plane : planes)
+        {
+          std::copy(plane.begin(), plane.end(), c.clipPlanes.plane[c.clipPlanes.count++]);
+        }
+        return CompositeFans(pipeline, c);
+      };
+      const std::vector<float> everything = clipped({ { n[0], n[1], n[2], d + 100.0 } });
+      const std::vector<float> nothing = clipped({ { n[0], n[1], n[2], d - 100.0 } });
+      const std::vector<float> far = clipped({ { n[0], n[1], n[2], d } });
+      const std::vector<float> near = clipped({ { -n[0], -n[1], -n[2], -d } });
+      double worstSplit = 0, nearAlpha = 0, farAlpha = 0;
+      for (int i = 0; i < w * h; ++i)
+      {
+        for (int c = 0; c < 4; ++c)
+        {
+          ASSERT_EQ(everything[4 * i + c], whole[4 * i + c]) << "pixel " << i;
+          ASSERT_EQ(nothing[4 * i + c], 0.0f) << "pixel " << i;
+          const float over = near[4 * i + c] + (1.0f - near[4 * i + 3]) * far[4 * i + c];
+          worstSplit = std::max(worstSplit, std::fabs(double(over) - whole[4 * i + c]));
+        }
+        nearAlpha = std::max(nearAlpha, double(near[4 * i + 3]));
+        farAlpha = std::max(farAlpha, double(far[4 * i + 3]));
+      }
+      std::printf("split by a plane %.2g; largest alpha near %.2f far %.2f\n", worstSplit,
+        nearAlpha, farAlpha);
+      EXPECT_GT(nearAlpha, 0.3);
+      EXPECT_GT(farAlpha, 0.3);
+      // As for depth ranges: the parts are blended in the exact order at the cut, the whole in
+      // the centroid order.
+      EXPECT_LT(worstSplit, shading == mtpt::Shading::PreIntegrated ? 5e-3 : 2e-3);
+      if (perspective)
+      {
+        continue;
+      }
+      // Facing the eye, the plane e_z = centre z keeps what a window-depth range keeps.
+      const mtpt::test::Vec3 ndc = mtpt::test::Apply(input.projection, centre);
+      const float middle = static_cast<float>(0.5 * (ndc[2] + 1.0));
+      std::vector<float> ranges(2 * w * h);
+      for (int i = 0; i < w * h; ++i)
+      {
+        ranges[2 * i] = 0.0f;
+        ranges[2 * i + 1] = middle;
+      }
+      mtpt::CompositeSettings r = s;
+      r.depthRange = ranges.data();
+      const std::vector<float> front = CompositeFans(pipeline, r);
+      const std::vector<float> facing = clipped({ { 0.0, 0.0, 1.0, -centre[2] } });
+      double worstFacing = 0;
+      for (std::size_t k = 0; k < front.size(); ++k)
+      {
+        worstFacing = std::max(worstFacing, std::fabs(double(front[k]) - facing[k]));
+      }
+      std::printf("plane against depth range %.2g\n", worstFacing);
+      EXPECT_LT(worstFacing, 2e-5);
     }
   }
 }

@@ -27,6 +27,7 @@ struct RasterFrame
   bool vertexColours = false; ///< the records hold colours (CompositeSettings::vertexColours)
   bool clipToRange = false;   ///< CompositeSettings::depthRange is set (TileTarget::range)
   DepthClipping clipping;
+  ClipPlanes planes; ///< cut the fragments of fans marked Fan::straddles
   PerspectiveInterpolation interpolation;
   float inverseUnit = 1.0f; ///< 1 / ScalarOpacityUnitDistance
   /// VTK-compatible fans drawn whole where they can be (FanRaster-inl.h), which gives the

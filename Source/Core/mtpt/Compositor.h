@@ -97,6 +97,14 @@ struct CompositeSettings
    */
   const float* depthRange = nullptr;
   DepthClipping clipping;
+  /**
+   * Clipping planes in eye coordinates (`clipping` gives the eye ray of each pixel): each
+   * fragment contributes only the part of its segment every plane keeps, with that part's
+   * length and, in pre-integrated shading, its scalars; VTK-compatible shading keeps the
+   * segment's colour and attenuation, as for depth peeling. Fans wholly clipped by one plane
+   * are left out at binning, and fans no plane cuts are drawn as without planes.
+   */
+  ClipPlanes clipPlanes;
 
   /// Switches to pre-integrated shading with `table` (the integral functions of
   /// transferFunction, kept alive by the caller) and the view's `interpolation`.
@@ -200,6 +208,7 @@ private:
   std::vector<float> Image;           ///< per tile: R, G, B, A planes
   std::vector<std::uint8_t> Cleared;  ///< per tile: cleared since Begin
   std::vector<TileRange> Ranges;      ///< per fan of the last Composite
+  std::vector<std::uint8_t> Straddles; ///< per fan of the last Composite: cut by a plane
   std::vector<std::uint32_t> Counts;  ///< per (block, tile): pairs, then the block's cursor
   std::vector<std::size_t> TileStart; ///< per tile: its first entry (tiles + 1 values)
   std::vector<std::uint32_t> Entries; ///< fans of the last Composite, tile by tile, in order

@@ -153,7 +153,10 @@ struct Fan
   TetVertex boundary[4]; ///< the silhouette's corners (front = back, length 0 for a cell's)
   std::uint8_t count;    ///< boundary corners: 0, 2, 3 or 4
   std::uint8_t closed;   ///< whether the last triangle closes the fan
-  std::uint8_t padding[6];
+  /// Set by the compositor on its own copy: the fan straddles a clipping plane, so its
+  /// fragments are cut (CompositeSettings::clipPlanes).
+  std::uint8_t straddles;
+  std::uint8_t padding[5];
 };
 static_assert(sizeof(Fan) == 128, "a fan is two cache lines");
 

@@ -49,6 +49,7 @@
 #define mtpt_ReferenceRenderer_h
 
 #include "mtpt/MeshView.h"
+#include "mtpt/Shading.h"
 
 #include <cstddef>
 #include <string>
@@ -126,6 +127,9 @@ struct ReferenceSettings
   ScalarMapping mapping = ScalarMapping::TransferFunctions;
   /// Translucent triangles composited with the volume in depth order (none by default).
   std::vector<ReferenceTriangle> triangles;
+  /// Clipping planes in eye coordinates: each ray integrates only the stretch every plane
+  /// keeps (the translucent triangles are not clipped, as VTK's mappers clip only their own).
+  ClipPlanes clipPlanes;
   /// Segments gathered at most per pass; the image is done in bands of rows that stay
   /// below it (memory: 32 bytes per segment with one scalar, as much in all with more).
   std::size_t maxSegmentsPerPass = std::size_t(1) << 23;

@@ -61,6 +61,8 @@ struct DepthClipping
   bool perspective = false;
   double a = 1.0, b = 0.0;
   PerspectiveInterpolation ray; ///< the eye ray per unit depth at a pixel (perspective)
+  /// Orthographic: eye x = (x_ndc + shiftX) * scaleX, and y alike.
+  double scaleX = 1.0, shiftX = 0.0, scaleY = 1.0, shiftY = 0.0;
 
   /// From an OpenGL-style projection (row-major), perspective or orthographic.
   static DepthClipping FromProjection(const Matrix4& projection);
@@ -70,6 +72,22 @@ struct DepthClipping
   {
     const double ndc = 2.0 * windowDepth - 1.0;
     return this->perspective ? 1.0 / (this->a * ndc + this->b) : this->a * ndc + this->b;
+  }
+
+  /// The eye-space point at eye depth `depth` on the ray through NDC (x, y).
+  void EyePoint(double x, double y, double depth, double e[3]) const
+  {
+    if (this->perspective)
+    {
+      e[0] = depth * (x + this->ray.shiftX) * this->ray.scaleX;
+      e[1] = depth * (y + this->ray.shiftY) * this->ray.scaleY;
+    }
+    else
+    {
+      e[0] = (x + this->shiftX) * this->scaleX;
+      e[1] = (y + this->shiftY) * this->scaleY;
+    }
+    e[2] = -depth;
   }
 
   /// The eye length per unit of eye depth of the ray through NDC (x, y).
@@ -101,6 +119,77 @@ struct DepthClipping
     const double to = (this->EyeDepth(farDepth) - front) / span;
     t0 = from > 0.0 ? (from < 1.0 ? from : 1.0) : 0.0;
     t1 = to > 0.0 ? (to < 1.0 ? to : 1.0) : 0.0;
+    return t1 > t0;
+  }
+};
+
+/**
+ * Clipping planes (vtkAbstractMapper's, Documentation/algorithm.md, "Clipping planes") in eye
+ * coordinates: plane i keeps the half-space n . e + d >= 0 of plane[i] = (n, d), as VTK's
+ * mappers keep the side a vtkPlane's normal points to. Each fragment's ray segment is cut
+ * exactly where it leaves a kept half-space: along a ray, the distance to a plane is affine
+ * in the distance travelled, so the cut is found from its two ends.
+ */
+struct ClipPlanes
+{
+  /// As many as VTK's GPU ray caster takes.
+  static constexpr int Max = 8;
+  int count = 0;
+  double plane[Max][4] = {};
+
+  bool operator==(const ClipPlanes& o) const
+  {
+    for (int i = 0; i < this->count && i < o.count; ++i)
+    {
+      for (int k = 0; k < 4; ++k)
+      {
+        if (this->plane[i][k] != o.plane[i][k])
+        {
+          return false;
+        }
+      }
+    }
+    return this->count == o.count;
+  }
+
+  /// Signed distance (times the normal's length) of eye point e to plane i.
+  double Distance(int i, const double e[3]) const
+  {
+    const double* p = this->plane[i];
+    return p[0] * e[0] + p[1] * e[1] + p[2] * e[2] + p[3];
+  }
+
+  /**
+   * Narrows [t0, t1] (fractions of a segment from eye point `front`, 0, to `back`, 1) to the
+   * part every plane keeps; false when no part of positive length is left.
+   */
+  bool Narrow(const double front[3], const double back[3], double& t0, double& t1) const
+  {
+    for (int i = 0; i < this->count; ++i)
+    {
+      const double f0 = this->Distance(i, front), f1 = this->Distance(i, back);
+      if (std::isnan(f0) || std::isnan(f1))
+      {
+        return false;
+      }
+      if (f0 >= 0.0 && f1 >= 0.0)
+      {
+        continue;
+      }
+      if (f0 < 0.0 && f1 < 0.0)
+      {
+        return false; // wholly clipped
+      }
+      const double cut = f0 / (f0 - f1); // where the distance is 0, in (0, 1]
+      if (f0 < 0.0)
+      {
+        t0 = cut > t0 ? cut : t0;
+      }
+      else
+      {
+        t1 = cut < t1 ? cut : t1;
+      }
+    }
     return t1 > t0;
   }
 };
