@@ -23,6 +23,7 @@
 #include "vtkNew.h"
 #include "vtkPNGWriter.h"
 #include "vtkPiecewiseFunction.h"
+#include "vtkPlane.h"
 #include "vtkRenderWindow.h"
 #include "vtkRenderWindowInteractor.h"
 #include "vtkRenderer.h"
@@ -63,7 +64,32 @@ struct Options
   bool unchanged = true, interactive = false, compare = false, reference = false;
   bool compareMerged = false;
   double updateRate = 15; ///< frames a second asked for while dragging (--interactive)
+  std::vector<std::string> clipPlanes; ///< --clip-plane: "ox,oy,oz,nx,ny,nz" each
 };
+
+/// Adds the --clip-plane planes to `mapper`; false (and a message) for a malformed one.
+bool AddClipPlanes(vtkAbstractMapper* mapper, const std::vector<std::string>& planes)
+{
+  for (const std::string& text : planes)
+  {
+    double v[6];
+    char end = 0;
+    if (std::sscanf(text.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf%c", v, v + 1, v + 2, v + 3, v + 4,
+          v + 5, &end) != 6 ||
+      (v[3] == 0 && v[4] == 0 && v[5] == 0))
+    {
+      std::fprintf(stderr,
+        "mtpt_render: --clip-plane takes ox,oy,oz,nx,ny,nz with a non-zero normal, not '%s'\n",
+        text.c_str());
+      return false;
+    }
+    vtkNew<vtkPlane> plane;
+    plane->SetOrigin(v[0], v[1], v[2]);
+    plane->SetNormal(v[3], v[4], v[5]);
+    mapper->AddClippingPlane(plane);
+  }
+  return true;
+}
 
 /// The transfer functions of --tf over the scalar range.
 vtkSmartPointer<vtkVolumeProperty> MakeTransferFunctions(
@@ -339,6 +365,7 @@ void CompareWithVTK(Stage& stage, const Scene& scene, vtkVolumeProperty* propert
   const char* contender =
     o.backend == "cpu" ? "mtpt-cpu" : (o.backend == "gl" ? "mtpt-gl" : "mtpt");
   auto ourSingleMapper = MakeMapper(contender, o.common.mapper);
+  AddClipPlanes(ourSingleMapper, o.clipPlanes);
   Stage single(scene, property, ourSingleMapper, o.width, o.height, look);
   const Timed ourSingle = Time(single, ourSingleMapper, o);
   auto theirSingleMapper = MakeMapper(kind);
@@ -423,6 +450,9 @@ int main(int argc, char** argv)
                        "a fixed image sample distance: one sample per D x D pixels, "
                        "stretched over the window (turns the automatic adjustment off)")
                      ->check(CLI::Range(0.1, 100.0));
+  app.add_option("--clip-plane", o.clipPlanes,
+    "a clipping plane ox,oy,oz,nx,ny,nz in world coordinates, keeping the side the normal "
+    "points to (repeatable; VTK's PT ignores them in --compare-vtk)");
   CLI11_PARSE(app, argc, argv);
   // Automatic adjustment unless a fixed distance is asked for; frames of a window at VTK's
   // default (still) update rate are drawn in full either way.
@@ -457,6 +487,10 @@ int main(int argc, char** argv)
   const char* contender =
     o.backend == "cpu" ? "mtpt-cpu" : (o.backend == "gl" ? "mtpt-gl" : "mtpt");
   auto mapper = MakeMapper(contender, o.common.mapper);
+  if (!AddClipPlanes(mapper, o.clipPlanes))
+  {
+    return 2;
+  }
   Stage stage(scene, property, mapper, o.width, o.height, look);
 
   // The picture, at the start view.

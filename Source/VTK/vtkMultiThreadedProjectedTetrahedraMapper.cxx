@@ -23,6 +23,7 @@
 #include "vtkMath.h"
 #include "vtkObjectFactory.h"
 #include "vtkOpenGLRenderWindow.h"
+#include "vtkPlaneCollection.h"
 #include "vtkOpenGLState.h"
 #include "vtkPoints.h"
 #include "vtkRenderer.h"
@@ -764,7 +765,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetUpFrame(vtkRenderer* renderer
     draw.origin[0] = draw.origin[1] = 0;
     draw.imageSize = { draw.size[0], draw.size[1] };
   }
-  draw.clipping = mtpt::DepthClipping::FromProjection(frame.projection);
+  this->SetUpClipping(renderer, frame, draw);
   if (this->CullInvisibleCells)
   {
     // Cells the opacity function hides are culled (exact: see mtpt/Culling.h), and cells
@@ -815,6 +816,20 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetUpFrame(vtkRenderer* renderer
     this->ReportProgress(window, begin + (1.0 - begin) * fraction);
     return window->CheckAbortStatus() == 0;
   };
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::SetUpClipping(
+  vtkRenderer* renderer, const mtpt::FrameInput& frame, mtpt::BackendFrame& draw)
+{
+  draw.clipping = mtpt::DepthClipping::FromProjection(frame.projection);
+  int ignored = 0;
+  draw.clipPlanes = mtpt::EyeClipPlanes(this, renderer, ignored);
+  if (ignored > 0 && this->Internal->Report(this->ClippingPlanes, "too many clipping planes"))
+  {
+    vtkWarningMacro(<< "clipping with the first " << mtpt::ClipPlanes::Max << " of "
+                    << mtpt::ClipPlanes::Max + ignored << " clipping planes, as many as VTK's "
+                    << "GPU ray caster takes");
+  }
 }
 
 void vtkMultiThreadedProjectedTetrahedraMapper::ConfigurePipeline(vtkOpenGLRenderWindow* window)

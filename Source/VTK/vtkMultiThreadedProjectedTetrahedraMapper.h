@@ -17,7 +17,8 @@
  * vtkProjectedTetrahedraMapper; other cells are split into tetrahedra. Where the images
  * differ, this mapper's is the more accurate (exact segment lengths, no 8-bit colours, cells
  * cut at the near plane); PRE_INTEGRATED_SHADING integrates the transfer functions exactly
- * along each fragment's segment. Cells that cannot show are culled before the sort, and
+ * along each fragment's segment. The mapper's clipping planes (world coordinates, up to 8)
+ * cut each fragment's segment exactly. Cells that cannot show are culled before the sort, and
  * results are reused while their inputs are unchanged. While the view moves, the image
  * sample distance and the fraction of the cells drawn adjust to the time VTK allots; a
  * still frame is the full image.
@@ -450,6 +451,9 @@ private:
   void AdjustDetail(vtkRenderer* renderer, vtkVolume* volume);
   void SetUpFrame(vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window,
     mtpt::RenderBackend* backend, mtpt::FrameInput& frame, mtpt::BackendFrame& draw);
+  /// The eye ray's depth clipping and the clipping planes of the frame, in eye coordinates.
+  void SetUpClipping(
+    vtkRenderer* renderer, const mtpt::FrameInput& frame, mtpt::BackendFrame& draw);
   /// The pipeline's settings for the frame, and its progress and abort callback.
   void ConfigurePipeline(vtkOpenGLRenderWindow* window);
   void DrawFrame(mtpt::RenderBackend* backend, mtpt::BackendFrame& draw);

@@ -65,6 +65,7 @@ CPUBackend::ImageKey CPUBackend::ImageKey::Of(const BackendFrame& frame)
   key.vertexColours = frame.vertexColours;
   key.unitDistance = frame.unitDistance;
   key.interpolation = frame.interpolation;
+  key.clipPlanes = frame.clipPlanes;
   return key;
 }
 
@@ -76,7 +77,7 @@ bool CPUBackend::ImageKey::operator==(const ImageKey& o) const
     vertexColours == o.vertexColours && unitDistance == o.unitDistance &&
     a.perspective == b.perspective && a.inverseWScale == b.inverseWScale &&
     a.inverseWOffset == b.inverseWOffset && a.scaleX == b.scaleX && a.shiftX == b.shiftX &&
-    a.scaleY == b.scaleY && a.shiftY == b.shiftY;
+    a.scaleY == b.scaleY && a.shiftY == b.shiftY && clipPlanes == o.clipPlanes;
 }
 
 bool CPUBackend::DrawPeel(const BackendFrame& frame, BackendTimes& times)
@@ -130,6 +131,7 @@ void CPUBackend::Composite(const BackendFrame& frame, BackendTimes& times, const
   settings.opaqueDepth = ranges ? nullptr : this->Path.OpaqueDepth();
   settings.depthRange = ranges;
   settings.clipping = frame.clipping;
+  settings.clipPlanes = frame.clipPlanes;
   settings.vertexColours = frame.vertexColours;
   if (frame.shading == Shading::PreIntegrated && !frame.vertexColours)
   {

@@ -68,6 +68,7 @@ private:
     bool vertexColours = false;
     double unitDistance = 0;
     PerspectiveInterpolation interpolation;
+    ClipPlanes clipPlanes;
 
     static ImageKey Of(const BackendFrame& frame);
     bool operator==(const ImageKey& other) const;

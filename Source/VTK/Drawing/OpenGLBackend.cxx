@@ -154,13 +154,43 @@ void OpenGLBackend::SetUniforms(const BackendFrame& frame, vtkShaderProgram* pro
   {
     program->SetUniformi("peelFront", frame.peel->Ranges(0)->GetTextureUnit());
     program->SetUniformi("peelBack", frame.peel->Ranges(1)->GetTextureUnit());
-    const DepthClipping& clipping = frame.clipping;
-    program->SetUniformi("depthPerspective", clipping.perspective ? 1 : 0);
-    program->SetUniformf("depthA", static_cast<float>(clipping.a));
-    program->SetUniformf("depthB", static_cast<float>(clipping.b));
-    const float size[2] = { static_cast<float>(frame.size[0]), static_cast<float>(frame.size[1]) };
-    program->SetUniform2f("viewportSize", size);
   }
+  this->SetClippingUniforms(frame, program);
+}
+
+void OpenGLBackend::SetClippingUniforms(const BackendFrame& frame, vtkShaderProgram* program)
+{
+  // The eye ray of each fragment, for depth peeling's ranges and the clipping planes: from
+  // its pixel in the target drawn into (the window's viewport, or a target of its own).
+  const DepthClipping& clipping = frame.clipping;
+  program->SetUniformi("depthPerspective", clipping.perspective ? 1 : 0);
+  program->SetUniformf("depthA", static_cast<float>(clipping.a));
+  program->SetUniformf("depthB", static_cast<float>(clipping.b));
+  const bool ownTarget = this->SampledTargetUsed || this->FloatTargetUsed || this->PeelTargetUsed;
+  const ImageSize target =
+    this->SampledTargetUsed ? frame.imageSize : ImageSize{ frame.size[0], frame.size[1] };
+  const float origin[2] = { ownTarget ? 0.0f : static_cast<float>(frame.origin[0]),
+    ownTarget ? 0.0f : static_cast<float>(frame.origin[1]) };
+  const float size[2] = { static_cast<float>(target.width), static_cast<float>(target.height) };
+  program->SetUniform2f("viewportOrigin", origin);
+  program->SetUniform2f("viewportSize", size);
+  const float orthoScale[2] = { static_cast<float>(clipping.scaleX),
+    static_cast<float>(clipping.scaleY) };
+  const float orthoShift[2] = { static_cast<float>(clipping.shiftX),
+    static_cast<float>(clipping.shiftY) };
+  program->SetUniform2f("orthoScale", orthoScale);
+  program->SetUniform2f("orthoShift", orthoShift);
+  const ClipPlanes& planes = frame.clipPlanes;
+  float values[ClipPlanes::Max][4] = {};
+  for (int i = 0; i < planes.count; ++i)
+  {
+    for (int k = 0; k < 4; ++k)
+    {
+      values[i][k] = static_cast<float>(planes.plane[i][k]);
+    }
+  }
+  program->SetUniformi("clipPlaneCount", planes.count);
+  program->SetUniform4fv("clipPlanes", ClipPlanes::Max, values);
 }
 
 bool OpenGLBackend::DrawPeel(const BackendFrame& frame, BackendTimes& times)

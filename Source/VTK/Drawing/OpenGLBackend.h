@@ -72,6 +72,8 @@ private:
   bool WriteTarget(const BackendFrame& frame, bool drawn, BackendTimes& times);
   void UploadTables(const BackendFrame& frame);
   void SetUniforms(const BackendFrame& frame, vtkShaderProgram* program);
+  /// Each fragment's eye ray (depth peeling, clipping planes) and the clipping planes.
+  void SetClippingUniforms(const BackendFrame& frame, vtkShaderProgram* program);
   bool DrawBatches(const BackendFrame& frame, vtkShaderProgram* program, BackendTimes& times);
   void Upload(const BackendFrame& frame, BackendTimes& times);
   void DrawUploaded(vtkShaderProgram* program);

@@ -66,6 +66,9 @@ struct BackendFrame
    */
   VolumetricPeel* peel = nullptr;
   DepthClipping clipping;          ///< of this frame's projection
+  /// The mapper's clipping planes in eye coordinates: each fragment's segment is cut to the
+  /// part they keep (mtpt::ClipPlanes).
+  ClipPlanes clipPlanes;
   double unitDistance = 1.0;       ///< ScalarOpacityUnitDistance, positive
   std::size_t batchSize = 1;       ///< tetrahedra decomposed per batch (>= 1)
   int threads = 0;                 ///< OpenMP threads (<= 0: the default)

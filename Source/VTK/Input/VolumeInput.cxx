@@ -7,6 +7,8 @@
 #include "vtkDataArray.h"
 #include "vtkMatrix4x4.h"
 #include "vtkNew.h"
+#include "vtkPlane.h"
+#include "vtkPlaneCollection.h"
 #include "vtkRenderer.h"
 #include "vtkUnstructuredGridBase.h"
 #include "vtkVolume.h"
@@ -158,6 +160,44 @@ void ViewMatrices(vtkRenderer* renderer, vtkVolume* volume, Matrix4& modelView, 
   copy(eye, modelView);
   copy(
     camera->GetProjectionTransformMatrix(renderer->GetTiledAspectRatio(), -1.0, 1.0), projection);
+}
+
+ClipPlanes EyeClipPlanes(vtkAbstractMapper* mapper, vtkRenderer* renderer, int& ignored)
+{
+  ClipPlanes planes;
+  ignored = 0;
+  vtkPlaneCollection* collection = mapper->GetClippingPlanes();
+  if (!collection || collection->GetNumberOfItems() == 0)
+  {
+    return planes;
+  }
+  // A world plane (n, -n . o) as a row vector times the inverse of the view matrix.
+  vtkNew<vtkMatrix4x4> toWorld;
+  vtkMatrix4x4::Invert(renderer->GetActiveCamera()->GetModelViewTransformMatrix(), toWorld);
+  vtkCollectionSimpleIterator it;
+  collection->InitTraversal(it);
+  while (vtkPlane* plane = collection->GetNextPlane(it))
+  {
+    if (planes.count == ClipPlanes::Max)
+    {
+      ++ignored;
+      continue;
+    }
+    double n[3], o[3];
+    plane->GetNormal(n);
+    plane->GetOrigin(o);
+    const double world[4] = { n[0], n[1], n[2], -(n[0] * o[0] + n[1] * o[1] + n[2] * o[2]) };
+    double* eye = planes.plane[planes.count++];
+    for (int c = 0; c < 4; ++c)
+    {
+      eye[c] = 0.0;
+      for (int r = 0; r < 4; ++r)
+      {
+        eye[c] += world[r] * toWorld->GetElement(r, c);
+      }
+    }
+  }
+  return planes;
 }
 
 double UnitDistance(vtkVolumeProperty* property, std::string* warning)

@@ -9,10 +9,12 @@
 
 #include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
 #include "mtpt/MeshView.h"
+#include "mtpt/Shading.h"
 
 #include <string>
 
 VTK_ABI_NAMESPACE_BEGIN
+class vtkAbstractMapper;
 class vtkAbstractVolumeMapper;
 class vtkDataArray;
 class vtkRenderer;
@@ -69,6 +71,14 @@ ScalarSelection SelectScalars(
  */
 void ViewMatrices(
   vtkRenderer* renderer, vtkVolume* volume, Matrix4& modelView, Matrix4& projection);
+
+/**
+ * The mapper's clipping planes (vtkAbstractMapper::ClippingPlanes, world coordinates: each
+ * vtkPlane keeps the side its normal points to) in the eye coordinates of `renderer`'s
+ * active camera, the first ClipPlanes::Max of them; `ignored` receives how many more there
+ * are.
+ */
+ClipPlanes EyeClipPlanes(vtkAbstractMapper* mapper, vtkRenderer* renderer, int& ignored);
 
 /**
  * The property's ScalarOpacityUnitDistance, or 1 when it is not positive (then `warning`

@@ -214,6 +214,22 @@ namespace
  * when lighting is off: ambient * ambient colour + diffuse * diffuse colour, clamped.
  * Returns the number of such actors whose lighting is on (not modelled).
  */
+/**
+ * The view of `volume` in `renderer` as the mapper draws it: the matrices, the image size,
+ * the background and the mapper's clipping planes; returns how many planes are ignored.
+ */
+int SetView(
+  vtkRenderer* renderer, vtkVolume* volume, const int size[2], mtpt::ReferenceSettings& settings)
+{
+  mtpt::ViewMatrices(renderer, volume, settings.modelView, settings.projection);
+  settings.width = size[0];
+  settings.height = size[1];
+  renderer->GetBackground(settings.background);
+  int ignored = 0;
+  settings.clipPlanes = mtpt::EyeClipPlanes(volume->GetMapper(), renderer, ignored);
+  return ignored;
+}
+
 int TranslucentTriangles(vtkRenderer* renderer, std::vector<mtpt::ReferenceTriangle>& triangles)
 {
   int lit = 0;
@@ -372,21 +388,22 @@ bool vtkMTPTReferenceRenderer::Render(
   mtpt::ReferenceSettings settings;
   this->ExactTransferFunctions =
     ConvertTransferFunctions(property, dataRange, this->TransferFunctionSamples, settings);
-  mtpt::ViewMatrices(renderer, volume, settings.modelView, settings.projection);
+  if (const int ignored = SetView(renderer, volume, size, settings))
+  {
+    vtkWarningMacro(<< "clipping with the first " << mtpt::ClipPlanes::Max << " clipping "
+                    << "planes; " << ignored << " more are ignored, as the mapper does");
+  }
   if (const int lit = TranslucentTriangles(renderer, settings.triangles))
   {
     vtkWarningMacro(<< lit << " translucent actor(s) have lighting on; the reference draws "
                     << "them with their flat colour (lighting off)");
   }
-  settings.width = size[0];
-  settings.height = size[1];
   settings.unitDistance = mtpt::UnitDistance(property);
   // Dependent components: the mapping of VTK's PT, integrated exactly (ScalarMapping).
   const int channels = mtpt::ChannelsOf(selected);
   settings.mapping = channels == 1
     ? mtpt::ScalarMapping::TransferFunctions
     : (channels == 2 ? mtpt::ScalarMapping::ColourAndOpacityScalars : mtpt::ScalarMapping::Colours);
-  renderer->GetBackground(settings.background);
   const mtpt::ScalarsView view{ values,
     selected.cellData ? mtpt::ScalarsView::Association::Cells
                       : mtpt::ScalarsView::Association::Points };

@@ -132,9 +132,21 @@ uniform sampler2D peelBack;
 uniform int depthPerspective;
 uniform float depthA;
 uniform float depthB;
+uniform vec2 viewportOrigin; // of the target drawn into, in its pixels
 uniform vec2 viewportSize;
 uniform vec2 rayScale;
 uniform vec2 rayShift;
+// Clipping planes (mtpt::ClipPlanes) in eye coordinates: each keeps n . e + d >= 0 of
+// (n, d). Orthographic eye x and y: (ndc + orthoShift) * orthoScale.
+uniform int clipPlaneCount;
+uniform vec4 clipPlanes[8];
+uniform vec2 orthoScale;
+uniform vec2 orthoShift;
+
+vec2 FragmentNdc()
+{
+  return (gl_FragCoord.xy - viewportOrigin) / viewportSize * 2.0 - 1.0;
+}
 
 float EyeDepth(float windowDepth)
 {
@@ -175,11 +187,51 @@ FragmentSegment SegmentOfFragment(bool depths)
   float rayLength = 1.0;
   if (depthPerspective == 1)
   {
-    vec2 ray = (gl_FragCoord.xy / viewportSize * 2.0 - 1.0 + rayShift) * rayScale;
+    vec2 ray = (FragmentNdc() + rayShift) * rayScale;
     rayLength = sqrt(1.0 + dot(ray, ray));
   }
   s.back = s.front + s.len / rayLength;
   return s;
+}
+
+// The eye point at eye depth `depth` on the fragment's ray (mtpt::DepthClipping::EyePoint).
+vec3 EyePoint(vec2 ndc, float depth)
+{
+  vec2 xy = depthPerspective == 1 ? depth * (ndc + rayShift) * rayScale
+                                  : (ndc + orthoShift) * orthoScale;
+  return vec3(xy, -depth);
+}
+
+// Narrows [t0, t1] to the part of the segment every clipping plane keeps
+// (mtpt::ClipPlanes::Narrow); false when no part is left.
+bool NarrowToPlanes(FragmentSegment s, inout float t0, inout float t1)
+{
+  vec2 ndc = FragmentNdc();
+  vec3 front = EyePoint(ndc, s.front);
+  vec3 back = EyePoint(ndc, s.back);
+  for (int i = 0; i < clipPlaneCount; ++i)
+  {
+    float f0 = dot(clipPlanes[i].xyz, front) + clipPlanes[i].w;
+    float f1 = dot(clipPlanes[i].xyz, back) + clipPlanes[i].w;
+    if (f0 >= 0.0 && f1 >= 0.0)
+    {
+      continue;
+    }
+    if (!(f0 >= 0.0) && !(f1 >= 0.0))
+    {
+      return false;
+    }
+    float cut = f0 / (f0 - f1);
+    if (f0 < 0.0)
+    {
+      t0 = max(t0, cut);
+    }
+    else
+    {
+      t1 = min(t1, cut);
+    }
+  }
+  return t1 > t0;
 }
 
 // The fragment of the part [t0, t1] of the segment (fractions from its front).
@@ -209,12 +261,16 @@ vec4 ShadeInRange(FragmentSegment s, vec4 range)
   }
   float t0 = clamp((EyeDepth(range.x) - s.front) / span, 0.0, 1.0);
   float t1 = clamp((EyeDepth(range.y) - s.front) / span, 0.0, 1.0);
+  if (clipPlaneCount > 0 && !NarrowToPlanes(s, t0, t1))
+  {
+    return vec4(0.0);
+  }
   return t1 > t0 ? ShadePart(s, t0, t1) : vec4(0.0);
 }
 
 void main()
 {
-  FragmentSegment segment = SegmentOfFragment(peelRanges == 1);
+  FragmentSegment segment = SegmentOfFragment(peelRanges == 1 || clipPlaneCount > 0);
   if (peelRanges == 1)
   {
     ivec2 pixel = ivec2(gl_FragCoord.xy);
@@ -222,7 +278,13 @@ void main()
     gl_FragData[1] = ShadeInRange(segment, texelFetch(peelBack, pixel, 0));
     return;
   }
-  vec4 fragment = ShadePart(segment, 0.0, 1.0);
+  float t0 = 0.0;
+  float t1 = 1.0;
+  if (clipPlaneCount > 0 && !NarrowToPlanes(segment, t0, t1))
+  {
+    discard;
+  }
+  vec4 fragment = ShadePart(segment, t0, t1);
   if (fragment.a <= 0.0)
   {
     discard;
