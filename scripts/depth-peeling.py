@@ -20,7 +20,7 @@ import statistics
 import time
 
 from vtkmodules.vtkFiltersSources import vtkSphereSource
-from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper, vtkRenderWindow
+from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper
 from vtkmodules.vtkRenderingVolume import vtkGPUVolumeRayCastMapper, vtkProjectedTetrahedraMapper
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 (factory overrides)
 import vtkmodules.vtkRenderingVolumeOpenGL2  # noqa: F401
@@ -68,18 +68,7 @@ def scene(data, mapper, spheres=1):
     renderer.SetUseDepthPeelingForVolumes(1)
     renderer.SetMaximumNumberOfPeels(8)
     renderer.SetOcclusionRatio(0.0)
-    window = vtkRenderWindow()
-    window.SetOffScreenRendering(1)
-    window.SetMultiSamples(0)
-    window.SetSize(args.size, args.size)
-    window.AddRenderer(renderer)
-    renderer.ResetCamera()
-    camera = renderer.GetActiveCamera()
-    camera.Azimuth(35)
-    camera.Elevation(20)
-    camera.OrthogonalizeViewUp()
-    renderer.ResetCameraClippingRange()
-    return renderer, volume, window
+    return renderer, volume, figures.window_for(renderer, args.size, multisamples=0)
 
 
 image_data, grid = figures.wavelet(args.extent)
