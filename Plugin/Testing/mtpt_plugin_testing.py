@@ -11,6 +11,8 @@ import os
 import sys
 import traceback
 
+import numpy
+
 from paraview import simple
 from vtkmodules.util import numpy_support
 from vtkmodules.vtkIOImage import vtkPNGReader, vtkPNGWriter
@@ -141,6 +143,16 @@ def compare(path_a, path_b):
         "covered_a": float(covered_a.mean()),
         "covered_b": float(covered_b.mean()),
     }
+
+
+def covered_centre_x(path):
+    """Where the covered pixels of the PNG at `path` lie across the image, left to right: the
+    mean column of the pixels that differ from the background, a fraction of the width."""
+    (width, _), pixels = read_rgb(path)
+    background = [round(c * 255.0) / 255.0 for c in BACKGROUND]
+    covered = (abs(pixels - background) > 2.5 / 255.0).any(axis=1)
+    columns = numpy.arange(len(covered)) % width
+    return float(columns[covered].mean()) / width if covered.any() else 0.5
 
 
 def check(condition, message):

@@ -38,6 +38,9 @@ MAX_RMSE_COVERED_DISTANCE_2 = 0.01
 # bound of a quarter of the cells (16/255 measured at 400x300 on the blunt fin:
 # Testing/Rendering/TestMapperLevelOfDetail); ParaView's LOD geometry is far from it.
 MAX_RMSE_COVERED_INTERACTIVE = 0.1
+# A plane through the centre keeping one side moves the volume's covered pixels that far
+# (a fraction of the image's width) towards that side.
+MIN_CLIP_SHIFT = 0.05
 
 args = testing.arguments(["PLUGIN", "DATA", "OUTPUT_DIR", "NAME"])
 out = functools.partial(testing.output_path, args)
@@ -114,6 +117,35 @@ def check_level_of_detail(display, view):
     return ok
 
 
+def check_clipping_plane(display, view, reader):
+    """A clipping plane through the mesh's centre, normal along world +x (the view's right):
+    the volume left is the right part of the image, and with the normal along -x the left
+    part; off again, the full image. Expects the CPU backend and the settings of the image
+    out("mtpt_cpu")."""
+    ok = True
+    bounds = reader.GetDataInformation().GetBounds()
+    centre = [0.5 * (bounds[2 * i] + bounds[2 * i + 1]) for i in range(3)]
+    whole = testing.covered_centre_x(out("mtpt_cpu"))
+    display.MTPTClippingPlaneOrigin = centre
+    display.MTPTClippingPlane = 1
+    sides = {}
+    for name, normal in (("right", [1.0, 0.0, 0.0]), ("left", [-1.0, 0.0, 0.0])):
+        display.MTPTClippingPlaneNormal = normal
+        testing.save(view, out("mtpt_clipped_" + name))
+        sides[name] = testing.covered_centre_x(out("mtpt_clipped_" + name))
+    print("%s: covered pixels' mean column: whole %.3f, kept right %.3f, kept left %.3f" %
+          (args["NAME"], whole, sides["right"], sides["left"]))
+    ok &= testing.check(sides["right"] > whole + MIN_CLIP_SHIFT and
+                        sides["left"] < whole - MIN_CLIP_SHIFT,
+                        "Clipping Plane keeps the side its normal points to")
+    display.MTPTClippingPlane = 0
+    testing.save(view, out("mtpt_unclipped"))
+    rmse = testing.compare(out("mtpt_cpu"), out("mtpt_unclipped"))["rmse"]
+    ok &= testing.check(rmse <= MAX_RMSE_ORDER_METHODS,
+                        "Clipping Plane off: the full image again (RMSE %.2g)" % rmse)
+    return ok
+
+
 def main():
     ok = True
 
@@ -175,6 +207,7 @@ def main():
 
     ok &= check_image_sample_distance(display, view)
     ok &= check_level_of_detail(display, view)
+    ok &= check_clipping_plane(display, view, reader)
     simple.Hide(reader, view)
 
     # A multi-block input: the mesh cut into two blocks of whole cells (the cells inside a

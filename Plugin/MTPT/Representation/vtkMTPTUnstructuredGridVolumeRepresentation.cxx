@@ -3,6 +3,7 @@
 
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
 #include "vtkObjectFactory.h"
+#include "vtkPlaneCollection.h"
 #include "vtkPVLODVolume.h"
 #include "vtkPVView.h"
 
@@ -147,6 +148,38 @@ void vtkMTPTUnstructuredGridVolumeRepresentation::SetMinimumCellFraction(double 
 double vtkMTPTUnstructuredGridVolumeRepresentation::GetMinimumCellFraction()
 {
   return this->MTPTMapper->GetMinimumCellFraction();
+}
+
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetClippingPlane(int on)
+{
+  vtkPlaneCollection* planes = this->MTPTMapper->GetClippingPlanes();
+  const bool present = planes && planes->IsItemPresent(this->ClippingPlane);
+  if (on && !present)
+  {
+    this->MTPTMapper->AddClippingPlane(this->ClippingPlane);
+  }
+  else if (!on && present)
+  {
+    this->MTPTMapper->RemoveClippingPlane(this->ClippingPlane);
+  }
+}
+
+int vtkMTPTUnstructuredGridVolumeRepresentation::GetClippingPlane()
+{
+  vtkPlaneCollection* planes = this->MTPTMapper->GetClippingPlanes();
+  return planes && planes->IsItemPresent(this->ClippingPlane) ? 1 : 0;
+}
+
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetClippingPlaneOrigin(
+  double x, double y, double z)
+{
+  this->ClippingPlane->SetOrigin(x, y, z);
+}
+
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetClippingPlaneNormal(
+  double x, double y, double z)
+{
+  this->ClippingPlane->SetNormal(x, y, z);
 }
 
 //------------------------------------------------------------------------------

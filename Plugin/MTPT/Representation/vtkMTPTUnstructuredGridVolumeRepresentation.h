@@ -24,6 +24,7 @@
 #define vtkMTPTUnstructuredGridVolumeRepresentation_h
 
 #include "vtkNew.h"                      // for vtkNew
+#include "vtkPlane.h"                    // for vtkPlane
 #include "vtkRepresentationMTPTModule.h" // for export macro
 #include "vtkUnstructuredGridVolumeRepresentation.h"
 
@@ -65,6 +66,15 @@ public:
   double GetMinimumCellFraction();
   ///@}
 
+  ///@{
+  /// One clipping plane on the mapper (vtkAbstractMapper::AddClippingPlane), in world
+  /// coordinates, keeping the side the normal points to; off by default.
+  void SetClippingPlane(int on);
+  int GetClippingPlane();
+  void SetClippingPlaneOrigin(double x, double y, double z);
+  void SetClippingPlaneNormal(double x, double y, double z);
+  ///@}
+
   /// As the superclass; a render keeps the volume while the view moves when the mapper's
   /// cell level of detail is on (see the class comment).
   int ProcessViewRequest(vtkInformationRequestKey* requestType, vtkInformation* inInfo,
@@ -78,6 +88,7 @@ protected:
   ~vtkMTPTUnstructuredGridVolumeRepresentation() override;
 
   vtkNew<vtkMultiThreadedProjectedTetrahedraMapper> MTPTMapper;
+  vtkNew<vtkPlane> ClippingPlane;
   /// The Image Sample Distance property's value, given to the mapper again when automatic
   /// adjustment (which overwrites the mapper's) is turned off.
   double ImageSampleDistance = 1.0;
