@@ -138,7 +138,7 @@ FanSide SideOfPlanes(const Fan& fan, const ClipPlanes& planes, const DepthClippi
     int kept = 0;
     for (int k = 0; k < n; ++k)
     {
-      kept += planes.Distance(i, ends[k]) >= 0.0 ? 1 : 0;
+      kept += planes.Distance(i, ends[k]) < 0.0 ? 0 : 1; // not a number: not clipped
     }
     if (kept == 0)
     {

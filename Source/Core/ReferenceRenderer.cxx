@@ -1035,7 +1035,7 @@ void KeptStretch(const ClipPlanes& planes, const double origin[3], const double 
     {
       high = std::min(high, -at / slope);
     }
-    else if (!(at >= 0.0))
+    else if (at < 0.0)
     {
       low = 1.0; // parallel to the plane on its clipped side
       high = 0.0;

@@ -65,11 +65,13 @@ TEST(ClipPlanes, NarrowKeepsThePartOnTheNormalsSide)
   t0 = 0;
   t1 = 1;
   EXPECT_FALSE(planes.Narrow(front, back, t0, t1));
-  // A plane that is not a number keeps nothing.
+  // A plane that is not a number cuts nothing, as in VTK's GPU ray caster.
   planes.plane[0][0] = std::numeric_limits<double>::quiet_NaN();
   t0 = 0;
   t1 = 1;
-  EXPECT_FALSE(planes.Narrow(front, back, t0, t1));
+  EXPECT_TRUE(planes.Narrow(front, back, t0, t1));
+  EXPECT_EQ(t0, 0.0);
+  EXPECT_EQ(t1, 1.0);
 }
 
 TEST(ClipPlanes, EqualityComparesThePlanesInUse)

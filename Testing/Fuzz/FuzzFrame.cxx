@@ -574,6 +574,48 @@ void CheckImage(const std::vector<float>& rgba, int width, int height)
   }
 }
 
+/**
+ * Clipping planes on the fans of the whole order in one batch: planes that keep everything
+ * give the image without planes bit for bit; any planes (degenerate, huge or not a number
+ * ones too) give a valid image, the same for both thread counts.
+ */
+void CheckClippingPlanes(FuzzedDataProvider& in, mtpt::FramePipeline& pipeline,
+  const mtpt::CompositeSettings& settings, const mtpt::FrameInput& frame, int threadsA,
+  int threadsB)
+{
+  pipeline.DecomposeFans(0, pipeline.SortedCount(), threadsA);
+  auto composite = [&](const mtpt::CompositeSettings& s, int threads)
+  {
+    std::vector<float> rgba(4u * s.width * s.height);
+    mtpt::Compositor compositor;
+    compositor.Begin(s);
+    compositor.Composite(pipeline.Fans().data(), pipeline.FanCount(), threads);
+    compositor.Resolve({ 0, 0, s.width, s.height }, nullptr, rgba.data(), threads);
+    return rgba;
+  };
+  mtpt::CompositeSettings clipped = settings;
+  clipped.clipping = mtpt::DepthClipping::FromProjection(frame.projection);
+  const std::vector<float> whole = composite(clipped, threadsA);
+  clipped.clipPlanes.count = 1;
+  const double keepAll[4] = { 0.0, 0.0, 0.0, 1.0 };
+  std::copy(keepAll, keepAll + 4, clipped.clipPlanes.plane[0]);
+  FUZZ_CHECK(composite(clipped, threadsB) == whole, "a plane keeping everything changed the image");
+  const double inf = std::numeric_limits<double>::infinity();
+  clipped.clipPlanes.count = in.ConsumeIntegralInRange(0, mtpt::ClipPlanes::Max);
+  for (int i = 0; i < clipped.clipPlanes.count; ++i)
+  {
+    for (double& v : clipped.clipPlanes.plane[i])
+    {
+      v = in.PickValueInArray(
+        { 0.0, 1.0, -1.0, 0.3, -2.5, 1e30, -1e-30, inf, std::nan(""), 4.0, -0.7 });
+    }
+  }
+  const std::vector<float> a = composite(clipped, threadsA);
+  CheckImage(a, clipped.width, clipped.height);
+  FUZZ_CHECK(composite(clipped, threadsB) == a, "clipped: %d and %d threads differ", threadsA,
+    threadsB);
+}
+
 /// The decoded case, for reproducing a failure: MTPT_FUZZ_VERBOSE=1 mtpt_fuzz_frame <input>.
 void Dump(const Mesh& mesh, const mtpt::FrameInput& frame, const mtpt::FramePipeline& pipeline,
   const mtpt::TransferFunctionTable& table, const mtpt::CompositeSettings& settings)
@@ -615,8 +657,8 @@ void Dump(const Mesh& mesh, const mtpt::FrameInput& frame, const mtpt::FramePipe
     }
   }
   std::fprintf(stderr, "viewport %dx%d, image %dx%d, cull frustum %d, opacity table %d\n",
-    frame.imageSize.width, frame.imageSize.height, settings.width, settings.height, frame.cullFrustum,
-    frame.opacity.size);
+    frame.imageSize.width, frame.imageSize.height, settings.width, settings.height,
+    frame.cullFrustum, frame.opacity.size);
   std::fprintf(
     stderr, "colour table [%.9g, %.9g], %d entries:\n", table.low, table.high, table.size);
   for (int i = 0; i < table.size; ++i)
@@ -857,5 +899,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     FUZZ_CHECK(std::fabs(over8[i] / 255.0f - over[i]) <= 0.5f / 255.0f + 1e-6f,
       "8-bit resolve %u against %g at value %zu", over8[i], over[i], i);
   }
+  CheckClippingPlanes(in, b, settings, frame, threadsA, threadsB);
   return 0;
 }

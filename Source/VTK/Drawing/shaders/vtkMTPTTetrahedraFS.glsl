@@ -213,11 +213,11 @@ bool NarrowToPlanes(FragmentSegment s, inout float t0, inout float t1)
   {
     float f0 = dot(clipPlanes[i].xyz, front) + clipPlanes[i].w;
     float f1 = dot(clipPlanes[i].xyz, back) + clipPlanes[i].w;
-    if (f0 >= 0.0 && f1 >= 0.0)
+    if (isnan(f0) || isnan(f1) || (f0 >= 0.0 && f1 >= 0.0))
     {
-      continue;
+      continue; // not a number: the plane cuts nothing, as in mtpt::ClipPlanes
     }
-    if (!(f0 >= 0.0) && !(f1 >= 0.0))
+    if (f0 < 0.0 && f1 < 0.0)
     {
       return false;
     }
