@@ -2,7 +2,7 @@
 """The mapper from Python (VTK's own wrapping): import, settings, and a rendering compared
 with VTK's own vtkProjectedTetrahedraMapper on the same scene."""
 from vtkmodules.vtkCommonCore import vtkIdList
-from vtkmodules.vtkCommonDataModel import vtkMultiBlockDataSet, vtkPiecewiseFunction
+from vtkmodules.vtkCommonDataModel import vtkMultiBlockDataSet, vtkPiecewiseFunction, vtkPlane
 from vtkmodules.vtkFiltersCore import vtkCellCenters
 try:  # vtkFiltersCore in today's VTK, vtkFiltersExtraction in VTK 9.1
     from vtkmodules.vtkFiltersCore import vtkExtractCells
@@ -106,6 +106,29 @@ def test_a_cell_fraction_draws_fewer_cells(bluntfin):
                  [full[3 * p + c] for p in covered for c in range(3)])
     print("a quarter of the cells against all: covered RMSE %.4f" % error)
     assert 0 < error < 18 / 255, error
+
+
+def test_a_clipping_plane_keeps_the_side_its_normal_points_to(bluntfin):
+    """Two opposite planes through the fin's centre, from Python: each image keeps part of the
+    volume, the two parts differ, and together they cover what the whole image covers."""
+    whole = render(bluntfin, Mapper())
+    bounds = bluntfin.GetBounds()
+    centre = [0.5 * (bounds[2 * i] + bounds[2 * i + 1]) for i in range(3)]
+    halves = []
+    for sign in (1.0, -1.0):
+        plane = vtkPlane()
+        plane.SetOrigin(*centre)
+        plane.SetNormal(sign, 0.0, 0.0)
+        mapper = Mapper()
+        mapper.AddClippingPlane(plane)
+        halves.append(set(covered_pixels(render(bluntfin, mapper), BACKGROUND)))
+    covered = set(covered_pixels(whole, BACKGROUND))
+    print("covered pixels: whole %d, the two sides %d and %d" %
+          (len(covered), len(halves[0]), len(halves[1])))
+    for half in halves:
+        assert 0.2 * len(covered) < len(half) < 0.8 * len(covered)
+    assert len(halves[0] ^ halves[1]) > 0.5 * len(covered)
+    assert len(covered - (halves[0] | halves[1])) < 0.01 * len(covered)
 
 
 def test_render_matches_vtk_pt(bluntfin):
