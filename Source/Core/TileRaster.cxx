@@ -1011,13 +1011,6 @@ FragmentSegment SegmentAt(
 }
 
 /**
- * Depth peeling: the pixels [lo, hi] of row y, each fragment contributing only the part of
- * its segment inside its pixel's range of window depths (TileTarget::range, DepthClipping).
- * VTK-compatible fragments keep the segment's colour and attenuation over the part's
- * length; pre-integrated ones are queued with the part's scalars and length. One fragment
- * at a time: peeling frames are few, and their fragments straddle depth boundaries.
- */
-/**
  * The part [t0, t1] of fragment `s` at tile column x, row y that is drawn: inside the
  * pixel's depth range (depth peeling) or, without one, in front of the opaque depth; and,
  * for a fan that straddles a clipping plane (`cut`), kept by every plane.
@@ -1055,6 +1048,15 @@ bool DrawnPart(const RasterFrame& f, const TileTarget& tile, const TileRow& row,
   return f.planes.Narrow(front, back, t0, t1);
 }
 
+/**
+ * Depth peeling and clipping planes: the pixels [lo, hi] of row y, each fragment contributing
+ * only the part of its segment inside its pixel's range of window depths (TileTarget::range,
+ * DepthClipping) and, for a fan that straddles a clipping plane (`cut`), kept by the planes.
+ * VTK-compatible fragments keep the segment's colour and attenuation over the part's
+ * length; pre-integrated ones are queued with the part's scalars and length. One fragment
+ * at a time: peeling frames are few, and their fragments straddle depth boundaries, as
+ * straddling fans' fragments straddle a plane.
+ */
 void ShadeClipped(const RasterFrame& f, const TileTarget& tile, Mode mode, const Planes& p, int y,
   int lo, int hi, WaitingFragments& waiting, bool cut)
 {

@@ -209,12 +209,6 @@ namespace
 {
 
 /**
- * The renderer's visible translucent actors (opacity strictly between 0 and 1) that draw
- * polygonal data, as triangles in eye coordinates with the flat colour VTK draws them with
- * when lighting is off: ambient * ambient colour + diffuse * diffuse colour, clamped.
- * Returns the number of such actors whose lighting is on (not modelled).
- */
-/**
  * The view of `volume` in `renderer` as the mapper draws it: the matrices, the image size,
  * the background and the mapper's clipping planes; returns how many planes are ignored.
  */
@@ -230,6 +224,12 @@ int SetView(
   return ignored;
 }
 
+/**
+ * The renderer's visible translucent actors (opacity strictly between 0 and 1) that draw
+ * polygonal data, as triangles in eye coordinates with the flat colour VTK draws them with
+ * when lighting is off: ambient * ambient colour + diffuse * diffuse colour, clamped.
+ * Returns the number of such actors whose lighting is on (not modelled).
+ */
 int TranslucentTriangles(vtkRenderer* renderer, std::vector<mtpt::ReferenceTriangle>& triangles)
 {
   int lit = 0;
