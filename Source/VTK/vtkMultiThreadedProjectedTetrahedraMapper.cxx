@@ -618,6 +618,11 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
   {
     vtkWarningMacro(<< "only composite blending is supported; drawing with it");
   }
+  if (volume->GetProperty()->GetShade(0) && in.Report(volume->GetProperty(), "shading"))
+  {
+    vtkWarningMacro(<< "the volume property's shading (ShadeOn) is not supported; drawing the "
+                       "volume unlit, as VTK's projected tetrahedra do");
+  }
   mtpt::FrameInput frame;
   if (!this->PrepareInput(volume->GetProperty(), frame))
   {

@@ -23,7 +23,8 @@
  * sample distance and the fraction of the cells drawn adjust to the time VTK allots; a
  * still frame is the full image.
  *
- * Composite blending only. Documentation/mapper.md explains each of these in full.
+ * Composite blending only, unlit (other blend modes and the property's shading are reported
+ * with a warning). Documentation/mapper.md explains each of these in full.
  *
  * @sa vtkProjectedTetrahedraMapper vtkUnstructuredGridVolumeMapper
  */

@@ -27,6 +27,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
@@ -101,6 +103,25 @@ protected:
   vtkSmartPointer<MessageObserver> Observer;
   vtkSmartPointer<Mapper> MapperUnderTest;
 };
+
+TEST_F(MapperRobustness, UnsupportedBlendModeAndShadingAreReportedOnce)
+{
+  // Only composite blending without lighting is drawn: maximum-intensity blending and the
+  // property's shading are each reported once, and the volume is drawn composited and
+  // unlit, the image of a mapper without them.
+  const auto plain = FreshBoxImage();
+  this->MapperUnderTest->SetBlendModeToMaximumIntensity();
+  this->Property->ShadeOn();
+  auto image = Render(SceneOf(this->Box), this->MapperUnderTest, 3);
+  auto count = [&](const char* text)
+  {
+    return std::count_if(this->Observer->warnings.begin(), this->Observer->warnings.end(),
+      [text](const std::string& w) { return w.find(text) != std::string::npos; });
+  };
+  EXPECT_EQ(count("only composite blending"), 1);
+  EXPECT_EQ(count("shading (ShadeOn) is not supported"), 1);
+  EXPECT_EQ(Compare(image, plain).worst, 0.0);
+}
 
 TEST_F(MapperRobustness, NonTetrahedralCellsAreSplitNotRejected)
 {
