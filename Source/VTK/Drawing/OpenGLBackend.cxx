@@ -158,6 +158,18 @@ void OpenGLBackend::SetUniforms(const BackendFrame& frame, vtkShaderProgram* pro
   this->SetClippingUniforms(frame, program);
 }
 
+PixelRegion OpenGLBackend::DrawnPixels(const BackendFrame& frame) const
+{
+  if (!this->DrawsIntoOwnTarget())
+  {
+    return { frame.origin[0], frame.origin[1], frame.origin[0] + frame.size[0],
+      frame.origin[1] + frame.size[1] };
+  }
+  const ImageSize size =
+    this->SampledTargetUsed ? frame.imageSize : ImageSize{ frame.size[0], frame.size[1] };
+  return { 0, 0, size.width, size.height };
+}
+
 void OpenGLBackend::SetClippingUniforms(const BackendFrame& frame, vtkShaderProgram* program)
 {
   // The eye ray of each fragment, for depth peeling's ranges and the clipping planes: from
@@ -166,12 +178,10 @@ void OpenGLBackend::SetClippingUniforms(const BackendFrame& frame, vtkShaderProg
   program->SetUniformi("depthPerspective", clipping.perspective ? 1 : 0);
   program->SetUniformf("depthA", static_cast<float>(clipping.a));
   program->SetUniformf("depthB", static_cast<float>(clipping.b));
-  const bool ownTarget = this->SampledTargetUsed || this->FloatTargetUsed || this->PeelTargetUsed;
-  const ImageSize target =
-    this->SampledTargetUsed ? frame.imageSize : ImageSize{ frame.size[0], frame.size[1] };
-  const float origin[2] = { ownTarget ? 0.0f : static_cast<float>(frame.origin[0]),
-    ownTarget ? 0.0f : static_cast<float>(frame.origin[1]) };
-  const float size[2] = { static_cast<float>(target.width), static_cast<float>(target.height) };
+  const PixelRegion drawn = this->DrawnPixels(frame);
+  const float origin[2] = { static_cast<float>(drawn.x0), static_cast<float>(drawn.y0) };
+  const float size[2] = { static_cast<float>(drawn.x1 - drawn.x0),
+    static_cast<float>(drawn.y1 - drawn.y0) };
   program->SetUniform2f("viewportOrigin", origin);
   program->SetUniform2f("viewportSize", size);
   const float orthoScale[2] = { static_cast<float>(clipping.scaleX),
@@ -302,12 +312,11 @@ bool OpenGLBackend::DrawBatches(
   vtkOpenGLState::ScopedglEnableDisable cull(state, GL_CULL_FACE);
   vtkOpenGLState::ScopedglViewport viewport(state);
   vtkOpenGLState::ScopedglScissor scissor(state);
-  if (this->SampledTargetUsed || this->FloatTargetUsed || this->PeelTargetUsed)
+  if (this->DrawsIntoOwnTarget())
   {
-    const ImageSize size = this->SampledTargetUsed ? frame.imageSize
-                                                   : ImageSize{ frame.size[0], frame.size[1] };
-    state->vtkglViewport(0, 0, size.width, size.height);
-    state->vtkglScissor(0, 0, size.width, size.height);
+    const PixelRegion drawn = this->DrawnPixels(frame);
+    state->vtkglViewport(0, 0, drawn.x1, drawn.y1);
+    state->vtkglScissor(0, 0, drawn.x1, drawn.y1);
   }
   // A peeling pass may have left another blend equation (GL_MAX).
   GLint equation[2] = { GL_FUNC_ADD, GL_FUNC_ADD };

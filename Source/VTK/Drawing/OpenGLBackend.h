@@ -72,6 +72,14 @@ private:
   bool WriteTarget(const BackendFrame& frame, bool drawn, BackendTimes& times);
   void UploadTables(const BackendFrame& frame);
   void SetUniforms(const BackendFrame& frame, vtkShaderProgram* program);
+  /// Whether DrawBatches draws into a target of its own (sampled, float or a peel's), from
+  /// its origin, rather than into the window's viewport.
+  bool DrawsIntoOwnTarget() const
+  {
+    return this->SampledTargetUsed || this->FloatTargetUsed || this->PeelTargetUsed;
+  }
+  /// The pixels DrawBatches draws into: its own target's, or the window's viewport.
+  PixelRegion DrawnPixels(const BackendFrame& frame) const;
   /// Each fragment's eye ray (depth peeling, clipping planes) and the clipping planes.
   void SetClippingUniforms(const BackendFrame& frame, vtkShaderProgram* program);
   bool DrawBatches(const BackendFrame& frame, vtkShaderProgram* program, BackendTimes& times);
