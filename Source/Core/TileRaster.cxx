@@ -972,10 +972,10 @@ void ShadeIntegrated(const RasterFrame& f, const TileTarget& tile, Mode mode, co
 }
 
 /// A fragment's ray segment: eye depths of its ends, eye length, and the scalars at its ends
-/// (pre-integrated shading), from the planes at one pixel.
+/// (pre-integrated shading), from the planes at one pixel, and the pixel centre's NDC.
 struct FragmentSegment
 {
-  double front, back, length, scalarFront = 0, scalarBack = 0, z;
+  double front, back, length, scalarFront = 0, scalarBack = 0, z, ndcX, ndcY;
 };
 
 FragmentSegment SegmentAt(
@@ -984,6 +984,8 @@ FragmentSegment SegmentAt(
   const float i = static_cast<float>(x), j = static_cast<float>(y - tile.y0);
   auto value = [&](int k) { return p.base[k] + p.dx[k] * i + p.dy[k] * j; };
   FragmentSegment s;
+  s.ndcX = 2.0 * (tile.x0 + x + 0.5) / f.width - 1.0;
+  s.ndcY = 2.0 * (y + 0.5) / f.height - 1.0;
   if (mode == Mode::ExactIntegral)
   {
     const double frontW = value(1), backW = value(3), rayX = value(4), rayY = value(5);
@@ -1003,10 +1005,8 @@ FragmentSegment SegmentAt(
     s.scalarFront = value(0);
     s.scalarBack = value(1);
   }
-  const double ndcX = 2.0 * (tile.x0 + x + 0.5) / f.width - 1.0;
-  const double ndcY = 2.0 * (y + 0.5) / f.height - 1.0;
   s.front = f.clipping.EyeDepth(0.5 * (s.z + 1.0));
-  s.back = s.front + s.length / f.clipping.RayLength(ndcX, ndcY);
+  s.back = s.front + s.length / f.clipping.RayLength(s.ndcX, s.ndcY);
   return s;
 }
 
@@ -1040,11 +1040,9 @@ bool DrawnPart(const RasterFrame& f, const TileTarget& tile, const TileRow& row,
   {
     return true;
   }
-  const double ndcX = 2.0 * (tile.x0 + x + 0.5) / f.width - 1.0;
-  const double ndcY = 2.0 * (y + 0.5) / f.height - 1.0;
   double front[3], back[3];
-  f.clipping.EyePoint(ndcX, ndcY, s.front, front);
-  f.clipping.EyePoint(ndcX, ndcY, s.back, back);
+  f.clipping.EyePoint(s.ndcX, s.ndcY, s.front, front);
+  f.clipping.EyePoint(s.ndcX, s.ndcY, s.back, back);
   return f.planes.Narrow(front, back, t0, t1);
 }
 
