@@ -7,8 +7,8 @@ python="${1:?usage: $0 PYTHON SOURCE-DIR WORK-DIR}"
 source="$(cd "${2:?usage: $0 PYTHON SOURCE-DIR WORK-DIR}" && pwd)"
 venv="${3:?usage: $0 PYTHON SOURCE-DIR WORK-DIR}/lizard-venv"
 lizard="lizard==1.24.3"
-if ! "$venv/bin/python" -m pip show --quiet "${lizard%%=*}" 2>/dev/null \
-  || [ "$("$venv/bin/python" -m pip show "${lizard%%=*}" | sed -n 's/^Version: //p')" != "${lizard##*=}" ]; then
+installed="$("$venv/bin/python" -m pip show "${lizard%%=*}" 2>/dev/null | sed -n 's/^Version: //p')" || true
+if [ "$installed" != "${lizard##*=}" ]; then
   rm -rf "$venv"
   "$python" -m venv "$venv"
   "$venv/bin/python" -m pip install --quiet --disable-pip-version-check "$lizard"
