@@ -6,8 +6,9 @@ two clipping planes on each mapper (vtkAbstractMapper::AddClippingPlane, world c
 and the exact reference with the same planes. Prints each MTPT image's covered-pixel RMSE
 against the ray cast and against the reference (of 255); then the time of a frame whose
 plane moves (the camera still) against frames without planes whose camera turns or whose
-colours change (the same order composited again), and what the moving-plane frames reused; and writes a picture: MTPT without planes, MTPT with them,
-VTK's GPU ray cast with them, the reference.
+colours change (the same order composited again), and what the moving-plane frames reused;
+and writes a picture: MTPT without planes, MTPT with them, VTK's GPU ray cast with them, the
+reference.
 
 usage: PYTHONPATH=build/lib/python3/dist-packages scripts/clipping-planes.py
          [--size 400] [--extent 20] [--frames 7] [--picture clipping_planes.png]
@@ -17,7 +18,7 @@ import statistics
 import time
 
 from vtkmodules.vtkCommonDataModel import vtkPlane
-from vtkmodules.vtkRenderingVolume import vtkGPUVolumeRayCastMapper, vtkProjectedTetrahedraMapper
+from vtkmodules.vtkRenderingVolume import vtkProjectedTetrahedraMapper
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 (factory overrides)
 import vtkmodules.vtkRenderingVolumeOpenGL2  # noqa: F401
 
@@ -66,13 +67,6 @@ def mtpt_mapper(backend, shading):
     return m
 
 
-def ray_cast():
-    m = vtkGPUVolumeRayCastMapper()
-    m.AutoAdjustSampleDistancesOff()
-    m.SetSampleDistance(0.1)
-    return m
-
-
 def median_frame(window, step):
     """Median seconds of a frame, `step()` called before each."""
     window.Render()
@@ -88,7 +82,7 @@ def median_frame(window, step):
 image_data, grid = figures.wavelet(args.extent)
 print(f"wavelet: {grid.GetNumberOfCells()} tetrahedra, {args.size}x{args.size}, VTK's default "
       "window (multisampled), two clipping planes")
-ray_mapper = ray_cast()
+ray_mapper = figures.gpu_ray_cast()
 add_planes(ray_mapper)
 renderer, volume, window = scene(image_data, ray_mapper)
 window.Render()
@@ -118,7 +112,7 @@ m = mtpt_mapper("CPU", "PreIntegrated")
 renderer, volume, window = scene(grid, m)
 window.Render()
 unclipped = figures.grab(window)
-ray_unclipped = ray_cast()
+ray_unclipped = figures.gpu_ray_cast()
 renderer_u, volume_u, window_u = scene(image_data, ray_unclipped)
 window_u.Render()
 rmse, _ = figures.difference(unclipped, figures.grab(window_u), BACKGROUND, 255)

@@ -21,7 +21,7 @@ import time
 
 from vtkmodules.vtkFiltersSources import vtkSphereSource
 from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper
-from vtkmodules.vtkRenderingVolume import vtkGPUVolumeRayCastMapper, vtkProjectedTetrahedraMapper
+from vtkmodules.vtkRenderingVolume import vtkProjectedTetrahedraMapper
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 (factory overrides)
 import vtkmodules.vtkRenderingVolumeOpenGL2  # noqa: F401
 
@@ -78,7 +78,7 @@ images = {}
 exact = None
 contenders = [("MTPT (CPU backend)", grid, lambda: cpu_mapper()),
               ("MTPT (OpenGL backend)", grid, lambda: gl_mapper()),
-              ("VTK's GPU ray cast of the image data", image_data, lambda: ray_cast()),
+              ("VTK's GPU ray cast of the image data", image_data, figures.gpu_ray_cast),
               ("VTK's PT", grid, lambda: vtkProjectedTetrahedraMapper())]
 
 
@@ -91,13 +91,6 @@ def cpu_mapper():
 def gl_mapper():
     m = Mapper()
     m.SetBackendToOpenGL()
-    return m
-
-
-def ray_cast():
-    m = vtkGPUVolumeRayCastMapper()
-    m.AutoAdjustSampleDistancesOff()
-    m.SetSampleDistance(0.1)
     return m
 
 
@@ -118,7 +111,8 @@ print("| peels | MTPT, CPU backend | MTPT, OpenGL backend | VTK's GPU ray cast (
 print("|---:|---:|---:|---:|")
 for peels in (0, 1, 2, 4, 8):
     row = []
-    for data, make in ((grid, cpu_mapper), (grid, gl_mapper), (image_data, ray_cast)):
+    for data, make in ((grid, cpu_mapper), (grid, gl_mapper),
+                       (image_data, figures.gpu_ray_cast)):
         renderer, volume, window = scene(data, make(), args.spheres)
         renderer.SetUseDepthPeeling(1 if peels > 0 else 0)
         renderer.SetUseDepthPeelingForVolumes(1 if peels > 0 else 0)

@@ -1,8 +1,9 @@
 # SPDX-License-Identifier: BSD-3-Clause
-"""Shared parts of the figure scripts (dependent-components.py, depth-peeling.py): the
-tetrahedralized wavelet, a volume in a renderer, a window's image, the exact reference as an image, and the
-covered-pixel difference of two images. Debian's python3 (python3-vtk9) with the build's
-`mtpt` package on PYTHONPATH."""
+"""Shared parts of the figure scripts (dependent-components.py, depth-peeling.py,
+clipping-planes.py): the tetrahedralized wavelet, a volume in a renderer and its window,
+VTK's GPU ray caster as the figures set it, a window's image, the exact reference as an
+image, and the covered-pixel difference of two images. Debian's python3 (python3-vtk9) with
+the build's `mtpt` package on PYTHONPATH."""
 import math
 
 from vtkmodules.vtkCommonCore import vtkUnsignedCharArray
@@ -13,6 +14,8 @@ from vtkmodules.vtkImagingCore import vtkRTAnalyticSource
 from vtkmodules.vtkIOImage import vtkPNGWriter
 from vtkmodules.vtkRenderingCore import (vtkColorTransferFunction, vtkRenderer, vtkRenderWindow,
                                          vtkVolume, vtkVolumeProperty, vtkWindowToImageFilter)
+
+from vtkmodules.vtkRenderingVolume import vtkGPUVolumeRayCastMapper
 
 from mtpt import vtkMTPTReferenceRenderer
 
@@ -45,6 +48,15 @@ def volume_property(colours, opacities, unit_distance):
     prop.SetScalarOpacity(opacity)
     prop.SetScalarOpacityUnitDistance(unit_distance)
     return prop
+
+
+def gpu_ray_cast():
+    """VTK's GPU ray caster as the figures compare with it: a fixed sample distance of 0.1,
+    no automatic adjustment."""
+    mapper = vtkGPUVolumeRayCastMapper()
+    mapper.AutoAdjustSampleDistancesOff()
+    mapper.SetSampleDistance(0.1)
+    return mapper
 
 
 def volume_scene(data, mapper, prop, background):
