@@ -409,6 +409,18 @@ void Compositor::Rasterize(const Fan* fans, int threads)
   frame.clipToRange = s.depthRange != nullptr;
   frame.clipping = s.clipping;
   frame.planes = s.clipPlanes;
+  frame.blendMode = s.blendMode;
+  frame.intensity = s.intensity;
+  {
+    // In entry coordinates. The range applies to the clamped scalar: where it reaches an end
+    // of the table it takes in everything beyond that end.
+    const TransferFunctionTable& tf = s.transferFunction;
+    const double low = tf.UnclampedEntryCoordinate(s.averageRange[0]);
+    const double high = tf.UnclampedEntryCoordinate(s.averageRange[1]);
+    frame.averageRange[0] = low <= 0.0 ? -HUGE_VAL : low;
+    frame.averageRange[1] = high >= tf.size - 1 ? HUGE_VAL : high;
+  }
+  const bool reduce = ReducesInAnyOrder(s.blendMode);
   const std::uint8_t* straddles = s.clipPlanes.count > 0 ? this->Straddles.data() : nullptr;
   const auto jobs = static_cast<std::int64_t>(this->Tiles.size());
   std::size_t triangles = 0, fragments = 0, hidden = 0;
@@ -431,7 +443,8 @@ void Compositor::Rasterize(const Fan* fans, int threads)
       }
       // A tile drawn by an earlier Composite holds what lies behind these fans: they are
       // drawn into a transparent image of their own, composited over it afterwards.
-      const bool behind = this->Cleared[tile] != 0;
+      // (A reduction folds fragments in any order: into the tile itself.)
+      const bool behind = this->Cleared[tile] != 0 && !reduce;
       float* pixels = this->Tile(tile);
       if (behind)
       {
@@ -520,20 +533,90 @@ inline void Store(float value, std::uint8_t& out)
 {
   out = static_cast<std::uint8_t>(std::min(1.0f, std::max(0.0f, value)) * 255.0f + 0.5f);
 }
+
+/**
+ * The premultiplied colour of a pixel's reduced planes (detail::TileTarget) in a blend mode
+ * other than Composite, as VTK's GPU ray caster ends its rays: the transfer function at the
+ * extreme scalar (maximum and minimum), or a grey clamped to [0, 1], opaque (average: the
+ * weighted sum over the length in the range, none when the pixel saw no such stretch;
+ * additive: the sum per unit distance).
+ */
+void ReducedPixel(const CompositeSettings& s, const float* p, float rgba[4])
+{
+  rgba[0] = rgba[1] = rgba[2] = rgba[3] = 0.0f;
+  if (!(p[3 * TilePixels] > 0.0f))
+  {
+    return; // no fragment reached the pixel
+  }
+  float grey = 0.0f;
+  bool shown = false;
+  switch (s.blendMode)
+  {
+    case BlendMode::MaximumIntensity:
+    case BlendMode::MinimumIntensity:
+    {
+      // The transfer function at the extreme scalar (given as an entry coordinate).
+      const TransferFunctionTable& tf = s.transferFunction;
+      const double span = tf.high > tf.low ? tf.high - tf.low : 1.0;
+      const double scalar = tf.low + p[0] * span / std::max(tf.size - 1, 1);
+      float entry[4];
+      tf.Lookup(static_cast<float>(scalar), entry);
+      const float alpha = std::min(1.0f, std::max(0.0f, entry[3]));
+      for (int k = 0; k < 3; ++k)
+      {
+        rgba[k] = entry[k] * alpha;
+      }
+      rgba[3] = alpha;
+      return;
+    }
+    case BlendMode::AverageIntensity:
+      if (p[TilePixels] > 0.0f)
+      {
+        grey = p[0] / p[TilePixels];
+        shown = true;
+      }
+      break;
+    case BlendMode::Additive:
+      grey = static_cast<float>(p[0] / s.unitDistance);
+      shown = true;
+      break;
+    case BlendMode::Composite:
+      break;
+  }
+  if (shown)
+  {
+    grey = grey > 1.0f ? 1.0f : (grey > 0.0f ? grey : 0.0f); // NaN gives 0
+    rgba[0] = rgba[1] = rgba[2] = grey;
+    rgba[3] = 1.0f;
+  }
+}
+
 } // namespace
 
 template <typename T>
 void Compositor::ResolveInto(const PixelRegion& region, const T* below, T* rgba, int threads)
 {
   const auto start = Clock::now();
+  const bool reduced = ReducesInAnyOrder(this->Settings.blendMode);
   ForEachPixel(region, this->TilesX, this->Cleared, this->Image.data(), threads,
     [&](std::size_t i, const float* p)
     {
-      const float alpha = p ? p[3 * TilePixels] : 0.0f, rest = 1.0f - alpha;
+      float drawn[4] = { 0.0f, 0.0f, 0.0f, 0.0f };
+      if (p && reduced)
+      {
+        ReducedPixel(this->Settings, p, drawn);
+      }
+      else if (p)
+      {
+        for (int c = 0; c < 4; ++c)
+        {
+          drawn[c] = p[c * TilePixels];
+        }
+      }
+      const float rest = 1.0f - drawn[3];
       for (int c = 0; c < 4; ++c)
       {
-        const float drawn = p ? p[c * TilePixels] : 0.0f;
-        Store(below ? drawn + rest * Unit(below[4 * i + c]) : drawn, rgba[4 * i + c]);
+        Store(below ? drawn[c] + rest * Unit(below[4 * i + c]) : drawn[c], rgba[4 * i + c]);
       }
     });
   this->Statistics.resolveSeconds += detail::SecondsSince(start);

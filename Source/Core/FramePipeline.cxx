@@ -88,9 +88,10 @@ NearPlaneKey NearPlaneKeyOf(std::uint64_t keys)
 }
 
 OrderKey OrderKeyOf(std::uint64_t keys, std::uint64_t nearPlane, OrderMethod method,
-  std::size_t maxSubArraySize, OrderMutation mutation)
+  std::size_t maxSubArraySize, OrderMutation mutation, bool sorted)
 {
   OrderKey key;
+  key.sorted = sorted;
   key.keys = keys;
   key.nearPlane = nearPlane;
   key.method = method;
@@ -281,7 +282,7 @@ bool FramePipeline::UpdateOrder(const FrameInput& input, const MeshKey& mesh, in
     counts.frustumCulled == 0 && counts.pixelCulled == 0 && this->NearPlaneCut.Clipped() == 0;
   cells.direction = ViewDirection(input.modelView);
   const OrderKey key = OrderKeyOf(this->DepthKeys.Version(), this->NearPlaneCut.Version(),
-    this->Method, this->MaxSubArraySize, this->Mutation);
+    this->Method, this->MaxSubArraySize, this->Mutation, input.ordered);
   const bool sorted = Timed(this->LastTimes.order,
     [&]
     {
@@ -301,6 +302,7 @@ bool FramePipeline::UpdateOrder(const FrameInput& input, const MeshKey& mesh, in
   }
   this->LastStats.orderReused = !keyed && !sorted;
   this->LastStats.orderFromPrevious = sorted && this->Order.FromPrevious();
+  this->LastStats.unordered = !input.ordered;
   this->LastStats.sorted = this->Order.Count();
   return true;
 }

@@ -165,7 +165,10 @@ struct TransferFunctions
   }
 
   /// Extinction tau(s) = o(s) / unitDistance.
-  double Tau(double s) const
+  double Tau(double s) const { return this->Opacity(s) * this->inverseUnit; }
+
+  /// The opacity function o(s).
+  double Opacity(double s) const
   {
     const std::size_t n = this->opacityScalar.size();
     double o;
@@ -188,7 +191,7 @@ struct TransferFunctions
         (s - this->opacityScalar[i]) / (this->opacityScalar[i + 1] - this->opacityScalar[i]);
       o = this->opacity[i] + f * (this->opacity[i + 1] - this->opacity[i]);
     }
-    return o * this->inverseUnit;
+    return o;
   }
 };
 
@@ -1069,6 +1072,114 @@ void CutSegments(Segment<C>* begin, Segment<C>* end, double low, double high)
   }
 }
 
+/// A ray's segments reduced by a blend mode other than Composite (ReferenceSettings).
+struct Reduction
+{
+  bool seen = false;
+  double extreme = 0, weighted = 0, length = 0;
+};
+
+/// Integrals of o x over a segment of `length` whose scalar runs linearly between `low` and
+/// `high` (in either direction): split at every breakpoint of o, of the clamping and of the
+/// average's range, so that on each piece the clamped scalar is linear and o x quadratic.
+void IntegrateIntensity(
+  const Scene& scene, double length, double low, double high, Reduction& r)
+{
+  const ReferenceSettings& s = scene.settings;
+  const double lo = s.scalarRange[0], hi = s.scalarRange[1];
+  const double span = hi > lo ? hi - lo : 1.0;
+  auto clamped = [&](double v) { return std::min(hi, std::max(lo, v)); };
+  auto ox = [&](double v)
+  {
+    const double c = clamped(v);
+    return scene.tf.Opacity(c) * (c - lo) / span;
+  };
+  const bool average = s.blendMode == BlendMode::AverageIntensity;
+  auto inRange = [&](double v)
+  {
+    const double c = clamped(v);
+    return !average || (s.averageRange[0] <= c && c <= s.averageRange[1]);
+  };
+  if (!(high > low))
+  {
+    if (inRange(low))
+    {
+      r.weighted += length * ox(low);
+      r.length += length;
+    }
+    return;
+  }
+  std::vector<double> cuts{ low, high, lo, hi, s.averageRange[0], s.averageRange[1] };
+  cuts.insert(cuts.end(), scene.tf.breaks.begin(), scene.tf.breaks.end());
+  std::sort(cuts.begin(), cuts.end());
+  for (std::size_t k = 0; k + 1 < cuts.size(); ++k)
+  {
+    const double a = std::max(low, cuts[k]), b = std::min(high, cuts[k + 1]);
+    if (!(b > a) || !inRange(0.5 * (a + b)))
+    {
+      continue;
+    }
+    const double piece = length * (b - a) / (high - low);
+    r.weighted += piece / 6.0 * (ox(a) + 4.0 * ox(0.5 * (a + b)) + ox(b));
+    r.length += piece;
+  }
+}
+
+/// Folds one segment into the ray's reduction.
+void ReduceSegment(const Scene& scene, double length, double front, double back, Reduction& r)
+{
+  const ReferenceSettings& s = scene.settings;
+  const double low = std::min(front, back), high = std::max(front, back);
+  const double lo = s.scalarRange[0], hi = s.scalarRange[1];
+  switch (s.blendMode)
+  {
+    case BlendMode::MaximumIntensity:
+      r.extreme = r.seen ? std::max(r.extreme, high) : high;
+      break;
+    case BlendMode::MinimumIntensity:
+      r.extreme = r.seen ? std::min(r.extreme, low) : low;
+      break;
+    case BlendMode::AverageIntensity:
+    case BlendMode::Additive:
+      IntegrateIntensity(scene, length, low, high, r);
+      break;
+    case BlendMode::Composite:
+      break;
+  }
+  r.extreme = std::min(hi, std::max(lo, r.extreme));
+  r.seen = true;
+}
+
+/// The pixel of a reduced ray over the background (linear RGB).
+void ReducedPixel(const Scene& scene, const Reduction& r, double out[3])
+{
+  const ReferenceSettings& s = scene.settings;
+  double colour[3] = { 0, 0, 0 }, alpha = 0;
+  if (s.blendMode == BlendMode::MaximumIntensity || s.blendMode == BlendMode::MinimumIntensity)
+  {
+    if (r.seen)
+    {
+      scene.tf.Color(r.extreme, colour);
+      alpha = std::min(1.0, std::max(0.0, scene.tf.Opacity(r.extreme)));
+      for (double& c : colour)
+      {
+        c *= alpha;
+      }
+    }
+  }
+  else if (r.seen && (s.blendMode == BlendMode::Additive || r.length > 0))
+  {
+    const double value = s.blendMode == BlendMode::Additive ? r.weighted * scene.tf.inverseUnit
+                                                            : r.weighted / r.length;
+    colour[0] = colour[1] = colour[2] = std::min(1.0, std::max(0.0, value));
+    alpha = 1;
+  }
+  for (int k = 0; k < 3; ++k)
+  {
+    out[k] = colour[k] + (1 - alpha) * s.background[k];
+  }
+}
+
 /// Per pixel of the band: its segments sorted by depth, integrated front to back with the
 /// translucent surfaces it crosses, then the background.
 template <int C>
@@ -1097,10 +1208,26 @@ void IntegratePixels(const Scene& scene, int bandStart, int bandEnd,
       KeptStretch(scene.settings.clipPlanes, origin, direction, low, high);
       CutSegments(begin, end, low, high);
     }
+    double* out = rgb + 3 * (static_cast<std::size_t>(y) * width + x);
+    if constexpr (C == 1)
+    {
+      if (scene.settings.blendMode != BlendMode::Composite)
+      {
+        Reduction reduction;
+        for (const Segment<C>* s = begin; s != end; ++s)
+        {
+          if (s->exit > s->enter)
+          {
+            ReduceSegment(scene, (s->exit - s->enter) * scale, s->front[0], s->back[0], reduction);
+          }
+        }
+        ReducedPixel(scene, reduction, out);
+        continue;
+      }
+    }
     RayState state;
     IntegrateRay(scene.tf, scale, begin, end, hits.data() + hitOffsets[i],
       hits.data() + hitOffsets[i + 1], state);
-    double* out = rgb + 3 * (static_cast<std::size_t>(y) * width + x);
     for (int k = 0; k < 3; ++k)
     {
       out[k] = state.color[k] + state.transmittance * scene.settings.background[k];
@@ -1167,6 +1294,20 @@ bool RenderReference(const PointsView& points, const CellsView& cells, const Sca
   if (!Invert(settings.projection, inverseProjection))
   {
     return Fail(error, "the projection matrix is singular");
+  }
+  if (settings.blendMode != BlendMode::Composite &&
+    (settings.mapping != ScalarMapping::TransferFunctions || !settings.triangles.empty()))
+  {
+    return Fail(error,
+      "blend modes other than composite take one scalar per tuple and no translucent "
+      "triangles");
+  }
+  if (settings.blendMode != BlendMode::Composite &&
+    (!std::isfinite(settings.scalarRange[0]) || !std::isfinite(settings.scalarRange[1]) ||
+      settings.scalarRange[1] < settings.scalarRange[0] ||
+      std::isnan(settings.averageRange[0]) || std::isnan(settings.averageRange[1])))
+  {
+    return Fail(error, "the scalar range must be finite and ordered, the average's range a number");
   }
   TransferFunctions tf;
   if (!BuildTransferFunctions(settings, tf, error))

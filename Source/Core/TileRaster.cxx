@@ -1102,12 +1102,95 @@ void ShadeClipped(const RasterFrame& f, const TileTarget& tile, Mode mode, const
   }
 }
 
+/**
+ * A blend mode other than Composite: folds the fragment at column x whose drawn part runs
+ * from entry coordinate u0 to u1 (not clamped) over eye length `length` into the pixel
+ * (TileTarget). The average's range (RasterFrame::averageRange) is open beyond the table
+ * where it reaches the table's ends, as it applies to the clamped scalar.
+ */
+void ReduceFragment(const RasterFrame& f, const TileRow& row, int x, double u0, double u1,
+  double length)
+{
+  const bool seen = row.a[x] > 0.0f;
+  row.a[x] = 1.0f;
+  const double low = std::min(u0, u1), high = std::max(u0, u1);
+  const double last = f.transferFunction.size - 1;
+  switch (f.blendMode)
+  {
+    case BlendMode::MaximumIntensity:
+    {
+      const auto value = static_cast<float>(std::min(last, std::max(0.0, high)));
+      row.r[x] = seen ? std::max(row.r[x], value) : value;
+      return;
+    }
+    case BlendMode::MinimumIntensity:
+    {
+      const auto value = static_cast<float>(std::min(last, std::max(0.0, low)));
+      row.r[x] = seen ? std::min(row.r[x], value) : value;
+      return;
+    }
+    case BlendMode::Additive:
+      row.r[x] += static_cast<float>(length * f.intensity->Mean(f.transferFunction, low, high));
+      return;
+    case BlendMode::AverageIntensity:
+    {
+      // The stretch of the segment whose scalar lies in the range: a fraction of its length.
+      const double from = std::max(low, f.averageRange[0]);
+      const double to = std::min(high, f.averageRange[1]);
+      double fraction = 0.0;
+      if (high > low)
+      {
+        fraction = to > from ? (to - from) / (high - low) : 0.0;
+      }
+      else
+      {
+        fraction = from <= to ? 1.0 : 0.0; // a constant scalar, in the range or not
+      }
+      if (fraction > 0.0)
+      {
+        const double part = length * fraction;
+        row.r[x] += static_cast<float>(
+          part * f.intensity->Mean(f.transferFunction, from, std::max(from, to)));
+        row.g[x] += static_cast<float>(part);
+      }
+      return;
+    }
+    case BlendMode::Composite:
+      return;
+  }
+}
+
+/// A blend mode other than Composite: reduces the fragments of the pixels [lo, hi] of row y,
+/// each one's part drawn (DrawnPart) with its scalars in entry coordinates.
+void ReduceSpan(const RasterFrame& f, const TileTarget& tile, Mode mode, const Planes& p, int y,
+  int lo, int hi, bool cut)
+{
+  const TileRow row = RowOf(tile, y);
+  for (int x = lo - tile.x0; x <= hi - tile.x0; ++x)
+  {
+    const FragmentSegment s = SegmentAt(f, tile, mode, p, x, y);
+    double t0, t1;
+    if (!DrawnPart(f, tile, row, s, x, y, cut, t0, t1))
+    {
+      continue;
+    }
+    const double change = s.scalarBack - s.scalarFront;
+    const double u0 = f.transferFunction.UnclampedEntryCoordinate(s.scalarFront + t0 * change);
+    const double u1 = f.transferFunction.UnclampedEntryCoordinate(s.scalarFront + t1 * change);
+    ReduceFragment(f, row, x, u0, u1, (t1 - t0) * s.length);
+  }
+}
+
 /// Shades the covered pixels lo..hi of row y by the mode's path, or cut by the depth range
-/// or (`cut`) the clipping planes.
+/// or (`cut`) the clipping planes; or reduces them (a blend mode other than Composite).
 void ShadeSpan(const RasterFrame& f, const TileTarget& tile, Mode mode, const Planes& p, int y,
   int lo, int hi, WaitingFragments& waiting, bool cut)
 {
-  if (f.clipToRange || cut)
+  if (ReducesInAnyOrder(f.blendMode))
+  {
+    ReduceSpan(f, tile, mode, p, y, lo, hi, cut);
+  }
+  else if (f.clipToRange || cut)
   {
     ShadeClipped(f, tile, mode, p, y, lo, hi, waiting, cut);
   }
@@ -1222,7 +1305,15 @@ void DrawTriangle(const RasterFrame& f, const TileTarget& tile, Mode mode, Corne
 void RasterizeTileImpl(const RasterFrame& f, const TileTarget& tile, const Fan* fans,
   std::size_t count, RasterCounts& counts)
 {
-  const Mode mode = !f.preIntegration
+  const bool reduce = ReducesInAnyOrder(f.blendMode);
+  const bool integrates =
+    f.blendMode == BlendMode::AverageIntensity || f.blendMode == BlendMode::Additive;
+  if (reduce && (f.vertexColours || (integrates && !f.intensity)))
+  {
+    return; // no scalars to reduce (colours in the records), or no integral to reduce with
+  }
+  // A reduction interpolates the scalars as pre-integrated shading does.
+  const Mode mode = !f.preIntegration && !reduce
     ? Mode::Compatible
     : (f.interpolation.perspective ? Mode::ExactIntegral : Mode::Integrated);
   WaitingFragments waiting; // pre-integrated fragments

@@ -34,6 +34,13 @@ double TransferFunctionTable::EntryCoordinate(double scalar) const
   return u > 0.0 ? (u < last ? u : last) : 0.0; // NaN maps to 0
 }
 
+double TransferFunctionTable::UnclampedEntryCoordinate(double scalar) const
+{
+  const double span = this->high > this->low ? this->high - this->low : 1.0;
+  const double u = (scalar - this->low) * (this->size - 1) / span;
+  return std::isnan(u) ? 0.0 : u;
+}
+
 namespace
 {
 
@@ -205,6 +212,69 @@ void PreIntegrationTable::Segment(const TransferFunctionTable& tf, float front, 
     }
     rgba[3] = static_cast<float>(alpha);
   }
+}
+
+namespace
+{
+
+/// Integral of o x over entry interval i from its start to fraction f, with k = 1 / (size - 1):
+/// o = a + d f and x = k (i + f) there.
+inline double IntensityPartial(double a, double d, int i, double f, double k)
+{
+  return k * f * (a * i + 0.5 * f * (a + d * i) + f * f * d / 3.0);
+}
+
+} // namespace
+
+void IntensityTable::Build(const TransferFunctionTable& tf)
+{
+  this->prefix.assign(static_cast<std::size_t>(std::max(tf.size, 0)), 0.0);
+  const double k = tf.size > 1 ? 1.0 / (tf.size - 1) : 0.0;
+  for (int i = 0; i + 1 < tf.size; ++i)
+  {
+    const double a = tf.table[4 * i + 3], d = static_cast<double>(tf.table[4 * i + 7]) - a;
+    this->prefix[i + 1] = this->prefix[i] + IntensityPartial(a, d, i, 1.0, k);
+  }
+}
+
+double IntensityTable::Mean(const TransferFunctionTable& tf, double u0, double u1) const
+{
+  if (!this->Covers(tf) || tf.size < 2)
+  {
+    return 0.0;
+  }
+  const double last = tf.size - 1;
+  if (u0 < 0.0 || u1 > last)
+  {
+    // Beyond the table the scalar is clamped: o x is 0 below it (x = 0) and the last entry's
+    // opacity above it (x = 1).
+    const double inside0 = std::min(last, std::max(0.0, u0));
+    const double inside1 = std::min(last, std::max(0.0, u1));
+    if (!(u1 > u0))
+    {
+      return this->Mean(tf, inside0, inside0);
+    }
+    const double above = std::max(0.0, u1 - std::max(u0, last));
+    const double inside =
+      inside1 > inside0 ? this->Mean(tf, inside0, inside1) * (inside1 - inside0) : 0.0;
+    return (inside + above * tf.table[4 * (tf.size - 1) + 3]) / (u1 - u0);
+  }
+  const double k = 1.0 / last;
+  int i0, i1;
+  double f0, f1;
+  Split(tf, u0, i0, f0);
+  Split(tf, u1, i1, f1);
+  const double a0 = tf.table[4 * i0 + 3], d0 = static_cast<double>(tf.table[4 * i0 + 7]) - a0;
+  if (i0 == i1)
+  {
+    // Inside one interval: the mean of the quadratic in closed form (no cancellation).
+    const double m1 = 0.5 * (f0 + f1), m2 = (f0 * f0 + f0 * f1 + f1 * f1) / 3.0;
+    return k * (a0 * i0 + m1 * (a0 + d0 * i0) + m2 * d0);
+  }
+  const double a1 = tf.table[4 * i1 + 3], d1 = static_cast<double>(tf.table[4 * i1 + 7]) - a1;
+  const double integral = this->prefix[i1] - this->prefix[i0] +
+    IntensityPartial(a1, d1, i1, f1, k) - IntensityPartial(a0, d0, i0, f0, k);
+  return integral / (u1 - u0);
 }
 
 } // namespace mtpt

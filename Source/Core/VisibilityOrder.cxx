@@ -383,6 +383,16 @@ bool OrderStage::Update(const Key& key, const Cells& cells, bool fromPrevious,
       }
     }
   }
+  if (!key.sorted)
+  {
+    // Any order serves: the cells in id order, then the near plane's pieces.
+    const std::vector<SortKey>& pieces = nearPlane.PieceKeys();
+    this->Sorted.insert(this->Sorted.end(), pieces.begin(), pieces.end());
+    this->SortedFromPrevious = false;
+    this->Held = Cells{}; // not an order to sort the next one from
+    this->Record.Store(key);
+    return true;
+  }
   // The same cells as the previous order after a small rotation: nearly sorted already.
   const Cells& held = this->Held;
   const double dot = cells.direction[0] * held.direction[0] +

@@ -456,10 +456,7 @@ struct SplitScene
     this->input.points = this->mesh.Points();
     this->input.cells = this->mesh.Cells();
     this->input.scalars = { this->mesh.scalars.data(), mtpt::ScalarsView::Association::Points };
-    this->input.modelView = mtpt::test::LookAt({ 1.2, 1.5, 3.5 }, { 0, 0, 0 }, { 0, 1, 0 });
-    this->input.projection = perspective ? mtpt::test::Perspective(45, 1.2, 1.5, 6)
-                                         : mtpt::test::Ortho(-1.8, 1.8, -1.5, 1.5, 1.5, 6);
-    this->input.perspective = perspective;
+    mtpt::test::ObliqueView(this->input, perspective);
   }
 
   /// The compositor's settings for `shading`, without ranges or planes.

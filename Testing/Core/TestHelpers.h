@@ -167,6 +167,17 @@ void AddKuhnTetrahedra(const int n[3], std::int64_t base,
 /// a smooth scalar field. Deterministic for a given seed.
 TetMesh JitteredGrid(int n, unsigned seed);
 
+/// The oblique view of the tests that split or reduce segments, for a mesh in [-1, 1]^3:
+/// sets the matrices of a FrameInput-like `input` (modelView, projection, perspective).
+template <typename Input>
+void ObliqueView(Input& input, bool perspective)
+{
+  input.modelView = LookAt({ 1.2, 1.5, 3.5 }, { 0, 0, 0 }, { 0, 1, 0 });
+  input.projection =
+    perspective ? Perspective(45, 1.2, 1.5, 6) : Ortho(-1.8, 1.8, -1.5, 1.5, 1.5, 6);
+  input.perspective = perspective;
+}
+
 /// Random tetrahedra whose corners are drawn from a 3x3x3 lattice in [-1, 1]^3 (projected by
 /// an axis-aligned view, its points coincide and line up: every projection class and every
 /// zero-band case occurs) and, for every fourth cell, from 40 random points (some nearly

@@ -30,13 +30,22 @@ struct RasterFrame
   ClipPlanes planes; ///< cut the fragments of fans marked Fan::straddles
   PerspectiveInterpolation interpolation;
   float inverseUnit = 1.0f; ///< 1 / ScalarOpacityUnitDistance
+  /// A mode other than Composite reduces fragments into the tile's planes (ReduceFragment).
+  BlendMode blendMode = BlendMode::Composite;
+  const IntensityTable* intensity = nullptr;  ///< average and additive modes
+  double averageRange[2] = { 0.0, 0.0 };       ///< average mode: entry coordinates
   /// VTK-compatible fans drawn whole where they can be (FanRaster-inl.h), which gives the
   /// image of drawing them triangle by triangle bit for bit; false (tests) draws them so.
   bool fanPath = true;
 };
 
-/// One tile: its pixels, its image and opaque depth (TileSize x TileSize each, row-major,
-/// row 0 at the bottom, whatever part of it lies outside the image).
+/**
+ * One tile: its pixels, its image and opaque depth (TileSize x TileSize each, row-major,
+ * row 0 at the bottom, whatever part of it lies outside the image). In a blend mode other
+ * than Composite the image's planes hold, per pixel, the reduced value (R: the extreme
+ * scalar's entry coordinate, or the sum of o x times length), the length summed (G,
+ * average), and whether a fragment reached the pixel (A: 1).
+ */
 struct TileTarget
 {
   int x0 = 0, y0 = 0;           ///< the tile's first pixel in the image

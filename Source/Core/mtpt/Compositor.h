@@ -105,6 +105,18 @@ struct CompositeSettings
    * are left out at binning, and fans no plane cuts are drawn as without planes.
    */
   ClipPlanes clipPlanes;
+  /**
+   * How fragments become a pixel (BlendMode). A mode other than Composite reduces each
+   * pixel's fragments, in any order, to one value that Resolve maps to colour: the fans may
+   * come in any order, and `intensity` (the integral of `transferFunction`, kept alive by the
+   * caller) is required for the average and additive modes. Fragments are then drawn one at
+   * a time, and `vertexColours` is not supported (nothing is drawn).
+   */
+  BlendMode blendMode = BlendMode::Composite;
+  const IntensityTable* intensity = nullptr;
+  /// Average intensity: only the stretches whose scalar lies in [low, high] count (VTK's
+  /// AverageIPScalarRange, in scalar units).
+  double averageRange[2] = { -1e300, 1e300 };
 
   /// Switches to pre-integrated shading with `table` (the integral functions of
   /// transferFunction, kept alive by the caller) and the view's `interpolation`.

@@ -80,6 +80,7 @@ struct FrameStats
   bool transformReused = false;     ///< the projected points of the previous frame served
   bool orderReused = false;         ///< no key was computed and nothing sorted
   bool orderFromPrevious = false;   ///< sorted from the previous order (nearly sorted)
+  bool unordered = false;           ///< kept in cell order, not sorted (FrameInput::ordered)
   bool decompositionReused = false; ///< the buffers of the previous frame served
 };
 
@@ -108,6 +109,9 @@ struct FrameInput
   /// The level of detail of a moving frame: the fraction of the visible cells drawn, a
   /// CellFractionLevel (LevelOfDetail.h). 1: every cell, the full frame.
   double cellFraction = 1;
+  /// False when the blend mode reduces fragments in any order (BlendMode): the cells are
+  /// culled as always but kept in cell order, and nothing is sorted.
+  bool ordered = true;
   /// Change counters, read only with reuse on (FramePipeline::SetReuse): change
   /// `dataVersion` whenever the content of the points, cells or scalars changes, and
   /// `opacityVersion` whenever the content of the opacity table changes.

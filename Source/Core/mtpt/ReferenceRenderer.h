@@ -130,6 +130,18 @@ struct ReferenceSettings
   /// Clipping planes in eye coordinates: each ray integrates only the stretch every plane
   /// keeps (the translucent triangles are not clipped, as VTK's mappers clip only their own).
   ClipPlanes clipPlanes;
+  /**
+   * How a ray's segments become its pixel (BlendMode; ScalarMapping::TransferFunctions
+   * only, without translucent triangles). The other modes reduce the segments in closed
+   * form: the extreme of the scalar lies at a segment's end, and o(s) x is quadratic
+   * between breakpoints, so Simpson's rule integrates it exactly. In them the scalar is
+   * first clamped to `scalarRange`, over which x is normalized (as a transfer-function
+   * table clamps it: set it to the table's range).
+   */
+  BlendMode blendMode = BlendMode::Composite;
+  double scalarRange[2] = { 0.0, 1.0 };
+  /// Average intensity: only the stretches whose (clamped) scalar lies in this range count.
+  double averageRange[2] = { -1e300, 1e300 };
   /// Segments gathered at most per pass; the image is done in bands of rows that stay
   /// below it (memory: 32 bytes per segment with one scalar, as much in all with more).
   std::size_t maxSegmentsPerPass = std::size_t(1) << 23;

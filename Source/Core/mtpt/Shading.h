@@ -25,6 +25,35 @@ enum class Shading
 };
 
 /**
+ * How the fragments along a ray become a pixel, with the values of vtkVolumeMapper's blend
+ * modes (Documentation/blend-modes.md). Composite blends them in visibility order; the
+ * others reduce them, in any order, to one value per pixel, each as VTK's GPU ray caster
+ * defines it with the scalar s and its normalized value x (0 at the transfer-function
+ * table's low end, 1 at its high end):
+ * - MaximumIntensity, MinimumIntensity: the largest (smallest) scalar along the ray, through
+ *   the transfer function: colour c(s) premultiplied by opacity o(s);
+ * - AverageIntensity: the mean of o(s) x along the stretches of the ray whose scalar lies
+ *   in a range, as grey, opaque;
+ * - Additive: the integral of o(s) x along the ray per unit distance, clamped to 1, as
+ *   grey, opaque.
+ * Each is computed exactly over each fragment's segment, along which the scalar is linear.
+ */
+enum class BlendMode
+{
+  Composite = 0,
+  MaximumIntensity = 1,
+  MinimumIntensity = 2,
+  AverageIntensity = 3,
+  Additive = 4
+};
+
+/// Whether `mode` reduces fragments in any order instead of blending them in order.
+inline bool ReducesInAnyOrder(BlendMode mode)
+{
+  return mode != BlendMode::Composite;
+}
+
+/**
  * What perspective-exact interpolation needs of the projection (pre-integrated shading).
  * In a perspective view each triangle of the decomposition has one planar front face and
  * one planar back face (its silhouette vertices have front = back), so 1 / w (w = clip w,

@@ -33,6 +33,8 @@ struct TransferFunctionTable
 
   /// `scalar` in entry units: 0 at `low`, size - 1 at `high`, clamped (NaN gives 0).
   double EntryCoordinate(double scalar) const;
+  /// The same, not clamped (NaN gives 0).
+  double UnclampedEntryCoordinate(double scalar) const;
 };
 
 /**
@@ -75,6 +77,37 @@ struct PreIntegrationTable
    */
   void Segment(const TransferFunctionTable& tf, float front, float back, float length,
     float inverseUnit, float rgba[4]) const;
+};
+
+/**
+ * Average and additive blending (BlendMode) integrate o(s) x along each segment, with o the
+ * table's opacity and x the scalar normalized over the table's range: x = u / (size - 1)
+ * at entry coordinate u. With o linear between entries, o x is quadratic there, so
+ *   W(u) = integral_0^u o x du
+ * is an exact piecewise cubic, stored at the entries (prefix sums) and completed inside an
+ * entry in closed form, as PreIntegrationTable's integrals. The OpenGL backend's shader
+ * reads the same sums.
+ */
+struct IntensityTable
+{
+  /// W at the entries.
+  std::vector<double> prefix;
+
+  /// Builds the prefix sums of `tf` (recompute whenever the table changes).
+  void Build(const TransferFunctionTable& tf);
+
+  /// Whether the prefix sums cover `tf`; if not, every mean is 0.
+  bool Covers(const TransferFunctionTable& tf) const
+  {
+    return tf.size >= 1 && this->prefix.size() >= static_cast<std::size_t>(tf.size);
+  }
+
+  /**
+   * The mean of o x over the entry coordinates [u0, u1] (u0 <= u1; beyond the table the
+   * scalar is clamped to its ends, as the table's lookups clamp it); o x at u0 when they are
+   * equal.
+   */
+  double Mean(const TransferFunctionTable& tf, double u0, double u1) const;
 };
 
 /// At most this many compositing steps per segment (pre-integrated shading).

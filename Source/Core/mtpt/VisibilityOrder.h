@@ -115,10 +115,13 @@ struct OrderKey
   OrderMethod method = OrderMethod::RadixSort;
   std::size_t maxSubArraySize = DefaultMaxSubArraySize;
   OrderMutation mutation = OrderMutation::None;
+  /// False: the blend mode reduces fragments in any order (BlendMode), so the keys are kept
+  /// in cell order and nothing is sorted.
+  bool sorted = true;
   bool operator==(const OrderKey& o) const
   {
     return keys == o.keys && nearPlane == o.nearPlane && method == o.method &&
-      maxSubArraySize == o.maxSubArraySize && mutation == o.mutation;
+      maxSubArraySize == o.maxSubArraySize && mutation == o.mutation && sorted == o.sorted;
   }
 };
 
