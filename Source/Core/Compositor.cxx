@@ -411,15 +411,7 @@ void Compositor::Rasterize(const Fan* fans, int threads)
   frame.planes = s.clipPlanes;
   frame.blendMode = s.blendMode;
   frame.intensity = s.intensity;
-  {
-    // In entry coordinates. The range applies to the clamped scalar: where it reaches an end
-    // of the table it takes in everything beyond that end.
-    const TransferFunctionTable& tf = s.transferFunction;
-    const double low = tf.UnclampedEntryCoordinate(s.averageRange[0]);
-    const double high = tf.UnclampedEntryCoordinate(s.averageRange[1]);
-    frame.averageRange[0] = low <= 0.0 ? -HUGE_VAL : low;
-    frame.averageRange[1] = high >= tf.size - 1 ? HUGE_VAL : high;
-  }
+  AverageRangeEntries(s.transferFunction, s.averageRange, HUGE_VAL, frame.averageRange);
   const bool reduce = ReducesInAnyOrder(s.blendMode);
   const std::uint8_t* straddles = s.clipPlanes.count > 0 ? this->Straddles.data() : nullptr;
   const auto jobs = static_cast<std::int64_t>(this->Tiles.size());

@@ -316,6 +316,38 @@ void FanValues(const TableLookup& lookup, const Fan& fan, hn::Vec<CornerTag> val
   centre[5] = hn::Broadcast<0>(own);
 }
 
+/**
+ * Maximum and minimum intensity: the fan's corners' values as the triangle path's
+ * ValueCorner gives them for `mode`, arranged so that front = value[0] / value[1] and
+ * back = value[2] / value[3] (Mode::Integrated: the scalars over 1; Mode::ExactIntegral: the
+ * scalars times 1 / w over 1 / w, affine in screen space), value[5] = z.
+ */
+void ExtremeFanValues(const RasterFrame& f, Mode mode, const Fan& fan,
+  hn::Vec<CornerTag> value[6], hn::Vec<CornerTag> centre[6])
+{
+  const CornerTag d;
+  HWY_ALIGN float corners[6][MaxFanTriangles] = {};
+  float own[6] = {};
+  for (int k = 0; k <= MaxFanTriangles; ++k)
+  {
+    Corner c;
+    c.vertex = k < MaxFanTriangles ? &fan.boundary[k < fan.count ? k : 0] : &fan.centre;
+    ValueCorner(f, mode, c);
+    const bool exact = mode == Mode::ExactIntegral;
+    const double v[6] = { c.values[0], exact ? c.values[1] : 1.0, exact ? c.values[2] : c.values[1],
+      exact ? c.values[3] : 1.0, 0.0, exact ? c.values[6] : c.values[3] };
+    for (int a = 0; a < 6; ++a)
+    {
+      (k < MaxFanTriangles ? corners[a][k] : own[a]) = static_cast<float>(v[a]);
+    }
+  }
+  for (int a = 0; a < 6; ++a)
+  {
+    value[a] = hn::Load(d, corners[a]);
+    centre[a] = hn::Set(d, own[a]);
+  }
+}
+
 /// Double-precision vectors of the plane set-up: a triangle per lane, 4 (or 2) at a time.
 using PlaneTag = hn::CappedTag<double, MaxFanTriangles>;
 
@@ -475,6 +507,13 @@ HWY_INLINE hn::Vec<D> ShadeFanLanes(D d, const RasterFrame& f, const TileRow& ro
     const auto start = hn::TableLookupLanes(hn::Load(d, p.start[a]), which);
     value[a] = hn::MulAdd(dx, i, start);
   }
+  if (ReducesInAnyOrder(f.blendMode))
+  {
+    // Maximum or minimum intensity (ExtremeFanValues): nothing becomes opaque.
+    FoldExtremes(d, f, row, x, hn::Div(value[0], value[1]), hn::Div(value[2], value[3]),
+      value[5], keep);
+    return hn::Zero(d);
+  }
   return ShadeLanes(d, f, row, x, value, keep);
 }
 
@@ -485,18 +524,22 @@ HWY_INLINE hn::Vec<D> ShadeFanLanes(D d, const RasterFrame& f, const TileRow& ro
 class FanPath
 {
 public:
-  FanPath(const RasterFrame& f, const TileTarget& tile)
+  FanPath(const RasterFrame& f, const TileTarget& tile, Mode mode)
     : Frame(f)
     , Target(tile)
     , Lookup(f.transferFunction)
+    , FanMode(mode)
+    , Extremes(f.blendMode == BlendMode::MaximumIntensity ||
+        f.blendMode == BlendMode::MinimumIntensity)
     , Applies(f.fanPath && !f.vertexColours && !f.clipToRange &&
-        hn::Lanes(FragmentTag()) >= MaxFanTriangles)
+        hn::Lanes(FragmentTag()) >= MaxFanTriangles &&
+        (this->Extremes || (mode == Mode::Compatible && !ReducesInAnyOrder(f.blendMode))))
   {
     this->Planes.Clear();
     for (int j = 0; j < T && this->Applies; ++j)
     {
       this->Opaque[j] = 0;
-      for (int x = 0; x < T; x += static_cast<int>(hn::Lanes(FragmentTag())))
+      for (int x = 0; x < T && !this->Extremes; x += static_cast<int>(hn::Lanes(FragmentTag())))
       {
         this->MarkOpaque(j, x, hn::LoadU(FragmentTag(), this->Target.rgba + 3 * T * T + j * T + x));
       }
@@ -504,9 +547,9 @@ public:
   }
 
   /**
-   * VTK-compatible shading of `fan` into the tile, as its triangles would be drawn. Returns
-   * false, having drawn nothing, when the fan path does not apply: the caller draws the
-   * triangles instead.
+   * VTK-compatible shading of `fan` into the tile, or its maximum or minimum intensity, as its
+   * triangles would be drawn. Returns false, having drawn nothing, when the fan path does not
+   * apply: the caller draws the triangles instead.
    */
   bool Draw(const Fan& fan, RasterCounts& counts)
   {
@@ -571,7 +614,8 @@ private:
         const std::size_t covered = hn::CountTrue(d, keep);
         counts.fragments += covered;
         // Fragments behind opaque pixels are skipped; a fan all behind them is not set up.
-        keep = hn::And(keep, Transparent(d, row, x));
+        // (In a reduction the alpha plane says only that a fragment came.)
+        keep = this->Extremes ? keep : hn::And(keep, Transparent(d, row, x));
         if (hn::AllFalse(d, keep))
         {
           continue;
@@ -632,13 +676,22 @@ private:
   void SetUp(const Fan& fan, const FanGeometry& g)
   {
     hn::Vec<CornerTag> value[6], centre[6];
-    FanValues(this->Lookup, fan, value, centre);
+    if (this->Extremes)
+    {
+      ExtremeFanValues(this->Frame, this->FanMode, fan, value, centre);
+    }
+    else
+    {
+      FanValues(this->Lookup, fan, value, centre);
+    }
     this->Planes.SetUp(this->Target, g, value, centre);
   }
 
   const RasterFrame& Frame;
   const TileTarget& Target;
   const TableLookup Lookup;
+  const Mode FanMode;
+  const bool Extremes; ///< maximum or minimum intensity (else VTK-compatible shading)
   const bool Applies;
   FanPlanes Planes;
   std::uint64_t Opaque[T]; ///< per tile row, bit i: column i opaque (OpaqueAlpha)
@@ -649,7 +702,7 @@ private:
 class FanPath
 {
 public:
-  FanPath(const RasterFrame&, const TileTarget&) {}
+  FanPath(const RasterFrame&, const TileTarget&, Mode) {}
   bool Draw(const Fan&, RasterCounts&) { return false; }
 };
 

@@ -542,14 +542,15 @@ void ShadeCompatible(
 constexpr std::int64_t SmallTriangle = 8 * 256;
 
 /**
- * VTK-compatible shading of a small triangle (SmallTriangle) over rows [y0, y1] and columns
- * [x0, x1], a row's lanes at once. Coverage is tested per lane, exactly: within 15 pixels of
- * such a triangle every edge function value is an integer below 2^24 in magnitude, which
- * float holds exactly, so the float sums and comparisons decide as the 64-bit ones do.
+ * A small triangle (SmallTriangle) over rows [y0, y1] and columns [x0, x1], a row's lanes at
+ * once: shade(row, planes, y, x, keep) for each vector with a covered lane. Coverage is
+ * tested per lane, exactly: within 15 pixels of such a triangle every edge function value is
+ * an integer below 2^24 in magnitude, which float holds exactly, so the float sums and
+ * comparisons decide as the 64-bit ones do.
  */
-template <typename GetPlanes>
-void ShadeSmall(const RasterFrame& f, const TileTarget& tile, const Edges& edges,
-  GetPlanes&& planes, int x0, int x1, int y0, int y1, RasterCounts& counts)
+template <typename GetPlanes, typename Shade>
+void ShadeSmall(const TileTarget& tile, const Edges& edges, GetPlanes&& planes, int x0, int x1,
+  int y0, int y1, RasterCounts& counts, Shade&& shade)
 {
   const FragmentTag d;
   const int lanes = static_cast<int>(hn::Lanes(d));
@@ -567,7 +568,6 @@ void ShadeSmall(const RasterFrame& f, const TileTarget& tile, const Edges& edges
   for (int y = y0; y <= y1; ++y)
   {
     const TileRow row = RowOf(tile, y);
-    float start[6];
     const Planes* p = nullptr; // set up when the row has a covered pixel
     for (int from = first; from <= last; from += lanes)
     {
@@ -591,10 +591,9 @@ void ShadeSmall(const RasterFrame& f, const TileTarget& tile, const Edges& edges
         {
           return; // no area: nothing to draw
         }
-        RowStart(*p, y - tile.y0, start);
       }
       counts.fragments += hn::CountTrue(d, keep);
-      ShadeVector(d, f, row, *p, start, x, keep);
+      shade(row, *p, y, x, keep);
     }
     for (int k = 0; k < 3; ++k)
     {
@@ -1160,11 +1159,164 @@ void ReduceFragment(const RasterFrame& f, const TileRow& row, int x, double u0, 
   }
 }
 
+/// A whole fragment's scalars at its ends and its depth, as vectors: the attribute planes at
+/// the lanes' columns i of tile row j (Mode::Integrated and Mode::ExactIntegral).
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE void WholeFragments(D d, Mode mode, const Planes& p, V i, float j, V& front, V& back,
+  V& length, V& z)
+{
+  auto value = [&](int k)
+  { return hn::MulAdd(hn::Set(d, p.dx[k]), i, hn::Set(d, p.base[k] + p.dy[k] * j)); };
+  if (mode == Mode::Integrated)
+  {
+    front = value(0);
+    back = value(1);
+    length = value(2);
+    z = value(3);
+    return;
+  }
+  const V frontW = value(1), backW = value(3), rayX = value(4), rayY = value(5);
+  front = hn::Div(value(0), frontW);
+  back = hn::Div(value(2), backW);
+  const V ray = hn::Sqrt(hn::MulAdd(rayX, rayX, hn::MulAdd(rayY, rayY, hn::Set(d, 1.0f))));
+  length = hn::Mul(hn::ZeroIfNegative(hn::Sub(hn::Div(hn::Set(d, 1.0f), backW),
+                     hn::Div(hn::Set(d, 1.0f), frontW))), ray);
+  z = value(6);
+}
+
+/**
+ * Folds whole fragments with scalars `front` and `back` at their ends and depth z into the
+ * lanes `keep` of the vector at tile column x of `row`: maximum or minimum intensity.
+ */
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE void FoldExtremes(
+  D d, const RasterFrame& f, const TileRow& row, int x, V front, V back, V z, hn::Mask<D> keep)
+{
+  const TransferFunctionTable& tf = f.transferFunction;
+  const double span = tf.high > tf.low ? tf.high - tf.low : 1.0;
+  const auto one = hn::Set(d, 1.0f);
+  keep = hn::And(keep, hn::And(hn::Ge(z, hn::Set(d, -1.0f)), hn::Le(z, one)));
+  if (row.depth)
+  {
+    const auto depth = hn::MulAdd(z, hn::Set(d, 0.5f), hn::Set(d, 0.5f));
+    keep = hn::And(keep, hn::Le(depth, hn::LoadU(d, row.depth + x)));
+  }
+  if (hn::AllFalse(d, keep))
+  {
+    return;
+  }
+  const bool maximum = f.blendMode == BlendMode::MaximumIntensity;
+  const auto scalar = maximum ? hn::Max(front, back) : hn::Min(front, back);
+  auto u = hn::MulAdd(scalar, hn::Set(d, static_cast<float>((tf.size - 1) / span)),
+    hn::Set(d, static_cast<float>(-tf.low * (tf.size - 1) / span)));
+  u = hn::IfThenZeroElse(hn::IsNaN(u), u); // NaN gives 0, as EntryCoordinate
+  u = hn::Min(hn::Max(u, hn::Zero(d)), hn::Set(d, static_cast<float>(tf.size - 1)));
+  const auto held = hn::LoadU(d, row.r + x), alpha = hn::LoadU(d, row.a + x);
+  const auto folded = maximum ? hn::Max(held, u) : hn::Min(held, u);
+  const auto value = hn::IfThenElse(hn::Gt(alpha, hn::Zero(d)), folded, u);
+  hn::StoreU(hn::IfThenElse(keep, value, held), d, row.r + x);
+  hn::StoreU(hn::IfThenElse(keep, one, alpha), d, row.a + x);
+}
+
+/**
+ * Maximum and minimum intensity of the lanes `keep` of the vector at tile column x of `row`
+ * (tile row j), whose fragments are whole (no depth range, no plane cuts the fan): the
+ * extreme of the scalars at each segment's ends, in clamped entry coordinates
+ * (ReduceFragment's arithmetic in float).
+ */
+template <class D>
+void ReduceExtremeVector(D d, const RasterFrame& f, Mode mode, const TileRow& row,
+  const Planes& p, float j, int x, hn::Mask<D> keep)
+{
+  const auto i = hn::Iota(d, static_cast<float>(x));
+  hn::Vec<D> front, back, length, z;
+  WholeFragments(d, mode, p, i, j, front, back, length, z);
+  FoldExtremes(d, f, row, x, front, back, z, keep);
+}
+
+/// ReduceExtremeVector over the pixels [lo, hi] of row y.
+void ReduceExtremes(const RasterFrame& f, const TileTarget& tile, Mode mode, const Planes& p,
+  int y, int lo, int hi)
+{
+  const FragmentTag d;
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  const TileRow row = RowOf(tile, y);
+  const float j = static_cast<float>(y - tile.y0);
+  const int first = lo - tile.x0, end = hi - tile.x0;
+  for (int from = first; from <= end; from += lanes)
+  {
+    const int x = std::min(from, T - lanes); // as ShadeCompatible
+    const auto i = hn::Iota(d, static_cast<float>(x));
+    ReduceExtremeVector(d, f, mode, row, p, j, x,
+      hn::And(hn::Ge(i, hn::Set(d, static_cast<float>(from))),
+        hn::Le(i, hn::Set(d, static_cast<float>(end)))));
+  }
+}
+
+/**
+ * Average and additive blending of the pixels [lo, hi] of row y whose fragments are whole:
+ * the segments a vector at a time, then each one's integral (IntensityTable::Mean) in
+ * ReduceFragment.
+ */
+void ReduceIntegrals(const RasterFrame& f, const TileTarget& tile, Mode mode, const Planes& p,
+  int y, int lo, int hi)
+{
+  const FragmentTag d;
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  const TileRow row = RowOf(tile, y);
+  const TransferFunctionTable& tf = f.transferFunction;
+  const double span = tf.high > tf.low ? tf.high - tf.low : 1.0;
+  const double scale = (tf.size - 1) / span;
+  const float j = static_cast<float>(y - tile.y0);
+  HWY_ALIGN float front[MaxLanes], back[MaxLanes], length[MaxLanes], depth[MaxLanes];
+  const int first = lo - tile.x0, end = hi - tile.x0;
+  for (int from = first; from <= end; from += lanes)
+  {
+    const int x = std::min(from, T - lanes); // as ShadeCompatible
+    const auto i = hn::Iota(d, static_cast<float>(x));
+    hn::Vec<FragmentTag> vFront, vBack, vLength, z;
+    WholeFragments(d, mode, p, i, j, vFront, vBack, vLength, z);
+    hn::Store(vFront, d, front);
+    hn::Store(vBack, d, back);
+    hn::Store(vLength, d, length);
+    hn::Store(z, d, depth);
+    for (int k = std::max(from, x) - x; k < lanes && x + k <= end; ++k)
+    {
+      const float windowDepth = 0.5f * depth[k] + 0.5f;
+      if (!(depth[k] >= -1.0f && depth[k] <= 1.0f) ||
+        (row.depth && windowDepth > row.depth[x + k]))
+      {
+        continue; // outside the near and far planes, or behind opaque geometry
+      }
+      auto entry = [&](float scalar)
+      {
+        const double u = (scalar - tf.low) * scale;
+        return std::isnan(u) ? 0.0 : u;
+      };
+      ReduceFragment(f, row, x + k, entry(front[k]), entry(back[k]), length[k]);
+    }
+  }
+}
+
 /// A blend mode other than Composite: reduces the fragments of the pixels [lo, hi] of row y,
 /// each one's part drawn (DrawnPart) with its scalars in entry coordinates.
 void ReduceSpan(const RasterFrame& f, const TileTarget& tile, Mode mode, const Planes& p, int y,
   int lo, int hi, bool cut)
 {
+  const bool extreme = f.blendMode == BlendMode::MaximumIntensity ||
+    f.blendMode == BlendMode::MinimumIntensity;
+  if (!cut && !f.clipToRange)
+  {
+    if (extreme)
+    {
+      ReduceExtremes(f, tile, mode, p, y, lo, hi);
+    }
+    else
+    {
+      ReduceIntegrals(f, tile, mode, p, y, lo, hi);
+    }
+    return;
+  }
   const TileRow row = RowOf(tile, y);
   for (int x = lo - tile.x0; x <= hi - tile.x0; ++x)
   {
@@ -1222,6 +1374,37 @@ void CoverGuardBand(const RasterFrame& f, const double X[3], const double Y[3], 
       CoverSpans(edges, x0, x1, y0, y1, span);
     }
   }
+}
+
+/**
+ * A small triangle (ShadeSmall) whose fragments are whole, in VTK-compatible shading or
+ * maximum or minimum intensity; false, having drawn nothing, in other modes.
+ */
+template <typename GetPlanes>
+bool DrawSmall(const RasterFrame& f, const TileTarget& tile, Mode mode, const Edges& edges,
+  GetPlanes& getPlanes, int x0, int x1, int y0, int y1, RasterCounts& counts)
+{
+  if (mode == Mode::Compatible && !ReducesInAnyOrder(f.blendMode))
+  {
+    ShadeSmall(tile, edges, getPlanes, x0, x1, y0, y1, counts,
+      [&](const TileRow& row, const Planes& p, int y, int x, auto keep)
+      {
+        float start[6];
+        RowStart(p, y - tile.y0, start);
+        ShadeVector(FragmentTag(), f, row, p, start, x, keep);
+      });
+    return true;
+  }
+  if (f.blendMode == BlendMode::MaximumIntensity || f.blendMode == BlendMode::MinimumIntensity)
+  {
+    ShadeSmall(tile, edges, getPlanes, x0, x1, y0, y1, counts,
+      [&](const TileRow& row, const Planes& p, int y, int x, auto keep) {
+        ReduceExtremeVector(
+          FragmentTag(), f, mode, row, p, static_cast<float>(y - tile.y0), x, keep);
+      });
+    return true;
+  }
+  return false;
 }
 
 /**
@@ -1287,11 +1470,8 @@ void DrawTriangle(const RasterFrame& f, const TileTarget& tile, Mode mode, Corne
     {
       return;
     }
-    if (mode == Mode::Compatible && edges.extent <= SmallTriangle && !f.clipToRange && !cut)
-    {
-      ShadeSmall(f, tile, edges, getPlanes, x0, x1, y0, y1, counts);
-    }
-    else
+    const bool small = edges.extent <= SmallTriangle && !f.clipToRange && !cut;
+    if (!small || !DrawSmall(f, tile, mode, edges, getPlanes, x0, x1, y0, y1, counts))
     {
       CoverSpans(edges, x0, x1, y0, y1, span);
     }
@@ -1317,12 +1497,12 @@ void RasterizeTileImpl(const RasterFrame& f, const TileTarget& tile, const Fan* 
     ? Mode::Compatible
     : (f.interpolation.perspective ? Mode::ExactIntegral : Mode::Integrated);
   WaitingFragments waiting; // pre-integrated fragments
-  FanPath fanPath(f, tile); // VTK-compatible fans drawn whole
+  FanPath fanPath(f, tile, mode); // fans drawn whole (VTK-compatible, maximum, minimum)
   for (std::size_t e = 0; e < count; ++e)
   {
     const Fan& fan = fans[e];
     const bool cut = fan.straddles != 0;
-    if (mode == Mode::Compatible && !cut && fanPath.Draw(fan, counts))
+    if (!cut && fanPath.Draw(fan, counts))
     {
       continue; // the fan as a whole, as its triangles would be drawn
     }

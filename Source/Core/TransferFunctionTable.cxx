@@ -41,6 +41,15 @@ double TransferFunctionTable::UnclampedEntryCoordinate(double scalar) const
   return std::isnan(u) ? 0.0 : u;
 }
 
+void AverageRangeEntries(
+  const TransferFunctionTable& tf, const double range[2], double beyond, double entries[2])
+{
+  const double low = tf.UnclampedEntryCoordinate(range[0]);
+  const double high = tf.UnclampedEntryCoordinate(range[1]);
+  entries[0] = low <= 0.0 ? -beyond : low;
+  entries[1] = high >= tf.size - 1 ? beyond : high;
+}
+
 namespace
 {
 

@@ -953,6 +953,56 @@ TEST_P(CompositorSimd, FanPathDrawsTheTrianglesImage)
   }
 }
 
+TEST_P(CompositorSimd, FanPathReducesAsTheTrianglePath)
+{
+  // Maximum and minimum intensity take the fan path too (the scalars at the segments' ends,
+  // perspective-exact in perspective views): the same pixels as the triangle path, each
+  // with the extreme of its own triangle's scalars up to the rounding of the set-up.
+  const mtpt::test::TetMesh mesh = mtpt::test::JitteredGrid(9, 5);
+  std::vector<float> table;
+  for (int i = 0; i < 48; ++i)
+  {
+    const float t = i / 47.0f;
+    table.insert(table.end(), { t, 0.8f - 0.5f * t, 0.3f + 0.6f * t, t });
+  }
+  for (bool perspective : { false, true })
+  {
+    mtpt::FrameInput input;
+    input.points = mesh.Points();
+    input.cells = mesh.Cells();
+    input.scalars = { mesh.scalars.data(), mtpt::ScalarsView::Association::Points };
+    mtpt::test::ObliqueView(input, perspective);
+    input.ordered = false;
+    mtpt::FramePipeline pipeline;
+    ASSERT_TRUE(pipeline.Run(input, 2));
+    pipeline.DecomposeFans(0, pipeline.TetrahedronCount(), 2);
+    for (auto mode : { mtpt::BlendMode::MaximumIntensity, mtpt::BlendMode::MinimumIntensity })
+    {
+      mtpt::detail::RasterFrame frame;
+      frame.width = 211;
+      frame.height = 170;
+      frame.transferFunction = { table.data(), 48, -2.0, 3.0 };
+      frame.blendMode = mode;
+      frame.interpolation = mtpt::PerspectiveInterpolation::FromProjection(input.projection);
+      mtpt::detail::RasterCounts byFans, byTriangles;
+      std::size_t drawn = 0;
+      const double worst =
+        FanAgainstTrianglePath(frame, pipeline.Fans(), byFans, byTriangles, drawn);
+      SCOPED_TRACE(::testing::Message() << (perspective ? "perspective" : "orthographic") << ", "
+                                        << mtpt::detail::RasterTargetName());
+      EXPECT_LE(worst, 2e-4 * 47); // entry coordinates, up to 47
+      EXPECT_GT(drawn, static_cast<std::size_t>(frame.width) * frame.height / 10);
+      EXPECT_EQ(byFans.fragments, byTriangles.fragments);
+      if (GetParam() != HWY_SCALAR)
+      {
+        // The fan path sets up a fan's triangles together, the triangle path only those that
+        // cover a pixel: more set-ups show that fans were drawn whole.
+        EXPECT_GT(byFans.triangles, byTriangles.triangles);
+      }
+    }
+  }
+}
+
 TEST_P(CompositorSimd, FanPathCoversEdgesThroughPixelCentresByTheTopLeftRule)
 {
   // Fans whose every corner and edge lies on pixel centres: squares of 6 x 6 pixels sharing

@@ -110,6 +110,14 @@ struct IntensityTable
   double Mean(const TransferFunctionTable& tf, double u0, double u1) const;
 };
 
+/**
+ * The average's scalar range (AverageIntensity) in entry coordinates of `tf`. It applies to
+ * the clamped scalar, so where it reaches an end of the table it is open beyond that end
+ * (-+`beyond`).
+ */
+void AverageRangeEntries(
+  const TransferFunctionTable& tf, const double range[2], double beyond, double entries[2]);
+
 /// At most this many compositing steps per segment (pre-integrated shading).
 constexpr int MaxPreIntegrationSteps = MTPT_MAX_SEGMENT_STEPS;
 /// One compositing step per this many table entries crossed (pre-integrated shading).
