@@ -286,6 +286,25 @@ const char* vtkMultiThreadedProjectedTetrahedraMapper::GetShadingModeAsString()
   return this->ShadingMode == PRE_INTEGRATED_SHADING ? "PreIntegrated" : "VTKCompatible";
 }
 
+const char* vtkMultiThreadedProjectedTetrahedraMapper::GetBlendModeAsString()
+{
+  switch (this->BlendMode)
+  {
+    case COMPOSITE_BLEND:
+      return "Composite";
+    case MAXIMUM_INTENSITY_BLEND:
+      return "MaximumIntensity";
+    case MINIMUM_INTENSITY_BLEND:
+      return "MinimumIntensity";
+    case AVERAGE_INTENSITY_BLEND:
+      return "AverageIntensity";
+    case ADDITIVE_BLEND:
+      return "Additive";
+    default:
+      return "Unknown";
+  }
+}
+
 const char* vtkMultiThreadedProjectedTetrahedraMapper::GetBackendAsString()
 {
   return this->Backend == AUTOMATIC_BACKEND ? "Automatic"
@@ -415,7 +434,7 @@ int vtkMultiThreadedProjectedTetrahedraMapper::GetLastFrameReuse()
   return (stats.transformReused ? REUSED_TRANSFORM : 0) | (stats.orderReused ? REUSED_ORDER : 0) |
     (stats.orderFromPrevious ? ORDER_FROM_PREVIOUS : 0) |
     (stats.decompositionReused || imageReused ? REUSED_DECOMPOSITION : 0) |
-    (imageReused ? REUSED_IMAGE : 0);
+    (imageReused ? REUSED_IMAGE : 0) | (stats.unordered ? ORDER_NOT_NEEDED : 0);
 }
 vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetMemoryBytes()
 {
@@ -613,11 +632,6 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
     return;
   }
   this->MoveToWindow(window);
-  if (this->BlendMode != vtkUnstructuredGridVolumeMapper::COMPOSITE_BLEND &&
-    in.Report(this, "blend mode"))
-  {
-    vtkWarningMacro(<< "only composite blending is supported; drawing with it");
-  }
   if (volume->GetProperty()->GetShade(0) && in.Report(volume->GetProperty(), "shading"))
   {
     vtkWarningMacro(<< "the volume property's shading (ShadeOn) is not supported; drawing the "
@@ -811,6 +825,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetUpFrame(vtkRenderer* renderer
                          "shading");
     }
   }
+  this->SetUpBlending(frame, draw);
   // Orthographic projections give the linear default.
   draw.interpolation = mtpt::PerspectiveInterpolation::FromProjection(frame.projection);
   draw.threads = this->NumberOfThreads;
@@ -821,6 +836,47 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetUpFrame(vtkRenderer* renderer
     this->ReportProgress(window, begin + (1.0 - begin) * fraction);
     return window->CheckAbortStatus() == 0;
   };
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::SetUpBlending(
+  mtpt::FrameInput& frame, mtpt::BackendFrame& draw)
+{
+  Internals& in = *this->Internal;
+  const int mode = this->BlendMode;
+  draw.blendMode = mtpt::BlendMode::Composite;
+  if (mode < COMPOSITE_BLEND || mode > ADDITIVE_BLEND)
+  {
+    if (in.Report(this, "unknown blend mode"))
+    {
+      vtkErrorMacro(<< "blend mode " << mode << " is none of 0 (composite) to 4 (additive); "
+                    << "drawing with composite blending");
+    }
+  }
+  else if (mode != COMPOSITE_BLEND && in.Dependent)
+  {
+    if (in.Report(this, "blend mode with dependent components"))
+    {
+      vtkWarningMacro(<< this->GetBlendModeAsString() << " blending reduces one scalar; with "
+                      << "dependent components (IndependentComponents off) the data give the "
+                      << "colours, which are drawn with composite blending");
+    }
+  }
+  else if (mode != COMPOSITE_BLEND && in.PeelPass)
+  {
+    if (in.Report(this, "blend mode in depth peeling"))
+    {
+      vtkWarningMacro(<< this->GetBlendModeAsString() << " blending is not defined between "
+                      << "translucent surfaces; inside depth peeling the volume is drawn with "
+                      << "composite blending");
+    }
+  }
+  else
+  {
+    draw.blendMode = static_cast<mtpt::BlendMode>(mode);
+  }
+  draw.averageRange[0] = this->AverageIPScalarRange[0];
+  draw.averageRange[1] = this->AverageIPScalarRange[1];
+  frame.ordered = !mtpt::ReducesInAnyOrder(draw.blendMode);
 }
 
 void vtkMultiThreadedProjectedTetrahedraMapper::SetUpClipping(
@@ -951,6 +1007,9 @@ void vtkMultiThreadedProjectedTetrahedraMapper::PrintSelf(ostream& os, vtkIndent
   os << indent << "OrderMethod: " << this->GetOrderMethodAsString() << "\n";
   os << indent << "CompositorInstructionSet: " << GetCompositorInstructionSet() << "\n";
   os << indent << "ShadingMode: " << this->GetShadingModeAsString() << "\n";
+  os << indent << "BlendMode: " << this->GetBlendModeAsString() << "\n";
+  os << indent << "AverageIPScalarRange: " << this->AverageIPScalarRange[0] << " "
+     << this->AverageIPScalarRange[1] << "\n";
   os << indent << "MaxSubArraySize: " << this->MaxSubArraySize << "\n";
   os << indent << "UseFloatingPointFrameBuffer: " << this->UseFloatingPointFrameBuffer << "\n";
   os << indent << "SynchronizedTiming: " << this->SynchronizedTiming << "\n";

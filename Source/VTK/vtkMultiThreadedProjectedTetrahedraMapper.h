@@ -23,8 +23,9 @@
  * sample distance and the fraction of the cells drawn adjust to the time VTK allots; a
  * still frame is the full image.
  *
- * Composite blending only, unlit (other blend modes and the property's shading are reported
- * with a warning). Documentation/mapper.md explains each of these in full.
+ * Blend modes 0 to 4 as VTK's GPU ray caster defines them; maximum and minimum intensity,
+ * average and additive frames need no order and sort nothing. Unlit (the property's shading
+ * is reported with a warning). Documentation/mapper.md explains each of these in full.
  *
  * @sa vtkProjectedTetrahedraMapper vtkUnstructuredGridVolumeMapper
  */
@@ -137,6 +138,32 @@ public:
   void SetShadingModeToVTKCompatible() { this->SetShadingMode(VTK_COMPATIBLE_SHADING); }
   void SetShadingModeToPreIntegrated() { this->SetShadingMode(PRE_INTEGRATED_SHADING); }
   const char* GetShadingModeAsString();
+  ///@}
+
+  /// The blend modes beyond vtkUnstructuredGridVolumeMapper's two, with the values of
+  /// vtkVolumeMapper's (COMPOSITE_BLEND 0 and MAXIMUM_INTENSITY_BLEND 1 are inherited).
+  enum MoreBlendModes
+  {
+    MINIMUM_INTENSITY_BLEND = 2,
+    AVERAGE_INTENSITY_BLEND = 3,
+    ADDITIVE_BLEND = 4
+  };
+
+  ///@{
+  /**
+   * Blend modes as VTK's GPU ray caster defines them (SetBlendMode, inherited, takes 0 to 4;
+   * Documentation/blend-modes.md): maximum and minimum intensity show the transfer functions
+   * at the largest and smallest scalar along each ray; average intensity the mean of
+   * opacity times the normalized scalar where the scalar lies in AverageIPScalarRange;
+   * additive its integral per ScalarOpacityUnitDistance. Each is computed exactly along each
+   * fragment's segment, and none needs the visibility order: their frames sort nothing.
+   */
+  void SetBlendModeToMinimumIntensity() { this->SetBlendMode(MINIMUM_INTENSITY_BLEND); }
+  void SetBlendModeToAverageIntensity() { this->SetBlendMode(AVERAGE_INTENSITY_BLEND); }
+  void SetBlendModeToAdditive() { this->SetBlendMode(ADDITIVE_BLEND); }
+  const char* GetBlendModeAsString();
+  vtkSetVector2Macro(AverageIPScalarRange, double);
+  vtkGetVectorMacro(AverageIPScalarRange, double, 2);
   ///@}
 
   ///@{
@@ -355,7 +382,9 @@ public:
     REUSED_ORDER = 2,        ///< no key computed and nothing sorted
     ORDER_FROM_PREVIOUS = 4, ///< sorted starting from the previous order
     REUSED_DECOMPOSITION = 8, ///< no tetrahedron decomposed (and, in OpenGL, no upload)
-    REUSED_IMAGE = 16 ///< CPU backend: nothing composited; the previous frame's image served
+    REUSED_IMAGE = 16, ///< CPU backend: nothing composited; the previous frame's image served
+    /// The blend mode needs no order (maximum, minimum, average, additive): nothing sorted
+    ORDER_NOT_NEEDED = 32
   };
   int GetLastFrameReuse();
 
@@ -391,6 +420,7 @@ protected:
   int NumberOfThreads = 0;
   int OrderMethod = RADIX_SORT;
   int ShadingMode = VTK_COMPATIBLE_SHADING;
+  double AverageIPScalarRange[2] = { VTK_DOUBLE_MIN, VTK_DOUBLE_MAX };
   vtkIdType MaxSubArraySize = 32768;
   bool UseFloatingPointFrameBuffer = true;
   bool SynchronizedTiming = false;
@@ -453,6 +483,8 @@ private:
   void SetUpFrame(vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window,
     mtpt::RenderBackend* backend, mtpt::FrameInput& frame, mtpt::BackendFrame& draw);
   /// The eye ray's depth clipping and the clipping planes of the frame, in eye coordinates.
+  /// The blend mode the frame draws with (reported when another is asked for and cannot be).
+  void SetUpBlending(mtpt::FrameInput& frame, mtpt::BackendFrame& draw);
   void SetUpClipping(
     vtkRenderer* renderer, const mtpt::FrameInput& frame, mtpt::BackendFrame& draw);
   /// The pipeline's settings for the frame, and its progress and abort callback.

@@ -26,6 +26,9 @@
 #include "vtkIdList.h"
 #include "vtkMTPTReferenceRenderer.h"
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
+#include "vtkPolyDataMapper.h"
+#include "vtkCubeSource.h"
+#include "vtkActor.h"
 #include "vtkProjectedTetrahedraMapper.h"
 
 #include <gtest/gtest.h>
@@ -250,6 +253,11 @@ vtkSmartPointer<vtkImageData> Render(
 vtkSmartPointer<vtkImageData> ReferenceImage(const Stage& stage, vtkUnstructuredGridBase* input)
 {
   vtkNew<vtkMTPTReferenceRenderer> reference;
+  if (auto* mapper = vtkMultiThreadedProjectedTetrahedraMapper::SafeDownCast(
+        stage.volume->GetMapper()))
+  {
+    reference->SetAverageIPScalarRange(mapper->GetAverageIPScalarRange());
+  }
   if (!reference->Render(stage.renderer, stage.volume, input))
   {
     ADD_FAILURE() << "no reference image";
@@ -516,6 +524,29 @@ void ExpectCloseToReference(
       ExpectClose(image, reference, limits, label + " vs reference", 0.1);
     }
   }
+}
+
+void AddOpaqueCube(vtkRenderer* renderer, double h)
+{
+  vtkNew<vtkCubeSource> cube;
+  cube->SetBounds(-h, h, -h, h, -h, h);
+  vtkNew<vtkPolyDataMapper> mapper;
+  mapper->SetInputConnection(cube->GetOutputPort());
+  vtkNew<vtkActor> actor;
+  actor->SetMapper(mapper);
+  renderer->AddActor(actor);
+}
+
+vtkSmartPointer<vtkUnstructuredGrid> ShuffledBoxTest::Box;
+
+void ShuffledBoxTest::SetUpTestSuite()
+{
+  Box = ShuffleCells(MakeTetrahedralBox(10), 5);
+}
+
+void ShuffledBoxTest::TearDownTestSuite()
+{
+  Box = nullptr;
 }
 
 } // namespace rendering_test

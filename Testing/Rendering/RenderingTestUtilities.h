@@ -8,6 +8,8 @@
 #include "vtkNew.h"
 #include "vtkSmartPointer.h"
 
+#include <gtest/gtest.h>
+
 #include <functional>
 #include <string>
 #include <vector>
@@ -236,6 +238,21 @@ public:
     errors.clear();
     warnings.clear();
   }
+};
+
+/// Adds an opaque cube [-h, h]^3 (VTK's default surface colour and lighting) to `renderer`.
+void AddOpaqueCube(vtkRenderer* renderer, double h);
+
+/**
+ * A fixture whose tests take the backend as their parameter and share one grid, `Box`: the
+ * box of 10 x 10 x 10 cubes split into tetrahedra (MakeTetrahedralBox), its cells shuffled.
+ */
+class ShuffledBoxTest : public ::testing::TestWithParam<int>
+{
+protected:
+  static void SetUpTestSuite();
+  static void TearDownTestSuite();
+  static vtkSmartPointer<vtkUnstructuredGrid> Box;
 };
 
 } // namespace rendering_test

@@ -8,12 +8,9 @@
 
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
 
-#include "vtkActor.h"
-#include "vtkCubeSource.h"
 #include "vtkImageData.h"
 #include "vtkPlane.h"
 #include "vtkPlaneCollection.h"
-#include "vtkPolyDataMapper.h"
 #include "vtkRenderWindow.h"
 #include "vtkRenderer.h"
 #include "vtkTransform.h"
@@ -39,12 +36,9 @@ vtkSmartPointer<vtkPlane> MakePlane(double ox, double oy, double oz, double nx, 
   return plane;
 }
 
-class MapperClippingPlanes : public ::testing::TestWithParam<int>
+class MapperClippingPlanes : public ShuffledBoxTest
 {
 protected:
-  static void SetUpTestSuite() { Box = ShuffleCells(MakeTetrahedralBox(10), 5); }
-  static void TearDownTestSuite() { Box = nullptr; }
-
   /// The box with `mapper` from the oblique view, two planes through it: one oblique, one
   /// that takes off a corner from behind.
   Stage Clipped(Mapper* mapper, bool perspective)
@@ -56,9 +50,7 @@ protected:
     stage.window->Render();
     return stage;
   }
-  static vtkSmartPointer<vtkUnstructuredGrid> Box;
 };
-vtkSmartPointer<vtkUnstructuredGrid> MapperClippingPlanes::Box;
 
 TEST_P(MapperClippingPlanes, EachShadingMatchesTheExactReference)
 {
@@ -161,13 +153,7 @@ TEST_P(MapperClippingPlanes, OpaqueGeometryAndPlanesTogether)
   // An opaque box inside the clipped volume: fragments behind it stay hidden.
   auto mapper = MakeMapper(GetParam());
   const Stage stage = Clipped(mapper, true);
-  vtkNew<vtkCubeSource> cube;
-  cube->SetBounds(-0.3, 0.3, -0.3, 0.3, -0.3, 0.3);
-  vtkNew<vtkPolyDataMapper> cubeMapper;
-  cubeMapper->SetInputConnection(cube->GetOutputPort());
-  vtkNew<vtkActor> actor;
-  actor->SetMapper(cubeMapper);
-  stage.renderer->AddActor(actor);
+  AddOpaqueCube(stage.renderer, 0.3);
   stage.window->Render();
   auto image = Grab(stage.window, false);
   auto fresh = FreshMapperImage(stage, mapper,

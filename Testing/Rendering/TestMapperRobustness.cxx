@@ -104,22 +104,22 @@ protected:
   vtkSmartPointer<Mapper> MapperUnderTest;
 };
 
-TEST_F(MapperRobustness, UnsupportedBlendModeAndShadingAreReportedOnce)
+TEST_F(MapperRobustness, UnknownBlendModeAndShadingAreReportedOnce)
 {
-  // Only composite blending without lighting is drawn: maximum-intensity blending and the
-  // property's shading are each reported once, and the volume is drawn composited and
-  // unlit, the image of a mapper without them.
+  // A blend mode beyond vtkVolumeMapper's 0 to 4 is an error, and the property's shading a
+  // warning, each reported once; the volume is drawn composited and unlit, the image of a
+  // mapper without them.
   const auto plain = FreshBoxImage();
-  this->MapperUnderTest->SetBlendModeToMaximumIntensity();
+  this->MapperUnderTest->SetBlendMode(7);
   this->Property->ShadeOn();
   auto image = Render(SceneOf(this->Box), this->MapperUnderTest, 3);
-  auto count = [&](const char* text)
+  auto count = [&](const std::vector<std::string>& messages, const char* text)
   {
-    return std::count_if(this->Observer->warnings.begin(), this->Observer->warnings.end(),
+    return std::count_if(messages.begin(), messages.end(),
       [text](const std::string& w) { return w.find(text) != std::string::npos; });
   };
-  EXPECT_EQ(count("only composite blending"), 1);
-  EXPECT_EQ(count("shading (ShadeOn) is not supported"), 1);
+  EXPECT_EQ(count(this->Observer->errors, "blend mode 7 is none of 0 (composite) to 4"), 1);
+  EXPECT_EQ(count(this->Observer->warnings, "shading (ShadeOn) is not supported"), 1);
   EXPECT_EQ(Compare(image, plain).worst, 0.0);
 }
 

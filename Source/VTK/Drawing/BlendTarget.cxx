@@ -174,23 +174,24 @@ bool BlendTarget::BlendOverWindow(vtkOpenGLRenderWindow* window, vtkTextureObjec
   return this->DrawTexture(window, texture, origin, size, true, error);
 }
 
-bool BlendTarget::DrawTexture(vtkOpenGLRenderWindow* window, vtkTextureObject* texture,
-  const int origin[2], const int size[2], bool blend, std::string& error)
+vtkShaderProgram* BlendTarget::ReadyQuad(std::unique_ptr<vtkOpenGLQuadHelper>& quad,
+  vtkOpenGLRenderWindow* window, const char* fragmentShader)
 {
-  if (!this->Quad)
+  if (!quad)
   {
-    this->Quad = std::make_unique<vtkOpenGLQuadHelper>(window,
-      vtkOpenGLRenderUtilities::GetFullScreenQuadVertexShader().c_str(), vtkMTPTCompositeFS, "");
+    quad = std::make_unique<vtkOpenGLQuadHelper>(window,
+      vtkOpenGLRenderUtilities::GetFullScreenQuadVertexShader().c_str(), fragmentShader, "");
   }
   else
   {
-    window->GetShaderCache()->ReadyShaderProgram(this->Quad->Program);
+    window->GetShaderCache()->ReadyShaderProgram(quad->Program);
   }
-  if (!this->Quad->Program || !this->Quad->Program->GetCompiled())
-  {
-    error = "could not compile the shader that writes the image into the window";
-    return false;
-  }
+  return quad->Program && quad->Program->GetCompiled() ? quad->Program : nullptr;
+}
+
+void BlendTarget::DrawQuad(vtkOpenGLRenderWindow* window, vtkOpenGLQuadHelper& quad,
+  const int origin[2], const int size[2], bool blend)
+{
   vtkOpenGLState* state = window->GetState();
   vtkOpenGLState::ScopedglDepthMask depthMask(state);
   vtkOpenGLState::ScopedglEnableDisable depthTest(state, GL_DEPTH_TEST);
@@ -207,12 +208,25 @@ bool BlendTarget::DrawTexture(vtkOpenGLRenderWindow* window, vtkTextureObject* t
   }
   else
   {
-    state->vtkglDisable(GL_BLEND); // the texture already holds what was drawn below it
+    state->vtkglDisable(GL_BLEND);
   }
   state->vtkglViewport(origin[0], origin[1], size[0], size[1]);
+  quad.Render();
+}
+
+bool BlendTarget::DrawTexture(vtkOpenGLRenderWindow* window, vtkTextureObject* texture,
+  const int origin[2], const int size[2], bool blend, std::string& error)
+{
+  vtkShaderProgram* program = ReadyQuad(this->Quad, window, vtkMTPTCompositeFS);
+  if (!program)
+  {
+    error = "could not compile the shader that writes the image into the window";
+    return false;
+  }
+  // Without blending the texture already holds what was drawn below it.
   texture->Activate();
-  this->Quad->Program->SetUniformi("image", texture->GetTextureUnit());
-  this->Quad->Render();
+  program->SetUniformi("image", texture->GetTextureUnit());
+  DrawQuad(window, *this->Quad, origin, size, blend);
   texture->Deactivate();
   return OpenGLSucceeded("writing the image into the window", error);
 }

@@ -35,6 +35,7 @@ VTK_ABI_NAMESPACE_BEGIN
 class vtkOpenGLFramebufferObject;
 class vtkOpenGLQuadHelper;
 class vtkOpenGLRenderWindow;
+class vtkShaderProgram;
 class vtkTextureObject;
 class vtkWindow;
 VTK_ABI_NAMESPACE_END
@@ -98,6 +99,21 @@ public:
    */
   bool Read(vtkOpenGLRenderWindow* window, int x, int y, int width, int height, float* depth,
     unsigned char* rgba, std::string& error);
+
+  /**
+   * Makes `quad` a full-screen quad with `fragmentShader` in `window` (once) and readies its
+   * program; null when the shader cannot be compiled.
+   */
+  static vtkShaderProgram* ReadyQuad(std::unique_ptr<vtkOpenGLQuadHelper>& quad,
+    vtkOpenGLRenderWindow* window, const char* fragmentShader);
+
+  /**
+   * Draws `quad` (its program ready, its uniforms set) over the rectangle (origin, size) of
+   * the framebuffer bound for drawing: no depth test or write, every sample; replacing the
+   * colour there, or (`blend`) composited over it as premultiplied colour.
+   */
+  static void DrawQuad(vtkOpenGLRenderWindow* window, vtkOpenGLQuadHelper& quad,
+    const int origin[2], const int size[2], bool blend);
 
   /// The target's colour (RGBA float), valid after a successful Capture.
   vtkTextureObject* Colour();

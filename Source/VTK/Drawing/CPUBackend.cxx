@@ -66,6 +66,9 @@ CPUBackend::ImageKey CPUBackend::ImageKey::Of(const BackendFrame& frame)
   key.unitDistance = frame.unitDistance;
   key.interpolation = frame.interpolation;
   key.clipPlanes = frame.clipPlanes;
+  key.blendMode = frame.blendMode;
+  key.averageRange[0] = frame.averageRange[0];
+  key.averageRange[1] = frame.averageRange[1];
   return key;
 }
 
@@ -77,7 +80,9 @@ bool CPUBackend::ImageKey::operator==(const ImageKey& o) const
     vertexColours == o.vertexColours && unitDistance == o.unitDistance &&
     a.perspective == b.perspective && a.inverseWScale == b.inverseWScale &&
     a.inverseWOffset == b.inverseWOffset && a.scaleX == b.scaleX && a.shiftX == b.shiftX &&
-    a.scaleY == b.scaleY && a.shiftY == b.shiftY && clipPlanes == o.clipPlanes;
+    a.scaleY == b.scaleY && a.shiftY == b.shiftY && clipPlanes == o.clipPlanes &&
+    blendMode == o.blendMode && averageRange[0] == o.averageRange[0] &&
+    averageRange[1] == o.averageRange[1];
 }
 
 bool CPUBackend::DrawPeel(const BackendFrame& frame, BackendTimes& times)
@@ -136,6 +141,15 @@ void CPUBackend::Composite(const BackendFrame& frame, BackendTimes& times, const
   if (frame.shading == Shading::PreIntegrated && !frame.vertexColours)
   {
     settings.UsePreIntegration(frame.tables->PreIntegration(), frame.interpolation);
+  }
+  settings.blendMode = frame.blendMode;
+  if (ReducesInAnyOrder(frame.blendMode))
+  {
+    // Reductions interpolate the scalars as pre-integrated shading does.
+    settings.interpolation = frame.interpolation;
+    settings.intensity = &frame.tables->Intensity();
+    settings.averageRange[0] = frame.averageRange[0];
+    settings.averageRange[1] = frame.averageRange[1];
   }
   // Batch after batch, back to front, into one image: the tiles keep what earlier batches
   // drew. Decomposition and compositing both use every thread, so they take turns.

@@ -69,6 +69,8 @@ private:
     double unitDistance = 0;
     PerspectiveInterpolation interpolation;
     ClipPlanes clipPlanes;
+    BlendMode blendMode = BlendMode::Composite;
+    double averageRange[2] = { 0.0, 0.0 };
 
     static ImageKey Of(const BackendFrame& frame);
     bool operator==(const ImageKey& other) const;

@@ -3,6 +3,7 @@
 
 #include "Drawing/VolumetricPeel.h"
 #include "Input/TransferFunctionTables.h"
+#include "vtkMTPTReduceFS.h"
 #include "vtkMTPTSegmentShared.h"
 #include "vtkMTPTTetrahedraFS.h"
 #include "vtkMTPTTetrahedraVS.h"
@@ -12,6 +13,7 @@
 
 #include "vtkOpenGLBufferObject.h"
 #include "vtkOpenGLIndexBufferObject.h"
+#include "vtkOpenGLQuadHelper.h"
 #include "vtkOpenGLRenderWindow.h"
 #include "vtkOpenGLShaderCache.h"
 #include "vtkOpenGLState.h"
@@ -44,6 +46,28 @@ void MakeTableTexture(vtkTextureObject* texture, vtkOpenGLRenderWindow* window, 
   texture->SetMinificationFilter(filter);
   texture->SetMagnificationFilter(filter);
   texture->Create2DFromRaw(width, 1, 4, VTK_FLOAT, const_cast<float*>(values));
+}
+
+/**
+ * The blending of the tetrahedra's fragments: VTK's PT's back-to-front "over" of
+ * non-premultiplied colour; in the blend modes other than composite, GL_MAX (maximum, and
+ * minimum as the negated scalar) or sums (average, additive) of the reduced values.
+ */
+void SetBlending(const BackendFrame& frame, vtkOpenGLState* state)
+{
+  state->vtkglEnable(GL_BLEND);
+  if (!ReducesInAnyOrder(frame.blendMode) || frame.vertexColours)
+  {
+    state->vtkglBlendEquationSeparate(GL_FUNC_ADD, GL_FUNC_ADD);
+    state->vtkglBlendFuncSeparate(
+      GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
+    return;
+  }
+  const bool extreme = frame.blendMode == BlendMode::MaximumIntensity ||
+    frame.blendMode == BlendMode::MinimumIntensity;
+  const GLenum equation = extreme ? GL_MAX : GL_FUNC_ADD;
+  state->vtkglBlendEquationSeparate(equation, equation);
+  state->vtkglBlendFuncSeparate(GL_ONE, GL_ONE, GL_ONE, GL_ONE);
 }
 
 } // namespace
@@ -117,16 +141,39 @@ void OpenGLBackend::UploadTables(const BackendFrame& frame)
   }
   MakeTableTexture(this->IntegralsHigh, frame.window, table.size, high.data(), false);
   MakeTableTexture(this->IntegralsLow, frame.window, table.size, low.data(), false);
+  // W of the intensity integral, high and low parts in red and green.
+  const std::vector<double>& prefix = tables.Intensity().prefix;
+  std::vector<float> packed(4 * prefix.size(), 0.0f);
+  for (std::size_t i = 0; i < prefix.size(); ++i)
+  {
+    packed[4 * i] = static_cast<float>(prefix[i]);
+    packed[4 * i + 1] = static_cast<float>(prefix[i] - packed[4 * i]);
+  }
+  MakeTableTexture(this->IntensityPrefix, frame.window, table.size, packed.data(), false);
   this->UploadedTables = tables.Version();
 }
 
 void OpenGLBackend::SetUniforms(const BackendFrame& frame, vtkShaderProgram* program)
 {
   const bool preIntegrated = frame.shading == Shading::PreIntegrated && !frame.vertexColours;
+  // The blend modes other than composite interpolate the scalars as pre-integration does.
+  const bool reduce = ReducesInAnyOrder(frame.blendMode) && !frame.vertexColours;
+  const bool scalars = preIntegrated || reduce;
   const TransferFunctionTable table = frame.tables->Table();
   program->SetUniformi("transferFunction", this->TransferFunction->GetTextureUnit());
-  program->SetUniformi("shadingMode", frame.vertexColours ? 2 : (preIntegrated ? 1 : 0));
+  program->SetUniformi("shadingMode", frame.vertexColours ? 2 : (scalars ? 1 : 0));
   program->SetUniformi("tableSize", table.size);
+  program->SetUniformi("blendMode", reduce ? static_cast<int>(frame.blendMode) : 0);
+  program->SetUniformi("clampEntries", reduce ? 0 : 1);
+  if (reduce)
+  {
+    program->SetUniformi("intensityPrefix", this->IntensityPrefix->GetTextureUnit());
+    double range[2];
+    AverageRangeEntries(table, frame.averageRange, 1e30, range);
+    const float averageRange[2] = { static_cast<float>(std::max(-1e30, range[0])),
+      static_cast<float>(std::min(1e30, range[1])) };
+    program->SetUniform2f("averageRange", averageRange);
+  }
   if (preIntegrated)
   {
     program->SetUniformi("integralsHigh", this->IntegralsHigh->GetTextureUnit());
@@ -141,7 +188,7 @@ void OpenGLBackend::SetUniforms(const BackendFrame& frame, vtkShaderProgram* pro
   program->SetUniformf("entryScale", static_cast<float>(entryScale));
   program->SetUniformf("entryShift", static_cast<float>(-low * entryScale));
   const PerspectiveInterpolation& view = frame.interpolation;
-  program->SetUniformi("perspectiveExact", preIntegrated && view.perspective ? 1 : 0);
+  program->SetUniformi("perspectiveExact", scalars && view.perspective ? 1 : 0);
   program->SetUniformf("inverseDepthScale", static_cast<float>(view.inverseWScale));
   program->SetUniformf("inverseDepthOffset", static_cast<float>(view.inverseWOffset));
   const float rayScale[2] = { static_cast<float>(view.scaleX), static_cast<float>(view.scaleY) };
@@ -243,12 +290,76 @@ bool OpenGLBackend::Draw(const BackendFrame& frame, BackendTimes& times)
     return false;
   }
   this->UploadTables(frame);
-  this->BindTarget(frame);
+  if (ReducesInAnyOrder(frame.blendMode) && !frame.vertexColours)
+  {
+    return this->DrawReduced(frame, program, times);
+  }
+  this->BindTarget(frame, frame.floatFramebuffer);
   const bool drawn = this->DrawBatches(frame, program, times);
   return this->WriteTarget(frame, drawn, times) && drawn;
 }
 
-void OpenGLBackend::BindTarget(const BackendFrame& frame)
+bool OpenGLBackend::DrawReduced(
+  const BackendFrame& frame, vtkShaderProgram* program, BackendTimes& times)
+{
+  vtkOpenGLRenderWindow* window = frame.window;
+  this->BindTarget(frame, true);
+  if (!this->SampledTargetUsed && !this->FloatTargetUsed)
+  {
+    this->ErrorMessage = "blend modes other than composite need a float target, which this "
+                         "context cannot make" +
+      (this->WarningMessage.empty() ? "" : " (" + this->WarningMessage + ")");
+    this->WarningMessage.clear();
+    return false;
+  }
+  BlendTarget& target = this->SampledTargetUsed ? this->SampledTarget : this->Target;
+  {
+    // The target keeps the window's depth; its colour starts at the mode's neutral value.
+    vtkOpenGLState* state = window->GetState();
+    vtkOpenGLState::ScopedglEnableDisable scissor(state, GL_SCISSOR_TEST);
+    vtkOpenGLState::ScopedglClearColor clearColour(state);
+    vtkOpenGLState::ScopedglColorMask colourMask(state);
+    state->vtkglDisable(GL_SCISSOR_TEST);
+    const bool extreme = frame.blendMode == BlendMode::MaximumIntensity ||
+      frame.blendMode == BlendMode::MinimumIntensity;
+    state->vtkglClearColor(extreme ? -1e30f : 0.0f, 0.0f, 0.0f, 0.0f);
+    state->vtkglColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    state->vtkglClear(GL_COLOR_BUFFER_BIT);
+  }
+  const bool drawn = this->DrawBatches(frame, program, times);
+  target.Restore(window);
+  const auto start = Clock::now();
+  const bool resolved = drawn && this->ResolveReduced(frame, target.Colour());
+  const double seconds = SecondsSince(start);
+  times.draw += seconds;
+  times.viewport += seconds;
+  return resolved;
+}
+
+bool OpenGLBackend::ResolveReduced(const BackendFrame& frame, vtkTextureObject* reduced)
+{
+  vtkShaderProgram* program =
+    BlendTarget::ReadyQuad(this->ReduceQuad, frame.window, vtkMTPTReduceFS);
+  if (!program)
+  {
+    this->ErrorMessage = "could not compile the shader that maps the blend mode's values to "
+                         "colour";
+    return false;
+  }
+  reduced->Activate(); // read texel by texel: its filtering does not matter
+  this->TransferFunction->Activate();
+  program->SetUniformi("reduced", reduced->GetTextureUnit());
+  program->SetUniformi("transferFunction", this->TransferFunction->GetTextureUnit());
+  program->SetUniformi("blendMode", static_cast<int>(frame.blendMode));
+  program->SetUniformi("tableSize", frame.tables->Table().size);
+  program->SetUniformf("inverseUnitDistance", static_cast<float>(1.0 / frame.unitDistance));
+  BlendTarget::DrawQuad(frame.window, *this->ReduceQuad, frame.origin, frame.size, true);
+  this->TransferFunction->Deactivate();
+  reduced->Deactivate();
+  return OpenGLSucceeded("mapping the blend mode's values to colour", this->ErrorMessage);
+}
+
+void OpenGLBackend::BindTarget(const BackendFrame& frame, bool floatTarget)
 {
   vtkOpenGLRenderWindow* window = frame.window;
   this->FloatTargetUsed = this->SampledTargetUsed = false;
@@ -266,7 +377,7 @@ void OpenGLBackend::BindTarget(const BackendFrame& frame)
       this->WarningMessage = error + "; drawing at the viewport's size";
     }
   }
-  if (!this->SampledTargetUsed && frame.floatFramebuffer && !this->FloatTargetFailed)
+  if (!this->SampledTargetUsed && floatTarget && !this->FloatTargetFailed)
   {
     this->FloatTargetUsed = this->Target.Capture(window, frame.origin, frame.size, error);
     if (!this->FloatTargetUsed)
@@ -322,10 +433,8 @@ bool OpenGLBackend::DrawBatches(
   GLint equation[2] = { GL_FUNC_ADD, GL_FUNC_ADD };
   glGetIntegerv(GL_BLEND_EQUATION_RGB, &equation[0]);
   glGetIntegerv(GL_BLEND_EQUATION_ALPHA, &equation[1]);
-  state->vtkglBlendEquationSeparate(GL_FUNC_ADD, GL_FUNC_ADD);
-  // VTK's PT state: depth test against opaque geometry without depth writes, back-to-front
-  // "over" blending of non-premultiplied colour. A peel's ranges end at the opaque depth
-  // already, and its target has no depth.
+  // Depth test against opaque geometry without depth writes. A peel's ranges end at the
+  // opaque depth already, and its target has no depth.
   state->vtkglDepthMask(GL_FALSE);
   if (this->PeelTargetUsed)
   {
@@ -335,13 +444,12 @@ bool OpenGLBackend::DrawBatches(
   {
     state->vtkglEnable(GL_DEPTH_TEST);
   }
-  state->vtkglEnable(GL_BLEND);
   state->vtkglDisable(GL_CULL_FACE);
-  state->vtkglBlendFuncSeparate(
-    GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
+  SetBlending(frame, state);
   this->TransferFunction->Activate();
   this->IntegralsHigh->Activate();
   this->IntegralsLow->Activate();
+  this->IntensityPrefix->Activate();
   this->SetUniforms(frame, program);
 
   // Batch after batch: decompose, upload, draw. Draw calls return before the rasterizer is
@@ -366,6 +474,7 @@ bool OpenGLBackend::DrawBatches(
   this->TransferFunction->Deactivate();
   this->IntegralsHigh->Deactivate();
   this->IntegralsLow->Deactivate();
+  this->IntensityPrefix->Deactivate();
   state->vtkglBlendEquationSeparate(
     static_cast<GLenum>(equation[0]), static_cast<GLenum>(equation[1]));
   return drawn;
@@ -438,7 +547,13 @@ void OpenGLBackend::ReleaseGraphicsResources(vtkWindow* window)
     this->TransferFunction->ReleaseGraphicsResources(window);
     this->IntegralsHigh->ReleaseGraphicsResources(window);
     this->IntegralsLow->ReleaseGraphicsResources(window);
+    this->IntensityPrefix->ReleaseGraphicsResources(window);
+    if (this->ReduceQuad)
+    {
+      this->ReduceQuad->ReleaseGraphicsResources(window);
+    }
   }
+  this->ReduceQuad.reset();
   this->Target.ReleaseGraphicsResources(window);
   this->SampledTarget.ReleaseGraphicsResources(window);
   this->UploadedBuffers = this->UploadedTables = 0;

@@ -32,8 +32,10 @@
 #include "vtkOpenGLHelper.h"
 
 #include <cstdint>
+#include <memory>
 
 VTK_ABI_NAMESPACE_BEGIN
+class vtkOpenGLQuadHelper;
 class vtkOpenGLVertexBufferObject;
 class vtkShaderProgram;
 class vtkTextureObject;
@@ -64,9 +66,10 @@ private:
   void operator=(const OpenGLBackend&) = delete;
 
   vtkShaderProgram* ReadyProgram(vtkOpenGLRenderWindow* window);
-  /// Binds the target the batches are drawn into: the sampled target, the float target or
-  /// none (the window's framebuffer), setting SampledTargetUsed and FloatTargetUsed.
-  void BindTarget(const BackendFrame& frame);
+  /// Binds the target the batches are drawn into: the sampled target, the float target (when
+  /// `floatTarget`) or none (the window's framebuffer), setting SampledTargetUsed and
+  /// FloatTargetUsed; a target that cannot be made leaves WarningMessage saying why.
+  void BindTarget(const BackendFrame& frame, bool floatTarget);
   /// Unbinds the target and, when the batches were `drawn`, puts what they drew into the
   /// window.
   bool WriteTarget(const BackendFrame& frame, bool drawn, BackendTimes& times);
@@ -83,6 +86,11 @@ private:
   /// Each fragment's eye ray (depth peeling, clipping planes) and the clipping planes.
   void SetClippingUniforms(const BackendFrame& frame, vtkShaderProgram* program);
   bool DrawBatches(const BackendFrame& frame, vtkShaderProgram* program, BackendTimes& times);
+  /// Blend modes other than composite: the fragments reduced in a float target of their own
+  /// (cleared to the mode's neutral value, with the window's depth), then mapped to colour
+  /// over the window's viewport (ResolveReduced).
+  bool DrawReduced(const BackendFrame& frame, vtkShaderProgram* program, BackendTimes& times);
+  bool ResolveReduced(const BackendFrame& frame, vtkTextureObject* reduced);
   void Upload(const BackendFrame& frame, BackendTimes& times);
   void DrawUploaded(vtkShaderProgram* program);
 
@@ -90,6 +98,8 @@ private:
   vtkOpenGLHelper Triangles;
   vtkNew<vtkTextureObject> TransferFunction;
   vtkNew<vtkTextureObject> IntegralsHigh, IntegralsLow; // pre-integrated shading
+  vtkNew<vtkTextureObject> IntensityPrefix;             // average and additive blending
+  std::unique_ptr<vtkOpenGLQuadHelper> ReduceQuad;      // blend modes: reduced to colour
   BlendTarget Target;
   BlendTarget SampledTarget; ///< at an image sample distance other than 1
 

@@ -69,6 +69,10 @@ struct BackendFrame
   /// The mapper's clipping planes in eye coordinates: each fragment's segment is cut to the
   /// part they keep (mtpt::ClipPlanes).
   ClipPlanes clipPlanes;
+  /// How fragments become pixels (mtpt::BlendMode); a mode other than Composite reduces
+  /// them in any order (the pipeline then sorted nothing), with the scalars, not colours.
+  BlendMode blendMode = BlendMode::Composite;
+  double averageRange[2] = { -1e300, 1e300 }; ///< AverageIPScalarRange, scalar units
   double unitDistance = 1.0;       ///< ScalarOpacityUnitDistance, positive
   std::size_t batchSize = 1;       ///< tetrahedra decomposed per batch (>= 1)
   int threads = 0;                 ///< OpenMP threads (<= 0: the default)

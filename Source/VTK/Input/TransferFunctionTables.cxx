@@ -50,6 +50,7 @@ void TransferFunctionTables::Update(vtkVolumeProperty* property, double low, dou
   }
   this->Current = key;
   this->Integrals.Build(this->Table());
+  this->IntensityIntegral.Build(this->Table());
   ++this->Built;
 }
 

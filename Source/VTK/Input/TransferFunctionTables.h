@@ -47,6 +47,8 @@ public:
   TransferFunctionTable Table() const;
   /// Its integral functions, for pre-integrated shading.
   const PreIntegrationTable& PreIntegration() const { return this->Integrals; }
+  /// The integral of opacity times normalized scalar, for average and additive blending.
+  const IntensityTable& Intensity() const { return this->IntensityIntegral; }
   /// Changes whenever the table's content changes; 0 before the first Update.
   std::uint64_t Version() const { return this->Built; }
 
@@ -65,6 +67,7 @@ private:
   Key Current;
   std::vector<float> Values; ///< 4 * Size: r, g, b, attenuation
   PreIntegrationTable Integrals;
+  IntensityTable IntensityIntegral;
   std::uint64_t Built = 0;
 };
 

@@ -33,6 +33,7 @@
 #include "vtkUnstructuredGridBase.h"
 #include "vtkUnstructuredGridVolumeMapper.h"
 #include "vtkVolume.h"
+#include "vtkVolumeMapper.h"
 #include "vtkVolumeProperty.h"
 
 #include <algorithm>
@@ -225,6 +226,42 @@ int SetView(
 }
 
 /**
+ * The blend mode of `mapper` into `settings`, with the average's range (a vtkVolumeMapper's
+ * own, else `averageRange`); false when the mode is none the reference integrates (then
+ * composite).
+ */
+bool SetBlending(vtkAbstractMapper* mapper, const double dataRange[2],
+  const double averageRange[2], mtpt::ReferenceSettings& settings)
+{
+  // The mapper's blend mode (vtkVolumeMapper's values), x normalized over the data's range
+  // as the mappers' tables span it (a constant field: a range of width 1).
+  int mode = 0;
+  std::copy(averageRange, averageRange + 2, settings.averageRange);
+  if (auto* volumeMapper = vtkVolumeMapper::SafeDownCast(mapper))
+  {
+    mode = volumeMapper->GetBlendMode();
+    volumeMapper->GetAverageIPScalarRange(settings.averageRange);
+  }
+  else if (auto* gridMapper = vtkUnstructuredGridVolumeMapper::SafeDownCast(mapper))
+  {
+    mode = gridMapper->GetBlendMode();
+  }
+  const bool known = mode >= 0 && mode <= static_cast<int>(mtpt::BlendMode::Additive);
+  settings.blendMode = known ? static_cast<mtpt::BlendMode>(mode) : mtpt::BlendMode::Composite;
+  settings.scalarRange[0] = dataRange[0];
+  settings.scalarRange[1] = dataRange[1] > dataRange[0] ? dataRange[1] : dataRange[0] + 1.0;
+  return known;
+}
+
+/// How `channels` values per tuple become colour and opacity (VTK's PT's mappings).
+mtpt::ScalarMapping MappingOf(int channels)
+{
+  return channels == 1
+    ? mtpt::ScalarMapping::TransferFunctions
+    : (channels == 2 ? mtpt::ScalarMapping::ColourAndOpacityScalars : mtpt::ScalarMapping::Colours);
+}
+
+/**
  * The renderer's visible translucent actors (opacity strictly between 0 and 1) that draw
  * polygonal data, as triangles in eye coordinates with the flat colour VTK draws them with
  * when lighting is off: ambient * ambient colour + diffuse * diffuse colour, clamped.
@@ -399,11 +436,13 @@ bool vtkMTPTReferenceRenderer::Render(
                     << "them with their flat colour (lighting off)");
   }
   settings.unitDistance = mtpt::UnitDistance(property);
+  if (!SetBlending(volume->GetMapper(), dataRange, this->AverageIPScalarRange, settings))
+  {
+    vtkWarningMacro(<< "the mapper's blend mode is none the reference integrates (0 to 4); "
+                    << "integrating with composite blending");
+  }
   // Dependent components: the mapping of VTK's PT, integrated exactly (ScalarMapping).
-  const int channels = mtpt::ChannelsOf(selected);
-  settings.mapping = channels == 1
-    ? mtpt::ScalarMapping::TransferFunctions
-    : (channels == 2 ? mtpt::ScalarMapping::ColourAndOpacityScalars : mtpt::ScalarMapping::Colours);
+  settings.mapping = MappingOf(mtpt::ChannelsOf(selected));
   const mtpt::ScalarsView view{ values,
     selected.cellData ? mtpt::ScalarsView::Association::Cells
                       : mtpt::ScalarsView::Association::Points };

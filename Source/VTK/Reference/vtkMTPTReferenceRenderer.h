@@ -80,6 +80,17 @@ public:
   vtkGetMacro(TransferFunctionSamples, int);
   ///@}
 
+  ///@{
+  /**
+   * Average-intensity blending's scalar range where the volume's mapper has none of its own:
+   * vtkUnstructuredGridVolumeMapper declares none, so copy
+   * vtkMultiThreadedProjectedTetrahedraMapper's AverageIPScalarRange here; a vtkVolumeMapper's
+   * own is used. The blend mode itself is the mapper's.
+   */
+  vtkSetVector2Macro(AverageIPScalarRange, double);
+  vtkGetVectorMacro(AverageIPScalarRange, double, 2);
+  ///@}
+
   /**
    * Computes the reference image of `volume` as `renderer` shows it. `input` is the grid to
    * integrate; null takes the input of the volume's mapper. Returns false, with a
@@ -123,6 +134,7 @@ protected:
 
   int NumberOfThreads = 0;
   int TransferFunctionSamples = 8192;
+  double AverageIPScalarRange[2] = { VTK_DOUBLE_MIN, VTK_DOUBLE_MAX };
   int Size[2] = { 0, 0 };
   bool ExactTransferFunctions = false;
   double RenderSeconds = 0;

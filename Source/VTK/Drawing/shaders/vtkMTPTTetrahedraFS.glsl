@@ -268,6 +268,99 @@ vec4 ShadeInRange(FragmentSegment s, vec4 range)
   return t1 > t0 ? ShadePart(s, t0, t1) : vec4(0.0);
 }
 
+// Blend modes other than composite (mtpt::BlendMode): each fragment's reduced values,
+// which the target folds with GL_MAX (maximum; minimum as the negated scalar) or sums
+// (average, additive), and vtkMTPTReduceFS.glsl maps to colour. As the CPU compositor's
+// ReduceFragment and mtpt::IntensityTable::Mean: keep them in step.
+uniform int blendMode;
+uniform vec2 averageRange; // entry coordinates, open (+-1e30) where it reaches an end
+// W (the integral of opacity times normalized scalar) at the table entries, high and low.
+uniform sampler2D intensityPrefix;
+
+float IntensityPartial(int i, float f)
+{
+  float a = Entry(i).a;
+  float d = Entry(min(i + 1, tableSize - 1)).a - a;
+  return f * (a * float(i) + 0.5 * f * (a + d * float(i)) + f * f * d / 3.0) /
+    float(tableSize - 1);
+}
+
+// The mean of opacity times normalized scalar over [u0, u1] inside the table.
+float IntensityMeanInside(float u0, float u1)
+{
+  int i0, i1;
+  float f0, f1;
+  Split(u0, i0, f0);
+  Split(u1, i1, f1);
+  if (i0 == i1)
+  {
+    float a = Entry(i0).a;
+    float d = Entry(min(i0 + 1, tableSize - 1)).a - a;
+    float m1 = 0.5 * (f0 + f1);
+    float m2 = (f0 * f0 + f0 * f1 + f1 * f1) / 3.0;
+    return (a * float(i0) + m1 * (a + d * float(i0)) + m2 * d) / float(tableSize - 1);
+  }
+  vec2 w1 = texelFetch(intensityPrefix, ivec2(i1, 0), 0).xy;
+  vec2 w0 = texelFetch(intensityPrefix, ivec2(i0, 0), 0).xy;
+  float sum = (w1.x - w0.x) + (w1.y - w0.y);
+  return (sum + IntensityPartial(i1, f1) - IntensityPartial(i0, f0)) / (u1 - u0);
+}
+
+// The same with the scalar clamped beyond the table: 0 below it, the last opacity above.
+float IntensityMean(float u0, float u1)
+{
+  float last = float(tableSize - 1);
+  float inside0 = clamp(u0, 0.0, last);
+  float inside1 = clamp(u1, 0.0, last);
+  if (!(u1 > u0))
+  {
+    return IntensityMeanInside(inside0, inside0);
+  }
+  if (u0 >= 0.0 && u1 <= last)
+  {
+    return IntensityMeanInside(u0, u1);
+  }
+  float above = max(0.0, u1 - max(u0, last));
+  float inside = inside1 > inside0 ? IntensityMeanInside(inside0, inside1) * (inside1 - inside0)
+                                   : 0.0;
+  return (inside + above * Entry(tableSize - 1).a) / (u1 - u0);
+}
+
+// The reduced values of the part [t0, t1] of the segment: R the extreme entry coordinate
+// (negated for the minimum) or the integral, G the length in the average's range, A 1.
+vec4 Reduced(FragmentSegment s, float t0, float t1)
+{
+  float len = s.len * (t1 - t0);
+  float ds = s.scalarBack - s.scalarFront;
+  float a = s.scalarFront + t0 * ds;
+  float b = s.scalarFront + t1 * ds;
+  float low = min(a, b);
+  float high = max(a, b);
+  float last = float(tableSize - 1);
+  if (blendMode == 1)
+  {
+    return vec4(clamp(high, 0.0, last), 0.0, 0.0, 1.0);
+  }
+  if (blendMode == 2)
+  {
+    return vec4(-clamp(low, 0.0, last), 0.0, 0.0, 1.0);
+  }
+  if (blendMode == 4)
+  {
+    return vec4(len * IntensityMean(low, high), 0.0, 0.0, 1.0);
+  }
+  float from = max(low, averageRange.x);
+  float to = min(high, averageRange.y);
+  float fraction = high > low ? (to > from ? (to - from) / (high - low) : 0.0)
+                              : (from <= to ? 1.0 : 0.0);
+  if (!(fraction > 0.0))
+  {
+    return vec4(0.0, 0.0, 0.0, 1.0);
+  }
+  float part = len * fraction;
+  return vec4(part * IntensityMean(from, max(from, to)), part, 0.0, 1.0);
+}
+
 void main()
 {
   FragmentSegment segment = SegmentOfFragment(peelRanges == 1 || clipPlaneCount > 0);
@@ -283,6 +376,11 @@ void main()
   if (clipPlaneCount > 0 && !NarrowToPlanes(segment, t0, t1))
   {
     discard;
+  }
+  if (blendMode != 0)
+  {
+    gl_FragData[0] = Reduced(segment, t0, t1);
+    return;
   }
   vec4 fragment = ShadePart(segment, t0, t1);
   if (fragment.a <= 0.0)

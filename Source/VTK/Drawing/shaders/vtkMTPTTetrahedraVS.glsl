@@ -24,6 +24,7 @@ uniform int shadingMode; // 0: VTK-compatible, 1: pre-integrated, 2: vertex colo
 // inverseDepthScale * z_ndc + inverseDepthOffset; eye ray per unit depth =
 // ((ndc.xy + rayShift) * rayScale, -1).
 uniform int perspectiveExact;
+uniform int clampEntries;
 uniform float inverseDepthScale;
 uniform float inverseDepthOffset;
 uniform vec2 rayScale;
@@ -59,7 +60,10 @@ void main()
     // Pre-integrated: the scalars travel to the fragment shader (in table entry units).
     classified = vec4(0.0);
     float last = float(tableSize - 1);
-    preIntegration = vec3(clamp(scalarFrontBack * entryScale + entryShift, 0.0, last), thickness);
+    vec2 entries = scalarFrontBack * entryScale + entryShift;
+    // Average and additive blending clamp only in the fragment shader: along a segment that
+    // leaves the table's range the clamped scalar is not linear.
+    preIntegration = vec3(clampEntries == 1 ? clamp(entries, 0.0, last) : entries, thickness);
   }
   exactFrontBack = vec4(0.0);
   exactRay = vec2(0.0);
