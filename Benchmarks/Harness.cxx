@@ -376,6 +376,13 @@ const std::vector<std::string>& ContenderNames()
   return names;
 }
 
+const std::vector<std::string>& BlendModeNames()
+{
+  static const std::vector<std::string> names = { "composite", "maximum", "minimum", "average",
+    "additive" };
+  return names;
+}
+
 vtkSmartPointer<vtkUnstructuredGridVolumeMapper> MakeMapper(
   const std::string& name, const MapperSettings& settings)
 {
@@ -391,6 +398,9 @@ vtkSmartPointer<vtkUnstructuredGridVolumeMapper> MakeMapper(
                                                                 : Mapper::VTK_COMPATIBLE_SHADING);
     mapper->SetOrderMethod(
       settings.order == "partition" ? Mapper::PARTITION_SORT : Mapper::RADIX_SORT);
+    const auto& blends = BlendModeNames();
+    const auto blend = std::find(blends.begin(), blends.end(), settings.blend);
+    mapper->SetBlendMode(blend == blends.end() ? 0 : static_cast<int>(blend - blends.begin()));
     mapper->SynchronizedTimingOn(); // stage timers that measure the work, not its submission
     mapper->SetAutoAdjustSampleDistances(settings.autoAdjust ? 1 : 0);
     mapper->SetAutoAdjustCellFraction(settings.autoAdjust ? 1 : 0);
@@ -785,6 +795,8 @@ void AddCommonOptions(CLI::App& app, CommonOptions& options)
     ->check(CLI::IsMember({ "vtk", "pre-integrated" }));
   app.add_option("--order", options.mapper.order, "MTPT's visibility order")
     ->check(CLI::IsMember({ "radix", "partition" }));
+  app.add_option("--blend-mode", options.mapper.blend, "MTPT's blend mode")
+    ->check(CLI::IsMember(BlendModeNames()));
   options.dataFolder = DefaultDataFolder();
   app.add_option("--data", options.dataFolder,
     "folder of real meshes beyond the repository's (comb, kiefer, pulley, ...; default "

@@ -111,6 +111,8 @@ struct MapperSettings
   int threads = 0;               ///< 0: the default
   std::string shading = "vtk";   ///< "vtk" or "pre-integrated"
   std::string order = "radix";   ///< "radix" or "partition"
+  /// "composite", "maximum", "minimum", "average" or "additive" (BlendModeNames)
+  std::string blend = "composite";
   float imageSampleDistance = 1; ///< fixed, unless autoAdjust
   /// AutoAdjustSampleDistances and AutoAdjustCellFraction (off: every pixel and cell drawn)
   bool autoAdjust = false;
@@ -125,6 +127,9 @@ struct MapperSettings
  */
 vtkSmartPointer<vtkUnstructuredGridVolumeMapper> MakeMapper(
   const std::string& name, const MapperSettings& settings = {});
+
+/// The blend modes' names, in the order of their values (vtkVolumeMapper's enum).
+const std::vector<std::string>& BlendModeNames();
 
 /// Every contender name MakeMapper knows.
 const std::vector<std::string>& ContenderNames();

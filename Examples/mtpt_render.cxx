@@ -428,6 +428,10 @@ int main(int argc, char** argv)
     ->check(CLI::IsMember({ "radix", "partition" }));
   app.add_option("--shading", o.common.mapper.shading, "VTK-compatible or pre-integrated shading")
     ->check(CLI::IsMember({ "vtk", "pre-integrated" }));
+  app.add_option("--blend-mode", o.common.mapper.blend,
+    "composite; maximum or minimum intensity; average intensity; additive (VTK's blend modes; "
+    "VTK's PT composites in --compare-vtk)")
+    ->check(CLI::IsMember(BlendModeNames()));
   app.add_flag("--compare-vtk", o.compare,
     "also time vtkProjectedTetrahedraMapper (for a .vtm: "
     "vtkMultiBlockUnstructuredGridVolumeMapper), "
@@ -513,9 +517,11 @@ int main(int argc, char** argv)
 
   const Timed t = Time(stage, mapper, o);
   const StageFigures& f = t.figures;
-  std::printf("\nMTPT, %s backend, %s shading, %s order, %d threads requested (0: all), %dx%d; "
-              "median of %d frames, the camera turning %.2f degrees before each (ms):\n",
-    f.backend.c_str(), o.common.mapper.shading.c_str(), o.common.mapper.order.c_str(),
+  std::printf("\nMTPT, %s backend, %s shading, %s blending, %s order, %d threads requested "
+              "(0: all), %dx%d; median of %d frames, the camera turning %.2f degrees before "
+              "each (ms):\n",
+    f.backend.c_str(), o.common.mapper.shading.c_str(), o.common.mapper.blend.c_str(),
+    o.common.mapper.order.c_str(),
     o.common.mapper.threads, o.width, o.height, o.common.timing.repeat, o.common.timing.step);
   std::printf("| transform | cull | depth keys | order | decompose | CPU stages | composite (bin "
               "+ raster) | upload | draw | frame |%s\n",

@@ -58,14 +58,6 @@ def scene(data, mapper):
     return renderer, volume, figures.window_for(renderer, args.size)
 
 
-def mtpt_mapper(backend, shading):
-    m = Mapper()
-    getattr(m, "SetBackendTo" + backend)()
-    getattr(m, "SetShadingModeTo" + shading)()
-    m.SetAutoAdjustSampleDistances(0)
-    m.SetAutoAdjustCellFraction(0)
-    return m
-
 
 def median_frame(window, step):
     """Median seconds of a frame, `step()` called before each."""
@@ -90,7 +82,7 @@ ray_image = figures.grab(window)
 images = {}
 for backend in ("CPU", "OpenGL"):
     for shading in ("VTKCompatible", "PreIntegrated"):
-        m = mtpt_mapper(backend, shading)
+        m = figures.mtpt_mapper(backend, shading)
         add_planes(m)
         renderer, volume, window = scene(grid, m)
         window.Render()
@@ -108,7 +100,7 @@ window.Render()
 rmse, _ = figures.difference(figures.grab(window), ray_image, BACKGROUND, 255)
 print(f"VTK's PT (it ignores clipping planes): covered RMSE against VTK's GPU ray cast "
       f"{rmse:.1f}/255")
-m = mtpt_mapper("CPU", "PreIntegrated")
+m = figures.mtpt_mapper("CPU", "PreIntegrated")
 renderer, volume, window = scene(grid, m)
 window.Render()
 unclipped = figures.grab(window)
@@ -120,7 +112,7 @@ print(f"without planes, MTPT CPU pre-integrated against VTK's GPU ray cast: {rms
 
 print(f"\nFrame time, MTPT CPU backend (median of {args.frames} frames):")
 for shading in ("VTKCompatible", "PreIntegrated"):
-    m = mtpt_mapper("CPU", shading)
+    m = figures.mtpt_mapper("CPU", shading)
     renderer, volume, window = scene(grid, m)
     turning = median_frame(window, lambda: renderer.GetActiveCamera().Azimuth(1))
     # The same order composited again: a colour-only change of the transfer function.

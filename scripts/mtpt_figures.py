@@ -17,7 +17,7 @@ from vtkmodules.vtkRenderingCore import (vtkColorTransferFunction, vtkRenderer, 
 
 from vtkmodules.vtkRenderingVolume import vtkGPUVolumeRayCastMapper
 
-from mtpt import vtkMTPTReferenceRenderer
+from mtpt import vtkMTPTReferenceRenderer, vtkMultiThreadedProjectedTetrahedraMapper
 
 
 def wavelet(extent):
@@ -56,6 +56,17 @@ def gpu_ray_cast():
     mapper = vtkGPUVolumeRayCastMapper()
     mapper.AutoAdjustSampleDistancesOff()
     mapper.SetSampleDistance(0.1)
+    return mapper
+
+
+def mtpt_mapper(backend, shading="VTKCompatible"):
+    """MTPT with `backend` ("CPU", "OpenGL") and `shading` ("VTKCompatible", "PreIntegrated"),
+    every pixel and cell drawn (no automatic adjustment)."""
+    mapper = vtkMultiThreadedProjectedTetrahedraMapper()
+    getattr(mapper, "SetBackendTo" + backend)()
+    getattr(mapper, "SetShadingModeTo" + shading)()
+    mapper.SetAutoAdjustSampleDistances(0)
+    mapper.SetAutoAdjustCellFraction(0)
     return mapper
 
 
@@ -108,6 +119,9 @@ def reference(renderer, volume):
     """The exact reference of `volume` in `renderer` (with its visible translucent actors),
     rounded to bytes as the window's image is, as RGB image data of the renderer's size."""
     exact = vtkMTPTReferenceRenderer()
+    mapper = volume.GetMapper()
+    if isinstance(mapper, vtkMultiThreadedProjectedTetrahedraMapper):  # VTK's base has none
+        exact.SetAverageIPScalarRange(*mapper.GetAverageIPScalarRange())
     if not exact.Render(renderer, volume):
         raise RuntimeError("no reference image")
     values = exact.GetImage()
@@ -143,14 +157,19 @@ def difference(a, b, background, scale=1.0):
     return math.sqrt(total / max(1, 3 * count)), worst
 
 
-def write_picture(path, images, axis):
-    """Writes `images` side by side (axis 0) or stacked bottom to top (axis 1) as a PNG."""
+def append(images, axis):
+    """`images` side by side (axis 0) or stacked bottom to top (axis 1), as one image."""
     picture = vtkImageAppend()
     picture.SetAppendAxis(axis)
     for image in images:
         picture.AddInputData(image)
     picture.Update()
+    return picture.GetOutput()
+
+
+def write_picture(path, images, axis):
+    """Writes `images` side by side (axis 0) or stacked bottom to top (axis 1) as a PNG."""
     writer = vtkPNGWriter()
     writer.SetFileName(path)
-    writer.SetInputData(picture.GetOutput())
+    writer.SetInputData(append(images, axis))
     writer.Write()

@@ -41,6 +41,9 @@ MAX_RMSE_COVERED_INTERACTIVE = 0.1
 # A plane through the centre keeping one side moves the volume's covered pixels that far
 # (a fraction of the image's width) towards that side.
 MIN_CLIP_SHIFT = 0.05
+# Maximum intensity against composite blending of the same view: far apart (measured 0.1 and
+# more).
+MIN_RMSE_BLEND_MODES = 0.03
 
 args = testing.arguments(["PLUGIN", "DATA", "OUTPUT_DIR", "NAME"])
 out = functools.partial(testing.output_path, args)
@@ -146,6 +149,35 @@ def check_clipping_plane(display, view, reader):
     return ok
 
 
+def check_blend_modes(display, view):
+    """Blend Mode: maximum intensity gives another image than composite; additive an opaque
+    grey one (red = green = blue over the covered pixels); composite again the first image.
+    Expects the CPU backend and the settings of the image out("mtpt_cpu")."""
+    ok = True
+    display.MTPTBlendMode = 1
+    testing.save(view, out("mtpt_maximum"))
+    figures = testing.compare(out("mtpt_cpu"), out("mtpt_maximum"))
+    print("%s: maximum intensity vs composite: covered RMSE %.4f" %
+          (args["NAME"], figures["rmse_covered"]))
+    ok &= testing.check(figures["covered_b"] >= MIN_COVERED and
+                        figures["rmse_covered"] > MIN_RMSE_BLEND_MODES,
+                        "Blend Mode Maximum Intensity draws its own image")
+    display.MTPTBlendMode = 4
+    testing.save(view, out("mtpt_additive"))
+    _, pixels = testing.read_rgb(out("mtpt_additive"))
+    background = [round(c * 255.0) / 255.0 for c in testing.BACKGROUND]
+    covered = (abs(pixels - background) > 2.5 / 255.0).any(axis=1)
+    spread = float((pixels[covered].max(axis=1) - pixels[covered].min(axis=1)).max())
+    ok &= testing.check(covered.mean() >= MIN_COVERED and spread <= 1.5 / 255.0,
+                        "Blend Mode Additive draws grey (largest channel spread %.4f)" % spread)
+    display.MTPTBlendMode = 0
+    testing.save(view, out("mtpt_composite_again"))
+    rmse = testing.compare(out("mtpt_cpu"), out("mtpt_composite_again"))["rmse"]
+    ok &= testing.check(rmse <= MAX_RMSE_ORDER_METHODS,
+                        "Blend Mode Composite: the first image again (RMSE %.2g)" % rmse)
+    return ok
+
+
 def main():
     ok = True
 
@@ -208,6 +240,7 @@ def main():
     ok &= check_image_sample_distance(display, view)
     ok &= check_level_of_detail(display, view)
     ok &= check_clipping_plane(display, view, reader)
+    ok &= check_blend_modes(display, view)
     simple.Hide(reader, view)
 
     # A multi-block input: the mesh cut into two blocks of whole cells (the cells inside a

@@ -131,6 +131,27 @@ def test_a_clipping_plane_keeps_the_side_its_normal_points_to(bluntfin):
     assert len(covered - (halves[0] | halves[1])) < 0.01 * len(covered)
 
 
+def test_blend_modes_from_python(bluntfin):
+    """Maximum intensity through SetBlendModeToMaximumIntensity: its own image, and the order
+    not needed; the minimum's differs from it; additive is opaque grey where it covers."""
+    composite = render(bluntfin, Mapper())
+    images = {}
+    for name in ("MaximumIntensity", "MinimumIntensity", "Additive"):
+        mapper = Mapper()
+        getattr(mapper, "SetBlendModeTo" + name)()
+        assert mapper.GetBlendModeAsString() == name
+        images[name] = render(bluntfin, mapper)
+        assert mapper.GetLastFrameReuse() & Mapper.ORDER_NOT_NEEDED
+    covered = covered_pixels(images["MaximumIntensity"], BACKGROUND)
+    assert len(covered) > 0.1 * len(composite) / 3
+    assert rmse(images["MaximumIntensity"], composite) > 0.02
+    assert rmse(images["MaximumIntensity"], images["MinimumIntensity"]) > 0.02
+    grey = images["Additive"]
+    spread = max(max(grey[3 * p:3 * p + 3]) - min(grey[3 * p:3 * p + 3])
+                 for p in covered_pixels(grey, BACKGROUND))
+    assert spread <= 1.5 / 255, spread
+
+
 def test_render_matches_vtk_pt(bluntfin):
     grid = bluntfin
     # The mapper in the window VTK makes by default (multisampled); VTK's PT without

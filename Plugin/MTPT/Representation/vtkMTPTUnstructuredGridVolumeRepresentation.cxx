@@ -78,6 +78,21 @@ int vtkMTPTUnstructuredGridVolumeRepresentation::GetShadingMode()
   return this->MTPTMapper->GetShadingMode();
 }
 
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetBlendMode(int mode)
+{
+  this->MTPTMapper->SetBlendMode(mode);
+}
+
+int vtkMTPTUnstructuredGridVolumeRepresentation::GetBlendMode()
+{
+  return this->MTPTMapper->GetBlendMode();
+}
+
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetAverageIPScalarRange(double low, double high)
+{
+  this->MTPTMapper->SetAverageIPScalarRange(low, high);
+}
+
 // With automatic adjustment on, every render overwrites the mapper's distance (as in VTK's
 // ray caster); the distance the property holds is kept here and given to the mapper again
 // when the adjustment is turned off, so that the panel's value is the one drawn with.

@@ -52,6 +52,10 @@ public:
   int GetBackend();
   void SetShadingMode(int mode);
   int GetShadingMode();
+  /// vtkMultiThreadedProjectedTetrahedraMapper's blend mode (0 to 4) and the average's range.
+  void SetBlendMode(int mode);
+  int GetBlendMode();
+  void SetAverageIPScalarRange(double low, double high);
   void SetImageSampleDistance(double distance);
   double GetImageSampleDistance();
   void SetMinimumImageSampleDistance(double distance);
