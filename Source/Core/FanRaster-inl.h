@@ -317,12 +317,14 @@ void FanValues(const TableLookup& lookup, const Fan& fan, hn::Vec<CornerTag> val
 }
 
 /**
- * Maximum and minimum intensity: the fan's corners' values as the triangle path's
+ * Blend modes other than Composite: the fan's corners' values as the triangle path's
  * ValueCorner gives them for `mode`, arranged so that front = value[0] / value[1] and
  * back = value[2] / value[3] (Mode::Integrated: the scalars over 1; Mode::ExactIntegral: the
- * scalars times 1 / w over 1 / w, affine in screen space), value[5] = z.
+ * scalars times 1 / w over 1 / w, affine in screen space), value[4] = the segment's length
+ * (Mode::Integrated; in perspective views ReduceFanLanes finds it from the faces' 1 / w),
+ * value[5] = z.
  */
-void ExtremeFanValues(const RasterFrame& f, Mode mode, const Fan& fan,
+void ScalarFanValues(const RasterFrame& f, Mode mode, const Fan& fan,
   hn::Vec<CornerTag> value[6], hn::Vec<CornerTag> centre[6])
 {
   const CornerTag d;
@@ -334,8 +336,9 @@ void ExtremeFanValues(const RasterFrame& f, Mode mode, const Fan& fan,
     c.vertex = k < MaxFanTriangles ? &fan.boundary[k < fan.count ? k : 0] : &fan.centre;
     ValueCorner(f, mode, c);
     const bool exact = mode == Mode::ExactIntegral;
-    const double v[6] = { c.values[0], exact ? c.values[1] : 1.0, exact ? c.values[2] : c.values[1],
-      exact ? c.values[3] : 1.0, 0.0, exact ? c.values[6] : c.values[3] };
+    const double v[6] = { c.values[0], exact ? c.values[1] : 1.0,
+      exact ? c.values[2] : c.values[1], exact ? c.values[3] : 1.0, exact ? 0.0 : c.values[2],
+      exact ? c.values[6] : c.values[3] };
     for (int a = 0; a < 6; ++a)
     {
       (k < MaxFanTriangles ? corners[a][k] : own[a]) = static_cast<float>(v[a]);
@@ -491,6 +494,22 @@ HWY_INLINE hn::Vec<hn::RebindToSigned<D>> TriangleOfLanes(
   return index;
 }
 
+/// The values of the vector at tile column x, `offset` columns right of the row's first
+/// vector: each lane's from the planes of the triangle it lies in.
+template <class D>
+HWY_INLINE void FanLaneValues(D d, const FanPlanes& p, const EdgeLanes<D>* spokes, int x,
+  int offset, hn::Vec<D> value[6])
+{
+  const auto i = hn::Iota(d, static_cast<float>(x));
+  const auto which = hn::IndicesFromVec(d, TriangleOfLanes(d, spokes, p.triangles, offset));
+  for (int a = 0; a < 6; ++a)
+  {
+    const auto dx = hn::TableLookupLanes(hn::Load(d, p.dx[a]), which);
+    const auto start = hn::TableLookupLanes(hn::Load(d, p.start[a]), which);
+    value[a] = hn::MulAdd(dx, i, start);
+  }
+}
+
 /// Shades the lanes `keep` of the vector at tile column x of row `row`, `offset` columns
 /// right of the row's first vector: each lane with the values of its triangle's planes.
 /// Returns the lanes' alpha after it.
@@ -498,23 +517,47 @@ template <class D>
 HWY_INLINE hn::Vec<D> ShadeFanLanes(D d, const RasterFrame& f, const TileRow& row,
   const FanPlanes& p, const EdgeLanes<D>* spokes, int x, int offset, hn::Mask<D> keep)
 {
-  const auto i = hn::Iota(d, static_cast<float>(x));
-  const auto which = hn::IndicesFromVec(d, TriangleOfLanes(d, spokes, p.triangles, offset));
   hn::Vec<D> value[6];
-  for (int a = 0; a < 6; ++a)
-  {
-    const auto dx = hn::TableLookupLanes(hn::Load(d, p.dx[a]), which);
-    const auto start = hn::TableLookupLanes(hn::Load(d, p.start[a]), which);
-    value[a] = hn::MulAdd(dx, i, start);
-  }
-  if (ReducesInAnyOrder(f.blendMode))
-  {
-    // Maximum or minimum intensity (ExtremeFanValues): nothing becomes opaque.
-    FoldExtremes(d, f, row, x, hn::Div(value[0], value[1]), hn::Div(value[2], value[3]),
-      value[5], keep);
-    return hn::Zero(d);
-  }
+  FanLaneValues(d, p, spokes, x, offset, value);
   return ShadeLanes(d, f, row, x, value, keep);
+}
+
+/**
+ * A blend mode other than Composite: folds the lanes `keep` of the vector at tile column x
+ * of tile row y (image), `offset` columns right of the row's first vector, each with the
+ * values of its triangle's planes (ScalarFanValues).
+ */
+template <class D>
+HWY_INLINE void ReduceFanLanes(D d, const RasterFrame& f, const TileTarget& tile, Mode mode,
+  const TileRow& row, const FanPlanes& p, const EdgeLanes<D>* spokes, int x, int y, int offset,
+  hn::Mask<D> keep)
+{
+  hn::Vec<D> value[6];
+  FanLaneValues(d, p, spokes, x, offset, value);
+  const auto front = hn::Div(value[0], value[1]), back = hn::Div(value[2], value[3]);
+  if (f.blendMode == BlendMode::MaximumIntensity || f.blendMode == BlendMode::MinimumIntensity)
+  {
+    FoldExtremes(d, f, row, x, front, back, value[5], keep);
+    return;
+  }
+  auto length = value[4];
+  if (mode == Mode::ExactIntegral)
+  {
+    // The eye ray through the lanes' pixel centres (PerspectiveInterpolation), and the
+    // segment between the faces' depths 1 / value[1] and 1 / value[3].
+    const PerspectiveInterpolation& view = f.interpolation;
+    const auto i = hn::Iota(d, static_cast<float>(x));
+    const auto ndcX = hn::MulAdd(hn::Add(i, hn::Set(d, tile.x0 + 0.5f)),
+      hn::Set(d, 2.0f / f.width), hn::Set(d, -1.0f));
+    const float ndcY = 2.0f * (y + 0.5f) / f.height - 1.0f;
+    const auto rayX = hn::Mul(hn::Add(ndcX, hn::Set(d, static_cast<float>(view.shiftX))),
+      hn::Set(d, static_cast<float>(view.scaleX)));
+    const auto rayY = hn::Set(d, static_cast<float>((ndcY + view.shiftY) * view.scaleY));
+    const auto ray = hn::Sqrt(hn::MulAdd(rayX, rayX, hn::MulAdd(rayY, rayY, hn::Set(d, 1.0f))));
+    length = hn::Mul(hn::ZeroIfNegative(hn::Sub(hn::Div(hn::Set(d, 1.0f), value[3]),
+                       hn::Div(hn::Set(d, 1.0f), value[1]))), ray);
+  }
+  FoldIntegrals(d, f, row, x, front, back, length, value[5], keep);
 }
 
 /**
@@ -529,17 +572,16 @@ public:
     , Target(tile)
     , Lookup(f.transferFunction)
     , FanMode(mode)
-    , Extremes(f.blendMode == BlendMode::MaximumIntensity ||
-        f.blendMode == BlendMode::MinimumIntensity)
+    , Reduces(ReducesInAnyOrder(f.blendMode))
     , Applies(f.fanPath && !f.vertexColours && !f.clipToRange &&
         hn::Lanes(FragmentTag()) >= MaxFanTriangles &&
-        (this->Extremes || (mode == Mode::Compatible && !ReducesInAnyOrder(f.blendMode))))
+        (this->Reduces || mode == Mode::Compatible))
   {
     this->Planes.Clear();
     for (int j = 0; j < T && this->Applies; ++j)
     {
       this->Opaque[j] = 0;
-      for (int x = 0; x < T && !this->Extremes; x += static_cast<int>(hn::Lanes(FragmentTag())))
+      for (int x = 0; x < T && !this->Reduces; x += static_cast<int>(hn::Lanes(FragmentTag())))
       {
         this->MarkOpaque(j, x, hn::LoadU(FragmentTag(), this->Target.rgba + 3 * T * T + j * T + x));
       }
@@ -547,9 +589,9 @@ public:
   }
 
   /**
-   * VTK-compatible shading of `fan` into the tile, or its maximum or minimum intensity, as its
-   * triangles would be drawn. Returns false, having drawn nothing, when the fan path does not
-   * apply: the caller draws the triangles instead.
+   * VTK-compatible shading of `fan` into the tile, or its reduction in a blend mode other
+   * than Composite, as its triangles would be drawn. Returns false, having drawn nothing,
+   * when the fan path does not apply: the caller draws the triangles instead.
    */
   bool Draw(const Fan& fan, RasterCounts& counts)
   {
@@ -615,7 +657,7 @@ private:
         counts.fragments += covered;
         // Fragments behind opaque pixels are skipped; a fan all behind them is not set up.
         // (In a reduction the alpha plane says only that a fragment came.)
-        keep = this->Extremes ? keep : hn::And(keep, Transparent(d, row, x));
+        keep = this->Reduces ? keep : hn::And(keep, Transparent(d, row, x));
         if (hn::AllFalse(d, keep))
         {
           continue;
@@ -630,6 +672,12 @@ private:
         {
           this->Planes.Row(d, y - tile.y0);
           rowReady = true;
+        }
+        if (this->Reduces)
+        {
+          ReduceFanLanes(d, this->Frame, tile, this->FanMode, row, this->Planes, spokes, x, y,
+            x - start, keep);
+          continue;
         }
         this->MarkOpaque(y - tile.y0, x,
           ShadeFanLanes(d, this->Frame, row, this->Planes, spokes, x, x - start, keep));
@@ -676,9 +724,9 @@ private:
   void SetUp(const Fan& fan, const FanGeometry& g)
   {
     hn::Vec<CornerTag> value[6], centre[6];
-    if (this->Extremes)
+    if (this->Reduces)
     {
-      ExtremeFanValues(this->Frame, this->FanMode, fan, value, centre);
+      ScalarFanValues(this->Frame, this->FanMode, fan, value, centre);
     }
     else
     {
@@ -691,7 +739,7 @@ private:
   const TileTarget& Target;
   const TableLookup Lookup;
   const Mode FanMode;
-  const bool Extremes; ///< maximum or minimum intensity (else VTK-compatible shading)
+  const bool Reduces; ///< a blend mode other than Composite (else VTK-compatible shading)
   const bool Applies;
   FanPlanes Planes;
   std::uint64_t Opaque[T]; ///< per tile row, bit i: column i opaque (OpaqueAlpha)

@@ -1184,6 +1184,94 @@ HWY_INLINE void WholeFragments(D d, Mode mode, const Planes& p, V i, float j, V&
   z = value(6);
 }
 
+/// The lanes of `keep` whose whole fragments at depth z (NDC) are drawn: between the near
+/// and far planes, and not behind the opaque depth of tile column x of `row`.
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE hn::Mask<D> DrawnLanes(D d, const TileRow& row, int x, V z, hn::Mask<D> keep)
+{
+  keep = hn::And(keep, hn::And(hn::Ge(z, hn::Set(d, -1.0f)), hn::Le(z, hn::Set(d, 1.0f))));
+  if (row.depth)
+  {
+    const auto depth = hn::MulAdd(z, hn::Set(d, 0.5f), hn::Set(d, 0.5f));
+    keep = hn::And(keep, hn::Le(depth, hn::LoadU(d, row.depth + x)));
+  }
+  return keep;
+}
+
+/// Scalars in entry coordinates of `tf`, not clamped (NaN gives 0, as EntryCoordinate).
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE V EntryLanes(D d, const TransferFunctionTable& tf, V scalar)
+{
+  const double scale = (tf.size - 1) / (tf.high > tf.low ? tf.high - tf.low : 1.0);
+  const V u = hn::MulAdd(scalar, hn::Set(d, static_cast<float>(scale)),
+    hn::Set(d, static_cast<float>(-tf.low * scale)));
+  return hn::IfThenZeroElse(hn::IsNaN(u), u);
+}
+
+/// The integral of o x over the fractions [g0, g1] of table interval b (opacity a + dd g
+/// there, x = k (b + g)): k (g1 - g0) (a b + m1 (a + dd b) + m2 dd) with m1 and m2 the means
+/// of g and g^2 over [g0, g1]. Closed form: no cancellation however short.
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE V IntervalIntegralLanes(D d, V k, V a, V dd, V b, V g0, V g1)
+{
+  const V m1 = hn::Mul(hn::Set(d, 0.5f), hn::Add(g0, g1));
+  const V m2 =
+    hn::Mul(hn::Set(d, 1.0f / 3.0f), hn::MulAdd(g0, g0, hn::MulAdd(g0, g1, hn::Mul(g1, g1))));
+  const V mean = hn::MulAdd(m2, dd, hn::MulAdd(m1, hn::MulAdd(dd, b, a), hn::Mul(a, b)));
+  return hn::Mul(hn::Mul(k, hn::Sub(g1, g0)), mean);
+}
+
+/**
+ * IntensityTable::Mean per lane, in float as the OpenGL backend's shader computes it: the
+ * mean of o x over the entry coordinates [u0, u1] (u0 <= u1, not clamped). Within one
+ * interval, or across one boundary, in closed form; across more, from the prefix sums (whose
+ * rounding the span of at least one entry divides). Beyond the table: 0 below, the last
+ * opacity above.
+ */
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE V IntensityMeanLanes(D d, const RasterFrame& f, V u0, V u1)
+{
+  const hn::RebindToSigned<D> di;
+  const TransferFunctionTable& tf = f.transferFunction;
+  const IntensityTable& t = *f.intensity;
+  const int n = tf.size;
+  if (n < 2 || !t.Covers(tf) || t.prefixHigh.size() < static_cast<std::size_t>(n))
+  {
+    return hn::Zero(d);
+  }
+  const V zero = hn::Zero(d), one = hn::Set(d, 1.0f);
+  const V last = hn::Set(d, static_cast<float>(n - 1));
+  const V k = hn::Set(d, 1.0f / static_cast<float>(n - 1));
+  const V in0 = hn::Min(hn::Max(u0, zero), last), in1 = hn::Min(hn::Max(u1, zero), last);
+  const V lastInterval = hn::Set(d, static_cast<float>(n - 2));
+  const V b0 = hn::Min(hn::Floor(in0), lastInterval), b1 = hn::Min(hn::Floor(in1), lastInterval);
+  const V f0 = hn::Sub(in0, b0), f1 = hn::Sub(in1, b1);
+  const auto i0 = hn::ConvertTo(di, b0), i1 = hn::ConvertTo(di, b1);
+  auto alpha = [&](hn::Vec<decltype(di)> i)
+  { return hn::GatherIndex(d, tf.table + 3, hn::ShiftLeft<2>(i)); }; // entry i's alpha
+  const V a0 = alpha(i0), d0 = hn::Sub(alpha(hn::Add(i0, hn::Set(di, 1))), a0);
+  const V a1 = alpha(i1), d1 = hn::Sub(alpha(hn::Add(i1, hn::Set(di, 1))), a1);
+  // One interval; two neighbouring ones; or the prefix sums and the two ends' partials.
+  const V within = IntervalIntegralLanes(d, k, a0, d0, b0, f0, f1);
+  const V neighbours = hn::Add(IntervalIntegralLanes(d, k, a0, d0, b0, f0, one),
+    IntervalIntegralLanes(d, k, a1, d1, b1, zero, f1));
+  auto prefix = [&](const std::vector<float>& w, hn::Vec<decltype(di)> i)
+  { return hn::GatherIndex(d, w.data(), i); };
+  const V sums = hn::Add(hn::Sub(prefix(t.prefixHigh, i1), prefix(t.prefixHigh, i0)),
+    hn::Sub(prefix(t.prefixLow, i1), prefix(t.prefixLow, i0)));
+  const V across = hn::Add(sums, hn::Sub(IntervalIntegralLanes(d, k, a1, d1, b1, zero, f1),
+                                   IntervalIntegralLanes(d, k, a0, d0, b0, zero, f0)));
+  const V steps = hn::Sub(b1, b0);
+  const V inside = hn::IfThenElse(hn::Eq(steps, zero), within,
+    hn::IfThenElse(hn::Eq(steps, one), neighbours, across));
+  const V above = hn::ZeroIfNegative(hn::Sub(u1, hn::Max(u0, last)));
+  const V span = hn::Sub(u1, u0);
+  const V mean = hn::Div(hn::MulAdd(above, hn::Set(d, tf.table[4 * (n - 1) + 3]), inside), span);
+  // A constant scalar: o x there.
+  const V point = hn::Mul(hn::MulAdd(d0, f0, a0), hn::Mul(k, hn::Add(b0, f0)));
+  return hn::IfThenElse(hn::Gt(span, zero), mean, point);
+}
+
 /**
  * Folds whole fragments with scalars `front` and `back` at their ends and depth z into the
  * lanes `keep` of the vector at tile column x of `row`: maximum or minimum intensity.
@@ -1193,23 +1281,14 @@ HWY_INLINE void FoldExtremes(
   D d, const RasterFrame& f, const TileRow& row, int x, V front, V back, V z, hn::Mask<D> keep)
 {
   const TransferFunctionTable& tf = f.transferFunction;
-  const double span = tf.high > tf.low ? tf.high - tf.low : 1.0;
   const auto one = hn::Set(d, 1.0f);
-  keep = hn::And(keep, hn::And(hn::Ge(z, hn::Set(d, -1.0f)), hn::Le(z, one)));
-  if (row.depth)
-  {
-    const auto depth = hn::MulAdd(z, hn::Set(d, 0.5f), hn::Set(d, 0.5f));
-    keep = hn::And(keep, hn::Le(depth, hn::LoadU(d, row.depth + x)));
-  }
+  keep = DrawnLanes(d, row, x, z, keep);
   if (hn::AllFalse(d, keep))
   {
     return;
   }
   const bool maximum = f.blendMode == BlendMode::MaximumIntensity;
-  const auto scalar = maximum ? hn::Max(front, back) : hn::Min(front, back);
-  auto u = hn::MulAdd(scalar, hn::Set(d, static_cast<float>((tf.size - 1) / span)),
-    hn::Set(d, static_cast<float>(-tf.low * (tf.size - 1) / span)));
-  u = hn::IfThenZeroElse(hn::IsNaN(u), u); // NaN gives 0, as EntryCoordinate
+  auto u = EntryLanes(d, tf, maximum ? hn::Max(front, back) : hn::Min(front, back));
   u = hn::Min(hn::Max(u, hn::Zero(d)), hn::Set(d, static_cast<float>(tf.size - 1)));
   const auto held = hn::LoadU(d, row.r + x), alpha = hn::LoadU(d, row.a + x);
   const auto folded = maximum ? hn::Max(held, u) : hn::Min(held, u);
@@ -1219,82 +1298,82 @@ HWY_INLINE void FoldExtremes(
 }
 
 /**
- * Maximum and minimum intensity of the lanes `keep` of the vector at tile column x of `row`
- * (tile row j), whose fragments are whole (no depth range, no plane cuts the fan): the
- * extreme of the scalars at each segment's ends, in clamped entry coordinates
- * (ReduceFragment's arithmetic in float).
+ * Folds whole fragments (scalars `front` and `back` at their ends, eye length `length`, depth
+ * z) into the lanes `keep` of the vector at tile column x of `row`: average intensity or
+ * additive (ReduceFragment's arithmetic in float).
  */
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE void FoldIntegrals(D d, const RasterFrame& f, const TileRow& row, int x, V front,
+  V back, V length, V z, hn::Mask<D> keep)
+{
+  keep = DrawnLanes(d, row, x, z, keep);
+  if (hn::AllFalse(d, keep))
+  {
+    return;
+  }
+  const V u0 = EntryLanes(d, f.transferFunction, front);
+  const V u1 = EntryLanes(d, f.transferFunction, back);
+  const V low = hn::Min(u0, u1), high = hn::Max(u0, u1);
+  const V zero = hn::Zero(d), one = hn::Set(d, 1.0f);
+  V weighted, counted = zero;
+  if (f.blendMode == BlendMode::Additive)
+  {
+    weighted = hn::Mul(length, IntensityMeanLanes(d, f, low, high));
+  }
+  else
+  {
+    // The stretch whose scalar lies in the range: a fraction of the segment's length.
+    const V from = hn::Max(low, hn::Set(d, static_cast<float>(f.averageRange[0])));
+    const V to = hn::Min(high, hn::Set(d, static_cast<float>(f.averageRange[1])));
+    const V span = hn::Sub(high, low);
+    const V fraction = hn::IfThenElse(hn::Gt(span, zero),
+      hn::IfThenElseZero(hn::Gt(to, from), hn::Div(hn::Sub(to, from), span)),
+      hn::IfThenElseZero(hn::Le(from, to), one));
+    counted = hn::Mul(length, fraction);
+    weighted = hn::IfThenElseZero(hn::Gt(fraction, zero),
+      hn::Mul(counted, IntensityMeanLanes(d, f, from, hn::Max(from, to))));
+  }
+  const V r = hn::LoadU(d, row.r + x), g = hn::LoadU(d, row.g + x), a = hn::LoadU(d, row.a + x);
+  hn::StoreU(hn::IfThenElse(keep, hn::Add(r, weighted), r), d, row.r + x);
+  hn::StoreU(hn::IfThenElse(keep, hn::Add(g, counted), g), d, row.g + x);
+  hn::StoreU(hn::IfThenElse(keep, one, a), d, row.a + x);
+}
+
+/// The whole fragments of the lanes `keep` at tile column x of `row` (tile row j) folded by the
+/// frame's blend mode (FoldExtremes or FoldIntegrals).
 template <class D>
-void ReduceExtremeVector(D d, const RasterFrame& f, Mode mode, const TileRow& row,
-  const Planes& p, float j, int x, hn::Mask<D> keep)
+void ReduceVector(D d, const RasterFrame& f, Mode mode, const TileRow& row, const Planes& p,
+  float j, int x, hn::Mask<D> keep)
 {
   const auto i = hn::Iota(d, static_cast<float>(x));
   hn::Vec<D> front, back, length, z;
   WholeFragments(d, mode, p, i, j, front, back, length, z);
-  FoldExtremes(d, f, row, x, front, back, z, keep);
-}
-
-/// ReduceExtremeVector over the pixels [lo, hi] of row y.
-void ReduceExtremes(const RasterFrame& f, const TileTarget& tile, Mode mode, const Planes& p,
-  int y, int lo, int hi)
-{
-  const FragmentTag d;
-  const int lanes = static_cast<int>(hn::Lanes(d));
-  const TileRow row = RowOf(tile, y);
-  const float j = static_cast<float>(y - tile.y0);
-  const int first = lo - tile.x0, end = hi - tile.x0;
-  for (int from = first; from <= end; from += lanes)
+  if (f.blendMode == BlendMode::MaximumIntensity || f.blendMode == BlendMode::MinimumIntensity)
   {
-    const int x = std::min(from, T - lanes); // as ShadeCompatible
-    const auto i = hn::Iota(d, static_cast<float>(x));
-    ReduceExtremeVector(d, f, mode, row, p, j, x,
-      hn::And(hn::Ge(i, hn::Set(d, static_cast<float>(from))),
-        hn::Le(i, hn::Set(d, static_cast<float>(end)))));
+    FoldExtremes(d, f, row, x, front, back, z, keep);
+  }
+  else
+  {
+    FoldIntegrals(d, f, row, x, front, back, length, z, keep);
   }
 }
 
-/**
- * Average and additive blending of the pixels [lo, hi] of row y whose fragments are whole:
- * the segments a vector at a time, then each one's integral (IntensityTable::Mean) in
- * ReduceFragment.
- */
-void ReduceIntegrals(const RasterFrame& f, const TileTarget& tile, Mode mode, const Planes& p,
+/// ReduceVector over the pixels [lo, hi] of row y.
+void ReduceWhole(const RasterFrame& f, const TileTarget& tile, Mode mode, const Planes& p,
   int y, int lo, int hi)
 {
   const FragmentTag d;
   const int lanes = static_cast<int>(hn::Lanes(d));
   const TileRow row = RowOf(tile, y);
-  const TransferFunctionTable& tf = f.transferFunction;
-  const double span = tf.high > tf.low ? tf.high - tf.low : 1.0;
-  const double scale = (tf.size - 1) / span;
   const float j = static_cast<float>(y - tile.y0);
-  HWY_ALIGN float front[MaxLanes], back[MaxLanes], length[MaxLanes], depth[MaxLanes];
   const int first = lo - tile.x0, end = hi - tile.x0;
   for (int from = first; from <= end; from += lanes)
   {
     const int x = std::min(from, T - lanes); // as ShadeCompatible
     const auto i = hn::Iota(d, static_cast<float>(x));
-    hn::Vec<FragmentTag> vFront, vBack, vLength, z;
-    WholeFragments(d, mode, p, i, j, vFront, vBack, vLength, z);
-    hn::Store(vFront, d, front);
-    hn::Store(vBack, d, back);
-    hn::Store(vLength, d, length);
-    hn::Store(z, d, depth);
-    for (int k = std::max(from, x) - x; k < lanes && x + k <= end; ++k)
-    {
-      const float windowDepth = 0.5f * depth[k] + 0.5f;
-      if (!(depth[k] >= -1.0f && depth[k] <= 1.0f) ||
-        (row.depth && windowDepth > row.depth[x + k]))
-      {
-        continue; // outside the near and far planes, or behind opaque geometry
-      }
-      auto entry = [&](float scalar)
-      {
-        const double u = (scalar - tf.low) * scale;
-        return std::isnan(u) ? 0.0 : u;
-      };
-      ReduceFragment(f, row, x + k, entry(front[k]), entry(back[k]), length[k]);
-    }
+    ReduceVector(d, f, mode, row, p, j, x,
+      hn::And(hn::Ge(i, hn::Set(d, static_cast<float>(from))),
+        hn::Le(i, hn::Set(d, static_cast<float>(end)))));
   }
 }
 
@@ -1303,18 +1382,9 @@ void ReduceIntegrals(const RasterFrame& f, const TileTarget& tile, Mode mode, co
 void ReduceSpan(const RasterFrame& f, const TileTarget& tile, Mode mode, const Planes& p, int y,
   int lo, int hi, bool cut)
 {
-  const bool extreme = f.blendMode == BlendMode::MaximumIntensity ||
-    f.blendMode == BlendMode::MinimumIntensity;
   if (!cut && !f.clipToRange)
   {
-    if (extreme)
-    {
-      ReduceExtremes(f, tile, mode, p, y, lo, hi);
-    }
-    else
-    {
-      ReduceIntegrals(f, tile, mode, p, y, lo, hi);
-    }
+    ReduceWhole(f, tile, mode, p, y, lo, hi);
     return;
   }
   const TileRow row = RowOf(tile, y);
@@ -1377,14 +1447,18 @@ void CoverGuardBand(const RasterFrame& f, const double X[3], const double Y[3], 
 }
 
 /**
- * A small triangle (ShadeSmall) whose fragments are whole, in VTK-compatible shading or
- * maximum or minimum intensity; false, having drawn nothing, in other modes.
+ * A small triangle (ShadeSmall) whose fragments are whole: VTK-compatible shading or a blend
+ * mode other than Composite; false, having drawn nothing, in pre-integrated shading.
  */
 template <typename GetPlanes>
 bool DrawSmall(const RasterFrame& f, const TileTarget& tile, Mode mode, const Edges& edges,
   GetPlanes& getPlanes, int x0, int x1, int y0, int y1, RasterCounts& counts)
 {
-  if (mode == Mode::Compatible && !ReducesInAnyOrder(f.blendMode))
+  if (!ReducesInAnyOrder(f.blendMode) && mode != Mode::Compatible)
+  {
+    return false;
+  }
+  if (mode == Mode::Compatible)
   {
     ShadeSmall(tile, edges, getPlanes, x0, x1, y0, y1, counts,
       [&](const TileRow& row, const Planes& p, int y, int x, auto keep)
@@ -1395,16 +1469,10 @@ bool DrawSmall(const RasterFrame& f, const TileTarget& tile, Mode mode, const Ed
       });
     return true;
   }
-  if (f.blendMode == BlendMode::MaximumIntensity || f.blendMode == BlendMode::MinimumIntensity)
-  {
-    ShadeSmall(tile, edges, getPlanes, x0, x1, y0, y1, counts,
-      [&](const TileRow& row, const Planes& p, int y, int x, auto keep) {
-        ReduceExtremeVector(
-          FragmentTag(), f, mode, row, p, static_cast<float>(y - tile.y0), x, keep);
-      });
-    return true;
-  }
-  return false;
+  ShadeSmall(tile, edges, getPlanes, x0, x1, y0, y1, counts,
+    [&](const TileRow& row, const Planes& p, int y, int x, auto keep)
+    { ReduceVector(FragmentTag(), f, mode, row, p, static_cast<float>(y - tile.y0), x, keep); });
+  return true;
 }
 
 /**
@@ -1580,6 +1648,25 @@ void PreIntegratedSegmentsImpl(const TransferFunctionTable& tf, const PreIntegra
   }
 }
 
+void IntensityMeansImpl(const TransferFunctionTable& tf, const IntensityTable& table,
+  const float* u0, const float* u1, float* mean, std::size_t count)
+{
+  const FragmentTag d;
+  RasterFrame f;
+  f.transferFunction = tf;
+  f.intensity = &table;
+  const std::size_t lanes = hn::Lanes(d);
+  for (std::size_t i = 0; i < count; i += lanes)
+  {
+    const std::size_t n = std::min(lanes, count - i);
+    HWY_ALIGN float a[MaxLanes] = {}, b[MaxLanes] = {}, out[MaxLanes] = {};
+    std::copy(u0 + i, u0 + i + n, a);
+    std::copy(u1 + i, u1 + i + n, b);
+    hn::Store(IntensityMeanLanes(d, f, hn::Load(d, a), hn::Load(d, b)), d, out);
+    std::copy(out, out + n, mean + i);
+  }
+}
+
 } // namespace HWY_NAMESPACE
 } // namespace detail
 } // namespace mtpt
@@ -1595,6 +1682,7 @@ HWY_EXPORT(RasterizeTileImpl);
 HWY_EXPORT(TargetName);
 HWY_EXPORT(OpacitiesOfDensitiesImpl);
 HWY_EXPORT(PreIntegratedSegmentsImpl);
+HWY_EXPORT(IntensityMeansImpl);
 
 void RasterizeTile(const RasterFrame& frame, const TileTarget& tile, const Fan* fans,
   std::size_t count, RasterCounts& counts)
@@ -1618,6 +1706,12 @@ void PreIntegratedSegments(const TransferFunctionTable& tf, const PreIntegration
 {
   HWY_DYNAMIC_DISPATCH(PreIntegratedSegmentsImpl)
   (tf, table, front, back, length, inverseUnit, rgba, count);
+}
+
+void IntensityMeans(const TransferFunctionTable& tf, const IntensityTable& table, const float* u0,
+  const float* u1, float* mean, std::size_t count)
+{
+  HWY_DYNAMIC_DISPATCH(IntensityMeansImpl)(tf, table, u0, u1, mean, count);
 }
 
 } // namespace detail

@@ -244,6 +244,13 @@ void IntensityTable::Build(const TransferFunctionTable& tf)
     const double a = tf.table[4 * i + 3], d = static_cast<double>(tf.table[4 * i + 7]) - a;
     this->prefix[i + 1] = this->prefix[i] + IntensityPartial(a, d, i, 1.0, k);
   }
+  this->prefixHigh.resize(this->prefix.size());
+  this->prefixLow.resize(this->prefix.size());
+  for (std::size_t i = 0; i < this->prefix.size(); ++i)
+  {
+    this->prefixHigh[i] = static_cast<float>(this->prefix[i]);
+    this->prefixLow[i] = static_cast<float>(this->prefix[i] - this->prefixHigh[i]);
+  }
 }
 
 double IntensityTable::Mean(const TransferFunctionTable& tf, double u0, double u1) const

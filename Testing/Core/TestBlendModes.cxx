@@ -7,6 +7,7 @@
 #include "mtpt/FramePipeline.h"
 #include "mtpt/ReferenceRenderer.h"
 #include "mtpt/TransferFunctionTable.h"
+#include "detail/TileRaster.h"
 
 #include <gtest/gtest.h>
 
@@ -223,6 +224,44 @@ TEST(BlendModes, IntensityTableIntegratesExactly)
   EXPECT_EQ(table.Mean(tf, -5.0, -2.0), 0.0);
   // Not built for this table: every mean is 0.
   EXPECT_EQ(mtpt::IntensityTable{}.Mean(tf, 1.0, 2.0), 0.0);
+}
+
+TEST(BlendModes, VectorMeansMatchTheTable)
+{
+  // The compositor's vector paths compute the mean in float (as the OpenGL backend's shader):
+  // against IntensityTable::Mean in double, over random intervals, intervals that barely
+  // cross an entry boundary, constant scalars and scalars beyond the table.
+  const std::vector<float> values = SteepTable();
+  const mtpt::TransferFunctionTable tf{ values.data(), 64, -0.5, 1.5 };
+  mtpt::IntensityTable table;
+  table.Build(tf);
+  std::mt19937 random(11);
+  std::uniform_real_distribution<float> at(-8.0f, 71.0f), tiny(0.0f, 1e-4f);
+  std::vector<float> u0, u1;
+  for (int trial = 0; trial < 600; ++trial)
+  {
+    float a = at(random), b = at(random);
+    if (trial % 3 == 1)
+    {
+      a = std::round(a) - tiny(random); // across a boundary, barely
+      b = a + 2 * tiny(random);
+    }
+    if (trial % 7 == 2)
+    {
+      b = a; // a constant scalar
+    }
+    u0.push_back(std::min(a, b));
+    u1.push_back(std::max(a, b));
+  }
+  std::vector<float> means(u0.size());
+  mtpt::detail::IntensityMeans(tf, table, u0.data(), u1.data(), means.data(), u0.size());
+  double worst = 0;
+  for (std::size_t i = 0; i < u0.size(); ++i)
+  {
+    worst = std::max(worst, std::fabs(means[i] - table.Mean(tf, u0[i], u1[i])));
+  }
+  std::printf("worst float mean error %.3g (%s)\n", worst, mtpt::detail::RasterTargetName());
+  EXPECT_LT(worst, 2e-5);
 }
 
 TEST(BlendModes, UnorderedFramesSkipTheSort)

@@ -574,6 +574,18 @@ void CheckImage(const std::vector<float>& rgba, int width, int height)
   }
 }
 
+/// The pipeline's fans (decomposed already) composited with `s` on `threads` threads.
+std::vector<float> CompositeFans(
+  const mtpt::FramePipeline& pipeline, const mtpt::CompositeSettings& s, int threads)
+{
+  std::vector<float> rgba(4u * s.width * s.height);
+  mtpt::Compositor compositor;
+  compositor.Begin(s);
+  compositor.Composite(pipeline.Fans().data(), pipeline.FanCount(), threads);
+  compositor.Resolve({ 0, 0, s.width, s.height }, nullptr, rgba.data(), threads);
+  return rgba;
+}
+
 /**
  * Clipping planes on the fans of the whole order in one batch: planes that keep everything
  * give the image without planes bit for bit; any planes (degenerate, huge or not a number
@@ -585,14 +597,7 @@ void CheckClippingPlanes(FuzzedDataProvider& in, mtpt::FramePipeline& pipeline,
 {
   pipeline.DecomposeFans(0, pipeline.SortedCount(), threadsA);
   auto composite = [&](const mtpt::CompositeSettings& s, int threads)
-  {
-    std::vector<float> rgba(4u * s.width * s.height);
-    mtpt::Compositor compositor;
-    compositor.Begin(s);
-    compositor.Composite(pipeline.Fans().data(), pipeline.FanCount(), threads);
-    compositor.Resolve({ 0, 0, s.width, s.height }, nullptr, rgba.data(), threads);
-    return rgba;
-  };
+  { return CompositeFans(pipeline, s, threads); };
   mtpt::CompositeSettings clipped = settings;
   clipped.clipping = mtpt::DepthClipping::FromProjection(frame.projection);
   const std::vector<float> whole = composite(clipped, threadsA);
@@ -614,6 +619,32 @@ void CheckClippingPlanes(FuzzedDataProvider& in, mtpt::FramePipeline& pipeline,
   CheckImage(a, clipped.width, clipped.height);
   FUZZ_CHECK(composite(clipped, threadsB) == a, "clipped: %d and %d threads differ", threadsA,
     threadsB);
+}
+
+/**
+ * A blend mode other than composite (fuzzed, with a fuzzed average range) on the same fans:
+ * a valid image, the same for two thread counts.
+ */
+void CheckBlendModes(FuzzedDataProvider& in, mtpt::FramePipeline& pipeline,
+  const mtpt::CompositeSettings& settings, const mtpt::FrameInput& frame, int threadsA,
+  int threadsB)
+{
+  pipeline.DecomposeFans(0, pipeline.SortedCount(), threadsA);
+  mtpt::CompositeSettings reduced = settings;
+  reduced.blendMode = static_cast<mtpt::BlendMode>(in.ConsumeIntegralInRange(1, 4));
+  mtpt::IntensityTable intensity;
+  intensity.Build(reduced.transferFunction);
+  reduced.intensity = &intensity;
+  reduced.interpolation = mtpt::PerspectiveInterpolation::FromProjection(frame.projection);
+  reduced.clipping = mtpt::DepthClipping::FromProjection(frame.projection);
+  for (double& v : reduced.averageRange)
+  {
+    v = in.PickValueInArray({ -1e300, 1e300, 0.0, 0.5, 1.0, -3.0, std::nan("") });
+  }
+  const std::vector<float> a = CompositeFans(pipeline, reduced, threadsA);
+  CheckImage(a, reduced.width, reduced.height);
+  FUZZ_CHECK(CompositeFans(pipeline, reduced, threadsB) == a, "blend mode %d: %d and %d threads differ",
+    static_cast<int>(reduced.blendMode), threadsA, threadsB);
 }
 
 /// The decoded case, for reproducing a failure: MTPT_FUZZ_VERBOSE=1 mtpt_fuzz_frame <input>.
@@ -900,5 +931,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       "8-bit resolve %u against %g at value %zu", over8[i], over[i], i);
   }
   CheckClippingPlanes(in, b, settings, frame, threadsA, threadsB);
+  CheckBlendModes(in, b, settings, frame, threadsA, threadsB);
   return 0;
 }

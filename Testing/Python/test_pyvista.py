@@ -211,11 +211,26 @@ def test_mtpt_settings(mesh):
     defaults = add_volume(plotter(), mesh).GetMapper()
     assert defaults.GetBackend() == Mapper.AUTOMATIC_BACKEND
     assert defaults.GetAutoAdjustSampleDistances() == 1
+    assert defaults.GetBlendMode() == 0
+
+
+@pytest.mark.parametrize("blending, mode", [("maximum", 1), ("min", 2), ("average", 3),
+                                             ("additive", 4), (4, 4)])
+def test_blending_takes_pyvistas_names(mesh, blending, mode):
+    """PyVista's own unstructured-grid mapper takes composite and maximum only; MTPT's takes
+    every mode, and draws it."""
+    pl = plotter()
+    actor = add_volume(pl, mesh, blending=blending, backend="cpu")
+    assert actor.GetMapper().GetBlendMode() == mode
+    image = snapshot(pl)
+    assert actor.GetMapper().GetLastFrameReuse() & Mapper.ORDER_NOT_NEEDED
+    assert np.any(np.abs(image - np.array(BACKGROUND)) > 0.1)
+    pl.close()
 
 
 @pytest.mark.parametrize("arguments, error", [
     (dict(mapper="gpu"), TypeError),
-    (dict(blending="maximum"), ValueError),
+    (dict(blending="brightest"), ValueError),
     (dict(shade=True), ValueError),
     (dict(backend="vulkan"), ValueError),
     (dict(shading_mode="phong"), ValueError),

@@ -89,6 +89,13 @@ void PreIntegratedSegments(const TransferFunctionTable& tf, const PreIntegration
   const float* front, const float* back, const float* length, float inverseUnit, float* rgba,
   std::size_t count);
 
+/**
+ * mean[i] = IntensityTable::Mean over [u0[i], u1[i]] computed as RasterizeTile's average and
+ * additive fragments compute it (in float, several per vector), for tests.
+ */
+void IntensityMeans(const TransferFunctionTable& tf, const IntensityTable& table, const float* u0,
+  const float* u1, float* mean, std::size_t count);
+
 } // namespace detail
 } // namespace mtpt
 

@@ -90,8 +90,10 @@ struct PreIntegrationTable
  */
 struct IntensityTable
 {
-  /// W at the entries.
+  /// W at the entries, and the same as a float sum high + low (for the vector paths and the
+  /// OpenGL backend: differences of nearby entries keep their precision).
   std::vector<double> prefix;
+  std::vector<float> prefixHigh, prefixLow;
 
   /// Builds the prefix sums of `tf` (recompute whenever the table changes).
   void Build(const TransferFunctionTable& tf);

@@ -142,12 +142,12 @@ void OpenGLBackend::UploadTables(const BackendFrame& frame)
   MakeTableTexture(this->IntegralsHigh, frame.window, table.size, high.data(), false);
   MakeTableTexture(this->IntegralsLow, frame.window, table.size, low.data(), false);
   // W of the intensity integral, high and low parts in red and green.
-  const std::vector<double>& prefix = tables.Intensity().prefix;
-  std::vector<float> packed(4 * prefix.size(), 0.0f);
-  for (std::size_t i = 0; i < prefix.size(); ++i)
+  const IntensityTable& intensity = tables.Intensity();
+  std::vector<float> packed(4 * intensity.prefixHigh.size(), 0.0f);
+  for (std::size_t i = 0; i < intensity.prefixHigh.size(); ++i)
   {
-    packed[4 * i] = static_cast<float>(prefix[i]);
-    packed[4 * i + 1] = static_cast<float>(prefix[i] - packed[4 * i]);
+    packed[4 * i] = intensity.prefixHigh[i];
+    packed[4 * i + 1] = intensity.prefixLow[i];
   }
   MakeTableTexture(this->IntensityPrefix, frame.window, table.size, packed.data(), false);
   this->UploadedTables = tables.Version();

@@ -33,6 +33,14 @@ SHADING_MODES = {
     "vtk-compatible": _M.VTK_COMPATIBLE_SHADING,
     "pre-integrated": _M.PRE_INTEGRATED_SHADING,
 }
+# PyVista's names of vtkVolumeMapper's blend modes (Plotter.add_volume's `blending`).
+BLEND_MODES = {
+    "composite": 0, "comp": 0,
+    "maximum": 1, "max": 1, "maximum-intensity": 1,
+    "minimum": 2, "min": 2, "minimum-intensity": 2,
+    "average": 3, "avg": 3, "average-intensity": 3,
+    "additive": 4, "add": 4, "sum": 4,
+}
 
 if _BaseVolumeMapper is not None:
 
@@ -123,15 +131,14 @@ def add_volume(plotter, volume, *, backend=None, shading_mode=None, image_sample
         ``opacity_unit_distance``, ``name``, ``reset_camera``, ``preference``,
         ``categories``, ``annotations``, ``log_scale``, ``pickable``, ``render``,
         ``user_matrix``, ``ambient``, ``diffuse``, ``specular``, ``specular_power``.
-        ``mapper`` is not taken (this function chooses it), ``blending`` must be
-        ``"composite"`` and ``shade`` must be false: MTPT draws composite blending without
-        lighting.
+        ``mapper`` is not taken (this function chooses it) and ``shade`` must be false:
+        MTPT draws volumes without lighting. ``blending`` takes PyVista's names of the five
+        blend modes, which MTPT draws as VTK's GPU ray caster does.
     """
     if "mapper" in kwargs:
         raise TypeError("add_volume() chooses the mapper itself: leave out mapper=")
-    blending = kwargs.get("blending", "composite")
-    if str(blending).lower() not in ("composite", "comp", "0"):
-        raise ValueError(f"MTPT draws composite blending only, not blending={blending!r}")
+    # Set on MTPT's mapper below: PyVista's own unstructured-grid mapper takes only two modes.
+    blending = _choice("blending", kwargs.pop("blending", "composite"), BLEND_MODES)
     if kwargs.get("shade"):
         raise ValueError("MTPT draws volumes without lighting: leave out shade=True")
     backend = _choice("backend", backend, BACKENDS)
@@ -163,6 +170,7 @@ def add_volume(plotter, volume, *, backend=None, shading_mode=None, image_sample
         mapper.SetImageSampleDistance(float(image_sample_distance))
     if number_of_threads is not None:
         mapper.SetNumberOfThreads(int(number_of_threads))
+    mapper.SetBlendMode(blending)
 
     _replace_mapper(plotter, actor, pyvista_mapper, mapper)
     if render:

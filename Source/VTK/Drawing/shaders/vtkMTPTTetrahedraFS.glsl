@@ -277,15 +277,19 @@ uniform vec2 averageRange; // entry coordinates, open (+-1e30) where it reaches 
 // W (the integral of opacity times normalized scalar) at the table entries, high and low.
 uniform sampler2D intensityPrefix;
 
-float IntensityPartial(int i, float f)
+// The integral of opacity times normalized scalar over the fractions [g0, g1] of table
+// interval i, in closed form (no cancellation however short).
+float IntervalIntegral(int i, float g0, float g1)
 {
   float a = Entry(i).a;
   float d = Entry(min(i + 1, tableSize - 1)).a - a;
-  return f * (a * float(i) + 0.5 * f * (a + d * float(i)) + f * f * d / 3.0) /
-    float(tableSize - 1);
+  float m1 = 0.5 * (g0 + g1);
+  float m2 = (g0 * g0 + g0 * g1 + g1 * g1) / 3.0;
+  return (g1 - g0) * (a * float(i) + m1 * (a + d * float(i)) + m2 * d) / float(tableSize - 1);
 }
 
-// The mean of opacity times normalized scalar over [u0, u1] inside the table.
+// The mean of opacity times normalized scalar over [u0, u1] inside the table: within one
+// interval or across one boundary in closed form, across more from the prefix sums.
 float IntensityMeanInside(float u0, float u1)
 {
   int i0, i1;
@@ -300,10 +304,14 @@ float IntensityMeanInside(float u0, float u1)
     float m2 = (f0 * f0 + f0 * f1 + f1 * f1) / 3.0;
     return (a * float(i0) + m1 * (a + d * float(i0)) + m2 * d) / float(tableSize - 1);
   }
+  if (i1 == i0 + 1)
+  {
+    return (IntervalIntegral(i0, f0, 1.0) + IntervalIntegral(i1, 0.0, f1)) / (u1 - u0);
+  }
   vec2 w1 = texelFetch(intensityPrefix, ivec2(i1, 0), 0).xy;
   vec2 w0 = texelFetch(intensityPrefix, ivec2(i0, 0), 0).xy;
   float sum = (w1.x - w0.x) + (w1.y - w0.y);
-  return (sum + IntensityPartial(i1, f1) - IntensityPartial(i0, f0)) / (u1 - u0);
+  return (sum + IntervalIntegral(i1, 0.0, f1) - IntervalIntegral(i0, 0.0, f0)) / (u1 - u0);
 }
 
 // The same with the scalar clamped beyond the table: 0 below it, the last opacity above.
