@@ -109,8 +109,9 @@ struct CompositeSettings
    * How fragments become a pixel (BlendMode). A mode other than Composite reduces each
    * pixel's fragments, in any order, to one value that Resolve maps to colour: the fans may
    * come in any order, and `intensity` (the integral of `transferFunction`, kept alive by the
-   * caller) is required for the average and additive modes. Fragments are then drawn one at
-   * a time, and `vertexColours` is not supported (nothing is drawn).
+   * caller) is required for the average and additive modes. `interpolation` must then be
+   * the view's, as for pre-integrated shading (the scalars are interpolated as there), and
+   * `vertexColours` is not supported (nothing is drawn).
    */
   BlendMode blendMode = BlendMode::Composite;
   const IntensityTable* intensity = nullptr;

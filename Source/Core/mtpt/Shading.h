@@ -156,9 +156,10 @@ struct DepthClipping
  * Clipping planes (vtkAbstractMapper's, Documentation/clipping-planes.md) in eye coordinates:
  * plane i keeps the half-space n . e + d >= 0 of plane[i] = (n, d), as VTK's mappers keep
  * the side a vtkPlane's normal points to; where a distance is not a number (a plane or a
- * point that is not finite) the plane cuts nothing, as in VTK's GPU ray caster. Each fragment's ray segment is cut
- * exactly where it leaves a kept half-space: along a ray, the distance to a plane is affine
- * in the distance travelled, so the cut is found from its two ends.
+ * point that is not finite) the plane cuts nothing, as in VTK's GPU ray caster. Each
+ * fragment's ray segment is cut exactly where it leaves a kept half-space: along a ray, the
+ * distance to a plane is affine in the distance travelled, so the cut is found from its two
+ * ends.
  */
 struct ClipPlanes
 {
