@@ -1109,19 +1109,47 @@ void IntegrateIntensity(
     }
     return;
   }
-  std::vector<double> cuts{ low, high, lo, hi, s.averageRange[0], s.averageRange[1] };
-  cuts.insert(cuts.end(), scene.tf.breaks.begin(), scene.tf.breaks.end());
-  std::sort(cuts.begin(), cuts.end());
-  for (std::size_t k = 0; k + 1 < cuts.size(); ++k)
+  // The clamping's and the range's ends inside (low, high), in order, and the transfer
+  // functions' breakpoints there (as IntegrateSegment finds them): the pieces' ends.
+  double extra[4];
+  int extras = 0;
+  for (double v : { lo, hi, s.averageRange[0], s.averageRange[1] })
   {
-    const double a = std::max(low, cuts[k]), b = std::min(high, cuts[k + 1]);
-    if (!(b > a) || !inRange(0.5 * (a + b)))
+    if (v > low && v < high)
     {
-      continue;
+      extra[extras++] = v;
     }
-    const double piece = length * (b - a) / (high - low);
-    r.weighted += piece / 6.0 * (ox(a) + 4.0 * ox(0.5 * (a + b)) + ox(b));
-    r.length += piece;
+  }
+  std::sort(extra, extra + extras);
+  auto next = std::upper_bound(scene.tf.breaks.begin(), scene.tf.breaks.end(), low);
+  const auto last = std::lower_bound(next, scene.tf.breaks.end(), high);
+  int e = 0;
+  for (double a = low; a < high;)
+  {
+    double b = high;
+    if (next != last && *next < b)
+    {
+      b = *next;
+    }
+    if (e < extras && extra[e] < b)
+    {
+      b = extra[e];
+    }
+    while (next != last && *next <= b)
+    {
+      ++next;
+    }
+    while (e < extras && extra[e] <= b)
+    {
+      ++e;
+    }
+    if (inRange(0.5 * (a + b)))
+    {
+      const double piece = length * (b - a) / (high - low);
+      r.weighted += piece / 6.0 * (ox(a) + 4.0 * ox(0.5 * (a + b)) + ox(b));
+      r.length += piece;
+    }
+    a = b;
   }
 }
 
