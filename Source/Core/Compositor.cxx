@@ -547,12 +547,9 @@ void ReducedPixel(const CompositeSettings& s, const float* p, float rgba[4])
     case BlendMode::MaximumIntensity:
     case BlendMode::MinimumIntensity:
     {
-      // The transfer function at the extreme scalar (given as an entry coordinate).
-      const TransferFunctionTable& tf = s.transferFunction;
-      const double span = tf.high > tf.low ? tf.high - tf.low : 1.0;
-      const double scalar = tf.low + p[0] * span / std::max(tf.size - 1, 1);
+      // The transfer function at the extreme scalar's entry coordinate.
       float entry[4];
-      tf.Lookup(static_cast<float>(scalar), entry);
+      s.transferFunction.LookupEntry(p[0], entry);
       const float alpha = std::min(1.0f, std::max(0.0f, entry[3]));
       for (int k = 0; k < 3; ++k)
       {

@@ -126,21 +126,20 @@ void SpanMeans(const TransferFunctionTable& tf, const std::vector<double>& integ
   }
 }
 
-/// The table at entry coordinate u (linear between entries).
-inline void LookupEntry(const TransferFunctionTable& tf, double u, float rgba[4])
+} // namespace
+
+void TransferFunctionTable::LookupEntry(double u, float rgba[4]) const
 {
   int i;
   double f;
-  Split(tf, u, i, f);
-  const int j = std::min(i + 1, tf.size - 1);
+  Split(*this, u, i, f);
+  const int j = std::min(i + 1, this->size - 1);
   for (int k = 0; k < 4; ++k)
   {
-    rgba[k] =
-      static_cast<float>(tf.table[4 * i + k] + f * (tf.table[4 * j + k] - tf.table[4 * i + k]));
+    rgba[k] = static_cast<float>(
+      this->table[4 * i + k] + f * (this->table[4 * j + k] - this->table[4 * i + k]));
   }
 }
-
-} // namespace
 
 void PreIntegrationTable::Build(const TransferFunctionTable& tf)
 {
@@ -195,8 +194,8 @@ void PreIntegrationTable::Segment(const TransferFunctionTable& tf, float front, 
     // 1 / (e^d - 1) = e^-d / (1 - e^-d) = (1 - a) / a: no second exponential.
     const double h = d < MTPT_SERIES_DEPTH ? WeightSeries(d) : 1.0 / d - (1.0 - a) / a;
     float c0[4], c1[4];
-    LookupEntry(tf, u0, c0);
-    LookupEntry(tf, u1, c1);
+    tf.LookupEntry(u0, c0);
+    tf.LookupEntry(u1, c1);
     const double weight = (1.0 - alpha) * a;
     for (int k = 0; k < 3; ++k)
     {

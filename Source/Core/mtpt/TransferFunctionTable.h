@@ -30,6 +30,8 @@ struct TransferFunctionTable
 
   /// RGBA at `scalar`.
   void Lookup(float scalar, float rgba[4]) const;
+  /// RGBA at entry coordinate u in [0, size - 1] (linear between entries, in double).
+  void LookupEntry(double u, float rgba[4]) const;
 
   /// `scalar` in entry units: 0 at `low`, size - 1 at `high`, clamped (NaN gives 0).
   double EntryCoordinate(double scalar) const;
