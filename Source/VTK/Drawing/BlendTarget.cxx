@@ -114,10 +114,8 @@ bool BlendTarget::CaptureSampled(vtkOpenGLRenderWindow* window, const int origin
     return false;
   }
   {
-    // Blits and clears are scissored, and the renderer's scissor box is its viewport's.
+    // Blits are scissored, and the renderer's scissor box is its viewport's.
     vtkOpenGLState::ScopedglEnableDisable scissor(state, GL_SCISSOR_TEST);
-    vtkOpenGLState::ScopedglClearColor clearColour(state);
-    vtkOpenGLState::ScopedglColorMask colourMask(state);
     state->vtkglDisable(GL_SCISSOR_TEST);
     state->vtkglBindFramebuffer(GL_READ_FRAMEBUFFER, static_cast<unsigned int>(windowFramebuffer));
     if (windowFramebuffer == 0)
@@ -134,10 +132,9 @@ bool BlendTarget::CaptureSampled(vtkOpenGLRenderWindow* window, const int origin
     this->Framebuffer->ActivateDrawBuffer(0);
     state->vtkglBlitFramebuffer(0, 0, size[0], size[1], 0, 0, sampled.width, sampled.height,
       GL_DEPTH_BUFFER_BIT, GL_NEAREST);
-    state->vtkglClearColor(0.0f, 0.0f, 0.0f, 0.0f);
-    state->vtkglColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-    state->vtkglClear(GL_COLOR_BUFFER_BIT);
   }
+  const float transparent[4] = { 0.0f, 0.0f, 0.0f, 0.0f };
+  ClearColour(window, transparent);
   this->Framebuffer->Bind(vtkOpenGLFramebufferObject::GetReadMode());
   this->Framebuffer->ActivateReadBuffer(0);
   if (!OpenGLSucceeded("copying the window's depth into a sampled framebuffer", error))
@@ -172,6 +169,19 @@ bool BlendTarget::BlendOverWindow(vtkOpenGLRenderWindow* window, vtkTextureObjec
   texture->SetWrapS(vtkTextureObject::ClampToEdge);
   texture->SetWrapT(vtkTextureObject::ClampToEdge);
   return this->DrawTexture(window, texture, origin, size, true, error);
+}
+
+void BlendTarget::ClearColour(vtkOpenGLRenderWindow* window, const float rgba[4])
+{
+  // Clears are scissored, and the renderer's scissor box is its viewport's.
+  vtkOpenGLState* state = window->GetState();
+  vtkOpenGLState::ScopedglEnableDisable scissor(state, GL_SCISSOR_TEST);
+  vtkOpenGLState::ScopedglClearColor clearColour(state);
+  vtkOpenGLState::ScopedglColorMask colourMask(state);
+  state->vtkglDisable(GL_SCISSOR_TEST);
+  state->vtkglClearColor(rgba[0], rgba[1], rgba[2], rgba[3]);
+  state->vtkglColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  state->vtkglClear(GL_COLOR_BUFFER_BIT);
 }
 
 vtkShaderProgram* BlendTarget::ReadyQuad(std::unique_ptr<vtkOpenGLQuadHelper>& quad,

@@ -100,6 +100,10 @@ public:
   bool Read(vtkOpenGLRenderWindow* window, int x, int y, int width, int height, float* depth,
     unsigned char* rgba, std::string& error);
 
+  /// Clears the colour of the framebuffer bound for drawing to `rgba`: every pixel and
+  /// channel, whatever the scissor box and colour mask, which are left as they were.
+  static void ClearColour(vtkOpenGLRenderWindow* window, const float rgba[4]);
+
   /**
    * Makes `quad` a full-screen quad with `fragmentShader` in `window` (once) and readies its
    * program; null when the shader cannot be compiled.

@@ -313,19 +313,11 @@ bool OpenGLBackend::DrawReduced(
     return false;
   }
   BlendTarget& target = this->SampledTargetUsed ? this->SampledTarget : this->Target;
-  {
-    // The target keeps the window's depth; its colour starts at the mode's neutral value.
-    vtkOpenGLState* state = window->GetState();
-    vtkOpenGLState::ScopedglEnableDisable scissor(state, GL_SCISSOR_TEST);
-    vtkOpenGLState::ScopedglClearColor clearColour(state);
-    vtkOpenGLState::ScopedglColorMask colourMask(state);
-    state->vtkglDisable(GL_SCISSOR_TEST);
-    const bool extreme = frame.blendMode == BlendMode::MaximumIntensity ||
-      frame.blendMode == BlendMode::MinimumIntensity;
-    state->vtkglClearColor(extreme ? -1e30f : 0.0f, 0.0f, 0.0f, 0.0f);
-    state->vtkglColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-    state->vtkglClear(GL_COLOR_BUFFER_BIT);
-  }
+  // The target keeps the window's depth; its colour starts at the mode's neutral value.
+  const bool extreme = frame.blendMode == BlendMode::MaximumIntensity ||
+    frame.blendMode == BlendMode::MinimumIntensity;
+  const float neutral[4] = { extreme ? -1e30f : 0.0f, 0.0f, 0.0f, 0.0f };
+  BlendTarget::ClearColour(window, neutral);
   const bool drawn = this->DrawBatches(frame, program, times);
   target.Restore(window);
   const auto start = Clock::now();
