@@ -46,19 +46,20 @@ vtkStandardNewMacro(vtkMTPTReferenceRenderer);
 namespace
 {
 
-/// True when the piecewise function is exactly the polyline through its nodes, clamped.
-bool IsPolyline(vtkPiecewiseFunction* f)
+/**
+ * Whether every node of `f` (N values: its scalar, its values, then midpoint and sharpness)
+ * has VTK's default midpoint 0.5 and sharpness 0, and the scalars strictly increase: then
+ * the function is the polyline through its nodes.
+ */
+template <int N, typename Function>
+bool PolylineNodes(Function* f)
 {
-  if (!f->GetClamping())
-  {
-    return false;
-  }
   double previous = -std::numeric_limits<double>::infinity();
   for (int i = 0; i < f->GetSize(); ++i)
   {
-    double node[4];
+    double node[N];
     f->GetNodeValue(i, node);
-    if (node[2] != 0.5 || node[3] != 0.0 || !(node[0] > previous))
+    if (node[N - 2] != 0.5 || node[N - 1] != 0.0 || !(node[0] > previous))
     {
       return false;
     }
@@ -67,25 +68,17 @@ bool IsPolyline(vtkPiecewiseFunction* f)
   return true;
 }
 
+/// True when the piecewise function is exactly the polyline through its nodes, clamped.
+bool IsPolyline(vtkPiecewiseFunction* f)
+{
+  return f->GetClamping() && PolylineNodes<4>(f);
+}
+
 /// True when the colour function is exactly the RGB polyline through its nodes, clamped.
 bool IsPolyline(vtkColorTransferFunction* f)
 {
-  if (!f->GetClamping() || f->GetColorSpace() != VTK_CTF_RGB || f->GetScale() != VTK_CTF_LINEAR)
-  {
-    return false;
-  }
-  double previous = -std::numeric_limits<double>::infinity();
-  for (int i = 0; i < f->GetSize(); ++i)
-  {
-    double node[6];
-    f->GetNodeValue(i, node);
-    if (node[4] != 0.5 || node[5] != 0.0 || !(node[0] > previous))
-    {
-      return false;
-    }
-    previous = node[0];
-  }
-  return true;
+  return f->GetClamping() && f->GetColorSpace() == VTK_CTF_RGB &&
+    f->GetScale() == VTK_CTF_LINEAR && PolylineNodes<6>(f);
 }
 
 void NodeRange(vtkPiecewiseFunction* f, double range[2])
