@@ -411,7 +411,7 @@ void Compositor::Rasterize(const Fan* fans, int threads)
   frame.planes = s.clipPlanes;
   frame.blendMode = s.blendMode;
   frame.intensity = s.intensity;
-  AverageRangeEntries(s.transferFunction, s.averageRange, HUGE_VAL, frame.averageRange);
+  AverageRangeEntries(s.transferFunction, s.averageRange, AverageRangeBeyond, frame.averageRange);
   const bool reduce = ReducesInAnyOrder(s.blendMode);
   const std::uint8_t* straddles = s.clipPlanes.count > 0 ? this->Straddles.data() : nullptr;
   const auto jobs = static_cast<std::int64_t>(this->Tiles.size());

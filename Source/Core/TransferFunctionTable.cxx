@@ -46,8 +46,8 @@ void AverageRangeEntries(
 {
   const double low = tf.UnclampedEntryCoordinate(range[0]);
   const double high = tf.UnclampedEntryCoordinate(range[1]);
-  entries[0] = low <= 0.0 ? -beyond : low;
-  entries[1] = high >= tf.size - 1 ? beyond : high;
+  entries[0] = low <= 0.0 ? -beyond : std::min(low, beyond);
+  entries[1] = high >= tf.size - 1 ? beyond : std::max(high, -beyond);
 }
 
 namespace

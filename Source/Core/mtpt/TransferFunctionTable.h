@@ -115,12 +115,17 @@ struct IntensityTable
 };
 
 /**
- * The average's scalar range (AverageIntensity) in entry coordinates of `tf`. It applies to
- * the clamped scalar, so where it reaches an end of the table it is open beyond that end
- * (-+`beyond`).
+ * The average's scalar range (AverageIntensity) in entry coordinates of `tf`, within
+ * [-`beyond`, `beyond`]. It applies to the clamped scalar, so where it reaches an end of the
+ * table it is open beyond that end (-+`beyond`). With `beyond` a float (AverageRangeBeyond),
+ * the entries convert to float safely, however far the range lies.
  */
 void AverageRangeEntries(
   const TransferFunctionTable& tf, const double range[2], double beyond, double entries[2]);
+
+/// The `beyond` of AverageRangeEntries for the compositor and the OpenGL backend: far past
+/// any table, and a float.
+constexpr double AverageRangeBeyond = 1e30;
 
 /// At most this many compositing steps per segment (pre-integrated shading).
 constexpr int MaxPreIntegrationSteps = MTPT_MAX_SEGMENT_STEPS;

@@ -169,9 +169,8 @@ void OpenGLBackend::SetUniforms(const BackendFrame& frame, vtkShaderProgram* pro
   {
     program->SetUniformi("intensityPrefix", this->IntensityPrefix->GetTextureUnit());
     double range[2];
-    AverageRangeEntries(table, frame.averageRange, 1e30, range);
-    const float averageRange[2] = { static_cast<float>(std::max(-1e30, range[0])),
-      static_cast<float>(std::min(1e30, range[1])) };
+    AverageRangeEntries(table, frame.averageRange, AverageRangeBeyond, range);
+    const float averageRange[2] = { static_cast<float>(range[0]), static_cast<float>(range[1]) };
     program->SetUniform2f("averageRange", averageRange);
   }
   if (preIntegrated)
