@@ -1235,7 +1235,7 @@ HWY_INLINE V IntensityMeanLanes(D d, const RasterFrame& f, V u0, V u1)
   const TransferFunctionTable& tf = f.transferFunction;
   const IntensityTable& t = *f.intensity;
   const int n = tf.size;
-  if (n < 2 || !t.Covers(tf) || t.prefixHigh.size() < static_cast<std::size_t>(n))
+  if (n < 2 || !t.Covers(tf))
   {
     return hn::Zero(d);
   }

@@ -103,7 +103,9 @@ struct IntensityTable
   /// Whether the prefix sums cover `tf`; if not, every mean is 0.
   bool Covers(const TransferFunctionTable& tf) const
   {
-    return tf.size >= 1 && this->prefix.size() >= static_cast<std::size_t>(tf.size);
+    const auto size = static_cast<std::size_t>(tf.size);
+    return tf.size >= 1 && this->prefix.size() >= size && this->prefixHigh.size() >= size &&
+      this->prefixLow.size() >= size;
   }
 
   /**
