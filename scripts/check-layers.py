@@ -5,12 +5,13 @@
 
 The core (Source/Core), from the lowest layer:
   0  vocabulary: mtpt/MeshView.h, Records.h, SegmentShared.h, Shading.h, Stage.h, Threads.h,
-     Timing.h, TransferFunctionTable.h
+     Timing.h, TransferFunctionTable.h, Lighting.h
   1  helpers: detail/*.h; a fragment of a source file (FanRaster-inl.h) lies beside it
   2  stages, in the order a frame runs them; a stage includes only earlier ones:
      mtpt/Transform.h, Culling.h, LevelOfDetail.h, DepthKeys.h, NearPlane.h,
      VisibilityOrder.h, Decompose.h
-  3  assemblies: mtpt/Compositor.h, FramePipeline.h, ReferenceRenderer.h, ImageSampling.h
+  3  assemblies: mtpt/Compositor.h, FramePipeline.h, ReferenceRenderer.h, ImageSampling.h,
+     Gradients.h
 The VTK module (Source/VTK), in rooms, each a folder; each includes the core's public headers
 (mtpt/, never detail/) and the rooms it lists, and inside a room a file includes only those
 before it:
@@ -42,10 +43,10 @@ STAGES = ["Transform", "Culling", "LevelOfDetail", "DepthKeys", "NearPlane", "Vi
 CORE = {
     **{f"mtpt/{name}.h": (0, 0) for name in
        ["MeshView", "Records", "SegmentShared", "Shading", "Stage", "Threads", "Timing",
-        "TransferFunctionTable"]},
+        "TransferFunctionTable", "Lighting"]},
     **{f"mtpt/{name}.h": (2, rank) for rank, name in enumerate(STAGES)},
     **{f"mtpt/{name}.h": (3, 0) for name in
-       ["Compositor", "FramePipeline", "ReferenceRenderer", "ImageSampling"]},
+       ["Compositor", "FramePipeline", "ReferenceRenderer", "ImageSampling", "Gradients"]},
 }
 # Core sources whose header is not named after them, and fragments of a source (beside it).
 CORE_SOURCES = {"TileRaster.cxx": "detail/TileRaster.h",

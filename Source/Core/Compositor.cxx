@@ -174,9 +174,10 @@ bool CopyRanges(int tile, int tilesX, const CompositeSettings& s, std::vector<fl
  * Draws the fans listed in `list` (count of them, in visibility order: back to front) into
  * `target` front to back: gathered from the list's end, a chunk at a time.
  */
-void DrawFrontToBack(const Fan* fans, const std::uint8_t* straddles, const std::uint32_t* list,
-  std::size_t count, const detail::RasterFrame& frame, const detail::TileTarget& target,
-  std::vector<Fan>& chunk, detail::RasterCounts& counts)
+void DrawFrontToBack(const Fan* fans, const std::uint8_t* straddles, const LightFactors* lights,
+  const std::uint32_t* list, std::size_t count, const detail::RasterFrame& frame,
+  const detail::TileTarget& target, std::vector<Fan>& chunk, std::vector<LightFactors>& lit,
+  detail::RasterCounts& counts)
 {
   for (std::size_t left = count; left > 0;)
   {
@@ -193,8 +194,12 @@ void DrawFrontToBack(const Fan* fans, const std::uint8_t* straddles, const std::
       }
       chunk[k] = fans[list[at]];
       chunk[k].straddles = straddles ? straddles[list[at]] : 0;
+      if (lights)
+      {
+        lit[k] = lights[list[at]];
+      }
     }
-    detail::RasterizeTile(frame, target, chunk.data(), n, counts);
+    detail::RasterizeTile(frame, target, chunk.data(), n, counts, lights ? lit.data() : nullptr);
   }
 }
 
@@ -243,7 +248,8 @@ float* Compositor::Tile(int tile)
   return pixels;
 }
 
-void Compositor::Composite(const Fan* fans, std::size_t count, int threads)
+void Compositor::Composite(
+  const Fan* fans, std::size_t count, int threads, const LightFactors* lights)
 {
   if (count == 0 || !Usable(this->Settings))
   {
@@ -253,7 +259,7 @@ void Compositor::Composite(const Fan* fans, std::size_t count, int threads)
   this->Bin(fans, count, threads);
   this->Statistics.binSeconds += detail::SecondsSince(start);
   start = Clock::now();
-  this->Rasterize(fans, threads);
+  this->Rasterize(fans, lights, threads);
   this->Statistics.rasterSeconds += detail::SecondsSince(start);
 }
 
@@ -394,7 +400,7 @@ void Compositor::ListEntries(std::size_t count, int blocks)
   }
 }
 
-void Compositor::Rasterize(const Fan* fans, int threads)
+void Compositor::Rasterize(const Fan* fans, const LightFactors* lights, int threads)
 {
   const CompositeSettings& s = this->Settings;
   detail::RasterFrame frame;
@@ -425,6 +431,7 @@ void Compositor::Rasterize(const Fan* fans, int threads)
     std::vector<float> depth(s.opaqueDepth ? TilePixels : 0), batch;
     std::vector<float> range(s.depthRange ? 2 * TilePixels : 0);
     std::vector<Fan> chunk(FansPerChunk);
+    std::vector<LightFactors> lit(lights ? FansPerChunk : 0);
 #pragma omp for schedule(dynamic, 1)
     for (std::int64_t job = 0; job < jobs; ++job)
     {
@@ -447,8 +454,8 @@ void Compositor::Rasterize(const Fan* fans, int threads)
       target.range = s.depthRange ? range.data() : nullptr;
       detail::RasterCounts counts;
       const std::size_t first = this->TileStart[tile];
-      DrawFrontToBack(fans, straddles, this->Entries.data() + first,
-        this->TileStart[tile + 1] - first, frame, target, chunk, counts);
+      DrawFrontToBack(fans, straddles, lights, this->Entries.data() + first,
+        this->TileStart[tile + 1] - first, frame, target, chunk, lit, counts);
       if (behind)
       {
         Over(batch.data(), pixels);
@@ -623,13 +630,15 @@ void Compositor::Resolve(
 }
 
 void Compositor::Composite(const TetVertex* vertices, const std::uint32_t* indices,
-  std::size_t count, const CompositeSettings& settings, std::vector<float>& rgba, int threads)
+  std::size_t count, const CompositeSettings& settings, std::vector<float>& rgba, int threads,
+  const LightFactors* lights)
 {
   const int width = std::max(0, settings.width), height = std::max(0, settings.height);
   const std::size_t values = 4 * static_cast<std::size_t>(width) * height;
   rgba.assign(values, 0.0f);
   // Each triangle with three distinct corners as a fan of one.
   this->SlotFans.clear();
+  this->SlotLights.clear();
   for (std::size_t k = 0; k < count; ++k)
   {
     for (std::size_t t = 0; t < 4; ++t)
@@ -643,11 +652,16 @@ void Compositor::Composite(const TetVertex* vertices, const std::uint32_t* indic
         fan.centre = vertices[tri[2]];
         fan.count = 2;
         this->SlotFans.push_back(fan);
+        if (lights)
+        {
+          this->SlotLights.push_back(lights[k]);
+        }
       }
     }
   }
   this->Begin(settings);
-  this->Composite(this->SlotFans.data(), this->SlotFans.size(), threads);
+  this->Composite(this->SlotFans.data(), this->SlotFans.size(), threads,
+    lights ? this->SlotLights.data() : nullptr);
   if (values > 0)
   {
     this->Resolve(PixelRegion{ 0, 0, width, height }, nullptr, rgba.data(), threads);

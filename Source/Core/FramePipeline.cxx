@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "mtpt/FramePipeline.h"
 
+#include "detail/MeshAccess.h"
 #include "detail/Parallel.h"
 
 #include <algorithm>
@@ -355,6 +356,66 @@ void FramePipeline::DecomposeBatch(std::size_t first, std::size_t count, int thr
 void FramePipeline::DecomposeFans(std::size_t first, std::size_t count, int threads)
 {
   this->DecomposeWindow(this->FanBuffers, first, count, threads, this->FanBatchCount);
+}
+
+void FramePipeline::LightWindow(std::size_t first, std::size_t count, const Lighting& lighting,
+  const float* normals, const Matrix4& modelView, std::vector<LightFactors>& factors,
+  int threads)
+{
+  const auto start = Clock::now();
+  first = std::min(first, this->SortedSize);
+  count = std::min(count, this->SortedSize - first);
+  factors.assign(count, Unlit());
+  double normalMatrix[9];
+  if (count == 0 || !normals || !NormalMatrix(modelView, normalMatrix))
+  {
+    this->LastTimes.light += SecondsSince(start);
+    return;
+  }
+  const DecomposeInput& in = this->DecomposeState;
+  const std::uint32_t* rank = this->Order.Rank();
+  const std::vector<NearPiece>& pieces = this->NearPlaneCut.Pieces();
+  const std::size_t cellCount = in.cells.cellCount;
+  // By rank, as the decomposition (DecomposeTetrahedraByRank): the cells in storage order,
+  // each lit into its rank's entry, so that their points and normals are read in order.
+  const std::size_t listed = in.cellList ? in.cellListCount : cellCount;
+  threads = ThreadsForWork(listed, detail::CellsPerThread, threads);
+  detail::DispatchCells(in.cells, in.pointCount, [&](const auto& access) {
+    auto light = [&](std::size_t id, std::size_t cell)
+    {
+      const std::uint32_t r = rank[id];
+      std::int64_t ids[4];
+      if (r == NotInOrder || r < first || r - first >= count ||
+        !access.TetrahedronPoints(cell, ids))
+      {
+        return;
+      }
+      double centroid[3] = { 0, 0, 0 };
+      for (int i = 0; i < 4; ++i)
+      {
+        const ProjectedPoint& p = in.points[ids[i]];
+        centroid[0] += 0.25 * p.eyeX;
+        centroid[1] += 0.25 * p.eyeY;
+        centroid[2] += 0.25 * p.eyeZ;
+      }
+      double normal[3];
+      EyeNormal(normalMatrix, normals + 3 * cell, normal);
+      factors[r - first] = LightCell(lighting, normal, centroid);
+    };
+    const auto n = static_cast<std::int64_t>(listed);
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (std::int64_t i = 0; i < n; ++i)
+    {
+      const std::size_t cell = in.cellList ? in.cellList[i] : static_cast<std::size_t>(i);
+      light(cell, cell);
+    }
+    // A near-plane piece (id cellCount + j) is lit as its cell.
+    for (std::size_t j = 0; j < pieces.size(); ++j)
+    {
+      light(cellCount + j, pieces[j].cell);
+    }
+  });
+  this->LastTimes.light += SecondsSince(start);
 }
 
 } // namespace mtpt

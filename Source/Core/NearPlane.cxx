@@ -302,6 +302,7 @@ void NearPlaneStage::CutCrossing(const std::vector<SortKey>& keys, const Project
         ++this->ClippedCells;
         for (std::size_t j = before; j < this->Made.size(); ++j)
         {
+          this->Made[j].cell = cell;
           const NearPiece& piece = this->Made[j];
           const ProjectedPoint* pieceCorners[4] = { &piece.corners[0], &piece.corners[1],
             &piece.corners[2], &piece.corners[3] };

@@ -24,6 +24,7 @@ template <int C>
 struct Segment
 {
   double enter, exit, front[C], back[C];
+  std::uint32_t cell; ///< the cell it crosses (its lighting)
   bool operator<(const Segment& o) const
   {
     if (this->enter != o.enter)
@@ -48,7 +49,7 @@ struct Segment
         return this->back[k] < o.back[k];
       }
     }
-    return false;
+    return this->cell < o.cell;
   }
 };
 
@@ -522,6 +523,42 @@ inline bool Clip(
   return true;
 }
 
+/// Each cell's lighting (ReferenceSettings::normals), lit at its centroid; empty without
+/// normals, or when shading does not apply (other mappings and blend modes).
+std::vector<LightFactors> CellLights(const CellsView& cells, std::size_t pointCount,
+  const std::vector<EyePoint>& eye, const ReferenceSettings& s)
+{
+  std::vector<LightFactors> lights;
+  double normalMatrix[9];
+  if (!s.normals || s.mapping != ScalarMapping::TransferFunctions ||
+    s.blendMode != BlendMode::Composite || !NormalMatrix(s.modelView, normalMatrix))
+  {
+    return lights;
+  }
+  lights.assign(cells.cellCount, Unlit());
+  detail::DispatchCells(cells, pointCount, [&](const auto& access) {
+    for (std::size_t c = 0; c < cells.cellCount; ++c)
+    {
+      std::int64_t ids[4];
+      if (!access.TetrahedronPoints(c, ids))
+      {
+        continue;
+      }
+      double centroid[3] = { 0, 0, 0 }, normal[3];
+      for (int i = 0; i < 4; ++i)
+      {
+        for (int k = 0; k < 3; ++k)
+        {
+          centroid[k] += 0.25 * eye[ids[i]].eye[k];
+        }
+      }
+      EyeNormal(normalMatrix, s.normals + 3 * c, normal);
+      lights[c] = LightCell(s.lighting, normal, centroid);
+    }
+  });
+  return lights;
+}
+
 bool Fail(std::string* error, const std::string& message)
 {
   if (error)
@@ -818,6 +855,7 @@ struct Scene
   const std::vector<PixelBox>& triangleBoxes;
   Rays ray;
   int nthreads;
+  const std::vector<LightFactors>& lights; ///< per cell (ReferenceSettings::normals); empty: none
 
   /// The first `channels` values of the cell's points (values[k] of point ids[k]).
   void CellValues(
@@ -914,6 +952,7 @@ void GatherSegments(const Scene& scene, int bandStart, int bandEnd,
               {
                 continue;
               }
+              segment.cell = static_cast<std::uint32_t>(c);
               const std::size_t pixel = static_cast<std::size_t>(y - bandStart) * width + x;
               std::uint32_t slot;
 #pragma omp atomic capture
@@ -981,11 +1020,38 @@ inline void CompositeHit(const Hit& hit, RayState& ray)
   ray.transmittance *= 1.0 - t.opacity;
 }
 
+/**
+ * A segment integrated as Integrate does, lit by `light` (null: unlit): on its own, its
+ * colour C and opacity A become clamp(scale C + offset A, 0, A) before it is composited.
+ */
+template <int C>
+void IntegrateLit(const TransferFunctions& tf, double length, const Segment<C>& s,
+  const LightFactors* light, RayState& ray)
+{
+  if (!light)
+  {
+    Integrate(tf, length, s, ray);
+    return;
+  }
+  RayState own;
+  Integrate(tf, length, s, own);
+  const double alpha = 1.0 - own.transmittance;
+  for (int k = 0; k < 3; ++k)
+  {
+    const double lit = light->scale[k] * own.color[k] + light->offset[k] * alpha;
+    ray.color[k] += ray.transmittance * std::min(std::max(lit, 0.0), alpha);
+  }
+  ray.transmittance *= own.transmittance;
+  ray.depth += own.depth;
+}
+
 /// The segments and surface crossings of one ray, front to back: a crossing inside a
 /// segment splits it there (the data's values interpolated linearly at the split).
+/// `lights`: each cell's lighting (null: unlit).
 template <int C>
 void IntegrateRay(const TransferFunctions& tf, double scale, const Segment<C>* begin,
-  const Segment<C>* end, const Hit* hit, const Hit* lastHit, RayState& state)
+  const Segment<C>* end, const Hit* hit, const Hit* lastHit, const LightFactors* lights,
+  RayState& state)
 {
   for (const Segment<C>* s = begin; s != end && !state.Done(); ++s)
   {
@@ -993,6 +1059,7 @@ void IntegrateRay(const TransferFunctions& tf, double scale, const Segment<C>* b
     {
       CompositeHit(*hit, state);
     }
+    const LightFactors* light = lights ? lights + s->cell : nullptr;
     Segment<C> rest = *s;
     for (; hit != lastHit && hit->u < rest.exit; ++hit)
     {
@@ -1003,12 +1070,12 @@ void IntegrateRay(const TransferFunctions& tf, double scale, const Segment<C>* b
       {
         part.back[k] = rest.front[k] + f * (rest.back[k] - rest.front[k]);
       }
-      Integrate(tf, (part.exit - part.enter) * scale, part, state);
+      IntegrateLit(tf, (part.exit - part.enter) * scale, part, light, state);
       rest.enter = part.exit;
       std::copy(part.back, part.back + C, rest.front);
       CompositeHit(*hit, state);
     }
-    Integrate(tf, (rest.exit - rest.enter) * scale, rest, state);
+    IntegrateLit(tf, (rest.exit - rest.enter) * scale, rest, light, state);
   }
   for (; hit != lastHit; ++hit)
   {
@@ -1255,7 +1322,8 @@ void IntegratePixels(const Scene& scene, int bandStart, int bandEnd,
     }
     RayState state;
     IntegrateRay(scene.tf, scale, begin, end, hits.data() + hitOffsets[i],
-      hits.data() + hitOffsets[i + 1], state);
+      hits.data() + hitOffsets[i + 1], scene.lights.empty() ? nullptr : scene.lights.data(),
+      state);
     for (int k = 0; k < 3; ++k)
     {
       out[k] = state.color[k] + state.transmittance * scene.settings.background[k];
@@ -1347,8 +1415,9 @@ bool RenderReference(const PointsView& points, const CellsView& cells, const Sca
   const std::vector<EyePoint> eye = EyePoints(points, settings, nthreads);
   const std::vector<PixelBox> boxes = PixelBoxes(cells, points.count, eye, width, height, nthreads);
   const std::vector<PixelBox> triangleBoxes = TriangleBoxes(settings);
+  const std::vector<LightFactors> lights = CellLights(cells, points.count, eye, settings);
   const Scene scene{ cells, points.count, scalars, settings, tf, eye, boxes, triangleBoxes,
-    Rays{ inverseProjection, width, height }, nthreads };
+    Rays{ inverseProjection, width, height }, nthreads, lights };
   ReferenceStats counted;
   switch (settings.mapping)
   {

@@ -373,14 +373,16 @@ struct TileRow
   float* g;
   float* b;
   float* a;
-  const float* depth; ///< null: no opaque depth
+  const float* depth;        ///< null: no opaque depth
+  const LightFactors* light; ///< the fan's lighting (TileTarget::light); null: unlit
 };
 
 inline TileRow RowOf(const TileTarget& tile, int y)
 {
   const int j = y - tile.y0;
   float* r = tile.rgba + j * T;
-  return { r, r + T * T, r + 2 * T * T, r + 3 * T * T, tile.depth ? tile.depth + j * T : nullptr };
+  return { r, r + T * T, r + 2 * T * T, r + 3 * T * T, tile.depth ? tile.depth + j * T : nullptr,
+    tile.light };
 }
 
 /// The vector type of the fragment loops: 8 lanes where the processor has them (AVX2 and
@@ -454,8 +456,14 @@ HWY_INLINE hn::Vec<D> BlendUnder(
   float* planes[3] = { row.r, row.g, row.b };
   for (int k = 0; k < 3; ++k)
   {
+    auto c = colour[k];
+    if (row.light)
+    {
+      c = hn::MulAdd(hn::Set(d, row.light->scale[k]), c, hn::Set(d, row.light->offset[k]));
+      c = hn::Min(hn::Max(c, hn::Zero(d)), hn::Set(d, 1.0f));
+    }
     const auto in = hn::LoadU(d, planes[k] + x);
-    hn::StoreU(hn::IfThenElse(keep, hn::MulAdd(weight, colour[k], in), in), d, planes[k] + x);
+    hn::StoreU(hn::IfThenElse(keep, hn::MulAdd(weight, c, in), in), d, planes[k] + x);
   }
   const auto blended = hn::IfThenElse(keep, hn::Add(alpha, weight), alpha);
   hn::StoreU(blended, d, row.a + x);
@@ -466,6 +474,14 @@ HWY_INLINE hn::Vec<D> BlendUnder(
 /// of `row` holds.
 inline void BlendUnderPixel(const TileRow& row, int x, float a, float r, float g, float b)
 {
+  if (row.light)
+  {
+    const LightFactors& l = *row.light;
+    auto lit = [](float s, float c, float o) { return std::min(std::max(s * c + o, 0.0f), 1.0f); };
+    r = lit(l.scale[0], r, l.offset[0]);
+    g = lit(l.scale[1], g, l.offset[1]);
+    b = lit(l.scale[2], b, l.offset[2]);
+  }
   const float weight = (1.0f - row.a[x]) * a;
   row.r[x] += weight * r;
   row.g[x] += weight * g;
@@ -897,6 +913,7 @@ struct WaitingFragments
 {
   float front[SegmentLanes] = {}, back[SegmentLanes] = {}, length[SegmentLanes] = {};
   int x[SegmentLanes] = {}, y[SegmentLanes] = {}; ///< tile column, image row
+  const LightFactors* light[SegmentLanes] = {};   ///< the lighting of each one's fan
   std::size_t count = 0;
 };
 
@@ -918,7 +935,9 @@ void ShadeWaiting(const RasterFrame& f, const TileTarget& tile, WaitingFragments
     {
       continue;
     }
-    BlendUnderPixel(RowOf(tile, w.y[l]), w.x[l], opacity, rgba[0][l], rgba[1][l], rgba[2][l]);
+    TileRow row = RowOf(tile, w.y[l]);
+    row.light = w.light[l];
+    BlendUnderPixel(row, w.x[l], opacity, rgba[0][l], rgba[1][l], rgba[2][l]);
   }
   w.count = 0;
 }
@@ -963,6 +982,7 @@ void ShadeIntegrated(const RasterFrame& f, const TileTarget& tile, Mode mode, co
     }
     waiting.x[n] = x;
     waiting.y[n] = y;
+    waiting.light[n] = tile.light;
     if (++waiting.count == lanes)
     {
       ShadeWaiting(f, tile, waiting);
@@ -1084,6 +1104,7 @@ void ShadeClipped(const RasterFrame& f, const TileTarget& tile, Mode mode, const
       waiting.length[n] = static_cast<float>(part);
       waiting.x[n] = x;
       waiting.y[n] = y;
+      waiting.light[n] = tile.light;
       if (++waiting.count == lanes)
       {
         ShadeWaiting(f, tile, waiting);
@@ -1550,9 +1571,10 @@ void DrawTriangle(const RasterFrame& f, const TileTarget& tile, Mode mode, Corne
 
 #include "FanRaster-inl.h" // FanPath: this namespace's fan path (a fragment of this file)
 
-void RasterizeTileImpl(const RasterFrame& f, const TileTarget& tile, const Fan* fans,
-  std::size_t count, RasterCounts& counts)
+void RasterizeTileImpl(const RasterFrame& f, const TileTarget& target, const Fan* fans,
+  std::size_t count, RasterCounts& counts, const LightFactors* lights)
 {
+  TileTarget tile = target; // with the lighting of the fan being drawn
   const bool reduce = ReducesInAnyOrder(f.blendMode);
   const bool integrates =
     f.blendMode == BlendMode::AverageIntensity || f.blendMode == BlendMode::Additive;
@@ -1569,6 +1591,7 @@ void RasterizeTileImpl(const RasterFrame& f, const TileTarget& tile, const Fan* 
   for (std::size_t e = 0; e < count; ++e)
   {
     const Fan& fan = fans[e];
+    tile.light = lights && !reduce ? lights + e : nullptr;
     const bool cut = fan.straddles != 0;
     if (!cut && fanPath.Draw(fan, counts))
     {
@@ -1685,9 +1708,9 @@ HWY_EXPORT(PreIntegratedSegmentsImpl);
 HWY_EXPORT(IntensityMeansImpl);
 
 void RasterizeTile(const RasterFrame& frame, const TileTarget& tile, const Fan* fans,
-  std::size_t count, RasterCounts& counts)
+  std::size_t count, RasterCounts& counts, const LightFactors* lights)
 {
-  HWY_DYNAMIC_DISPATCH(RasterizeTileImpl)(frame, tile, fans, count, counts);
+  HWY_DYNAMIC_DISPATCH(RasterizeTileImpl)(frame, tile, fans, count, counts, lights);
 }
 
 const char* RasterTargetName()

@@ -827,7 +827,7 @@ namespace
 /// them), tile after tile, with an opaque depth image.
 std::vector<float> DrawTiles(const mtpt::detail::RasterFrame& frame,
   const std::vector<mtpt::Fan>& fans, const std::vector<float>& depth,
-  mtpt::detail::RasterCounts& counts)
+  mtpt::detail::RasterCounts& counts, const std::vector<mtpt::LightFactors>& lights = {})
 {
   constexpr int T = mtpt::TileSize;
   std::vector<float> tiles;
@@ -851,7 +851,9 @@ std::vector<float> DrawTiles(const mtpt::detail::RasterFrame& frame,
       tile.rgba = rgba.data();
       tile.depth = tileDepth.data();
       const std::vector<mtpt::Fan> frontToBack(fans.rbegin(), fans.rend());
-      mtpt::detail::RasterizeTile(frame, tile, frontToBack.data(), frontToBack.size(), counts);
+      const std::vector<mtpt::LightFactors> lit(lights.rbegin(), lights.rend());
+      mtpt::detail::RasterizeTile(frame, tile, frontToBack.data(), frontToBack.size(), counts,
+        lit.empty() ? nullptr : lit.data());
       tiles.insert(tiles.end(), rgba.begin(), rgba.end());
     }
   }
@@ -866,7 +868,8 @@ namespace
 /// Draws `fans` (visibility order) with the fan path and with the triangle path alone, and
 /// returns the largest channel difference; the counts of each in `byFans`, `byTriangles`.
 double FanAgainstTrianglePath(mtpt::detail::RasterFrame frame, const std::vector<mtpt::Fan>& fans,
-  mtpt::detail::RasterCounts& byFans, mtpt::detail::RasterCounts& byTriangles, std::size_t& drawn)
+  mtpt::detail::RasterCounts& byFans, mtpt::detail::RasterCounts& byTriangles, std::size_t& drawn,
+  const std::vector<mtpt::LightFactors>& lights = {})
 {
   std::vector<float> depth(static_cast<std::size_t>(frame.width) * frame.height);
   for (int y = 0; y < frame.height; ++y)
@@ -877,9 +880,9 @@ double FanAgainstTrianglePath(mtpt::detail::RasterFrame frame, const std::vector
     }
   }
   frame.fanPath = true;
-  const std::vector<float> fanImage = DrawTiles(frame, fans, depth, byFans);
+  const std::vector<float> fanImage = DrawTiles(frame, fans, depth, byFans, lights);
   frame.fanPath = false;
-  const std::vector<float> triangleImage = DrawTiles(frame, fans, depth, byTriangles);
+  const std::vector<float> triangleImage = DrawTiles(frame, fans, depth, byTriangles, lights);
   double worst = fanImage.size() == triangleImage.size() ? 0.0 : 1.0;
   drawn = 0;
   for (std::size_t i = 0; i < std::min(fanImage.size(), triangleImage.size()); ++i)
@@ -915,6 +918,14 @@ TEST_P(CompositorSimd, FanPathDrawsTheTrianglesImage)
   mtpt::FramePipeline pipeline;
   ASSERT_TRUE(pipeline.Run(input, 2));
   pipeline.DecomposeFans(0, pipeline.TetrahedronCount(), 2);
+  std::vector<mtpt::LightFactors> lights(pipeline.FanCount());
+  std::mt19937 random(3);
+  std::uniform_real_distribution<float> factor(0.0f, 1.2f);
+  for (mtpt::LightFactors& l : lights)
+  {
+    l = { { factor(random), factor(random), factor(random), 0 },
+      { 0.3f * factor(random), 0.3f * factor(random), 0.3f * factor(random), 0 } };
+  }
   for (const float density : { 0.3f, 30.0f })
   {
     std::vector<float> table;
@@ -930,11 +941,17 @@ TEST_P(CompositorSimd, FanPathDrawsTheTrianglesImage)
       frame.height = size.second;
       frame.transferFunction = { table.data(), 48, -2.0, 3.0 };
       frame.inverseUnit = 1.0f / 0.3f;
-      mtpt::detail::RasterCounts byFans, byTriangles;
-      std::size_t drawn = 0;
+      mtpt::detail::RasterCounts byFans, byTriangles, litByFans, litByTriangles;
+      std::size_t drawn = 0, litDrawn = 0;
       const double worst =
         FanAgainstTrianglePath(frame, pipeline.Fans(), byFans, byTriangles, drawn);
+      // Lit (Lighting.h), each fan by factors of its own: the fan path lights each fragment
+      // with its own fan's factors, as the triangle path does.
+      const double litWorst = FanAgainstTrianglePath(
+        frame, pipeline.Fans(), litByFans, litByTriangles, litDrawn, lights);
       const bool faint = density < 1;
+      EXPECT_LE(litWorst, faint ? 4e-6 : 1.0 / 2048 + 4e-6);
+      EXPECT_EQ(litByFans.fragments, byFans.fragments);
       EXPECT_LE(worst, faint ? 2e-6 : 1.0 / 2048 + 2e-6)
         << size.first << "x" << size.second << ", " << mtpt::detail::RasterTargetName();
       EXPECT_GT(drawn, 4 * static_cast<std::size_t>(frame.width) * frame.height / 10)

@@ -35,6 +35,8 @@
  */
 #include "mtpt/Compositor.h"
 #include "mtpt/FramePipeline.h"
+#include "mtpt/Gradients.h"
+#include "mtpt/Lighting.h"
 
 #include <fuzzer/FuzzedDataProvider.h>
 
@@ -575,13 +577,13 @@ void CheckImage(const std::vector<float>& rgba, int width, int height)
 }
 
 /// The pipeline's fans (decomposed already) composited with `s` on `threads` threads.
-std::vector<float> CompositeFans(
-  const mtpt::FramePipeline& pipeline, const mtpt::CompositeSettings& s, int threads)
+std::vector<float> CompositeFans(const mtpt::FramePipeline& pipeline,
+  const mtpt::CompositeSettings& s, int threads, const mtpt::LightFactors* lights = nullptr)
 {
   std::vector<float> rgba(4u * s.width * s.height);
   mtpt::Compositor compositor;
   compositor.Begin(s);
-  compositor.Composite(pipeline.Fans().data(), pipeline.FanCount(), threads);
+  compositor.Composite(pipeline.Fans().data(), pipeline.FanCount(), threads, lights);
   compositor.Resolve({ 0, 0, s.width, s.height }, nullptr, rgba.data(), threads);
   return rgba;
 }
@@ -645,6 +647,79 @@ void CheckBlendModes(FuzzedDataProvider& in, mtpt::FramePipeline& pipeline,
   CheckImage(a, reduced.width, reduced.height);
   FUZZ_CHECK(CompositeFans(pipeline, reduced, threadsB) == a, "blend mode %d: %d and %d threads differ",
     static_cast<int>(reduced.blendMode), threadsA, threadsB);
+}
+
+/**
+ * Shading (mtpt/Lighting.h) with fuzzed coefficients and lights (degenerate, huge, not a
+ * number ones too) on the fans of the whole order: gradients, normals and factors of any
+ * mesh and view; the factors of unit lighting give the unlit image; any give a valid image,
+ * the same for two thread counts.
+ */
+void CheckShading(FuzzedDataProvider& in, mtpt::FramePipeline& pipeline,
+  const mtpt::CompositeSettings& settings, const mtpt::FrameInput& frame, int threadsA,
+  int threadsB)
+{
+  std::vector<float> gradients, normals, one;
+  mtpt::PointGradients(frame.points, frame.cells, frame.scalars, gradients, threadsA);
+  mtpt::PointGradients(frame.points, frame.cells, frame.scalars, one, threadsB);
+  FUZZ_CHECK(one == gradients, "gradients: %d and %d threads differ", threadsA, threadsB);
+  mtpt::CellNormals(frame.cells, frame.points.count, gradients, normals, threadsA);
+  for (std::size_t c = 0; c < normals.size() / 3; ++c)
+  {
+    const float* n = normals.data() + 3 * c;
+    const float length = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+    FUZZ_CHECK(length == 0.0f || std::fabs(length - 1.0f) < 1e-5f, "cell %zu: normal of length %g",
+      c, std::sqrt(length));
+  }
+  pipeline.DecomposeFans(0, pipeline.SortedCount(), threadsA);
+  mtpt::CompositeSettings lit = settings;
+  lit.clipping = mtpt::DepthClipping::FromProjection(frame.projection);
+  std::vector<mtpt::LightFactors> factors;
+  mtpt::Lighting unit;
+  unit.ambient = 1;
+  unit.diffuse = unit.specular = 0;
+  pipeline.LightWindow(0, pipeline.SortedCount(), unit, normals.data(), frame.modelView, factors,
+    threadsA);
+  const std::vector<float> unlit = CompositeFans(pipeline, lit, threadsA);
+  const std::vector<float> same = CompositeFans(pipeline, lit, threadsA, factors.data());
+  for (std::size_t i = 0; i < unlit.size(); ++i)
+  {
+    // Only a mean colour rounded past 1 may change: lit colours are clamped to 1.
+    FUZZ_CHECK(std::fabs(same[i] - unlit[i]) <= 1e-6f, "unit lighting changed value %zu: %g, %g",
+      i, same[i], unlit[i]);
+  }
+  const double inf = std::numeric_limits<double>::infinity();
+  auto value = [&]
+  { return in.PickValueInArray({ 0.0, 1.0, -1.0, 0.3, 0.7, 1e30, -1e-30, inf, std::nan(""), 8.0 }); };
+  mtpt::Lighting lighting;
+  lighting.headlight = in.ConsumeBool();
+  lighting.twoSided = in.ConsumeBool();
+  lighting.ambient = value();
+  lighting.diffuse = value();
+  lighting.specular = value();
+  lighting.specularPower = value();
+  lighting.count = in.ConsumeIntegralInRange(0, 3);
+  for (int i = 0; i < lighting.count; ++i)
+  {
+    mtpt::Light& l = lighting.lights[i];
+    l.positional = in.ConsumeBool();
+    for (int k = 0; k < 3; ++k)
+    {
+      l.diffuse[k] = value();
+      l.direction[k] = value();
+      l.position[k] = value();
+      l.attenuation[k] = value();
+    }
+    l.coneAngle = value() * 60;
+  }
+  pipeline.LightWindow(0, pipeline.SortedCount(), lighting, normals.data(), frame.modelView,
+    factors, threadsA);
+  const std::vector<float> a = CompositeFans(pipeline, lit, threadsA, factors.data());
+  CheckImage(a, lit.width, lit.height);
+  pipeline.LightWindow(0, pipeline.SortedCount(), lighting, normals.data(), frame.modelView,
+    factors, threadsB);
+  FUZZ_CHECK(CompositeFans(pipeline, lit, threadsB, factors.data()) == a,
+    "shaded: %d and %d threads differ", threadsA, threadsB);
 }
 
 /// The decoded case, for reproducing a failure: MTPT_FUZZ_VERBOSE=1 mtpt_fuzz_frame <input>.
@@ -932,5 +1007,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   CheckClippingPlanes(in, b, settings, frame, threadsA, threadsB);
   CheckBlendModes(in, b, settings, frame, threadsA, threadsB);
+  CheckShading(in, b, settings, frame, threadsA, threadsB);
   return 0;
 }

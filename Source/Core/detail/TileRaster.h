@@ -6,6 +6,7 @@
 #ifndef mtpt_detail_TileRaster_h
 #define mtpt_detail_TileRaster_h
 
+#include "mtpt/Lighting.h"
 #include "mtpt/Records.h"
 #include "mtpt/Shading.h"
 #include "mtpt/TransferFunctionTable.h"
@@ -53,6 +54,9 @@ struct TileTarget
   float* rgba = nullptr;        ///< R, G, B, A planes of TileSize * TileSize floats
   const float* depth = nullptr; ///< opaque depth; null: none
   const float* range = nullptr; ///< depth peeling: near and far window depth per pixel
+  /// Shading: the lighting of the fan being drawn (each fragment's colour c becomes
+  /// clamp(scale c + offset, 0, 1)); null: unlit.
+  const LightFactors* light = nullptr;
 };
 
 /// Work counted while rasterizing.
@@ -66,11 +70,12 @@ struct RasterCounts
 
 /**
  * Draws fans[0, count), in that order, front to back (the first nearest), under what the
- * tile holds; pixels already opaque skip the fragments behind them (OpaqueAlpha).
+ * tile holds; pixels already opaque skip the fragments behind them (OpaqueAlpha). With
+ * `lights` (count entries, composite blending only), fan e is lit by lights[e].
  * Thread safety: writes only the tile's image and `counts`.
  */
 void RasterizeTile(const RasterFrame& frame, const TileTarget& tile, const Fan* fans,
-  std::size_t count, RasterCounts& counts);
+  std::size_t count, RasterCounts& counts, const LightFactors* lights = nullptr);
 
 /// The instruction set RasterizeTile runs with here (e.g. "AVX2"), for reports.
 const char* RasterTargetName();

@@ -56,6 +56,7 @@
 #ifndef mtpt_Compositor_h
 #define mtpt_Compositor_h
 
+#include "mtpt/Lighting.h"
 #include "mtpt/MeshView.h"
 #include "mtpt/Records.h"
 #include "mtpt/Shading.h"
@@ -162,9 +163,14 @@ public:
    */
   void Begin(const CompositeSettings& settings);
 
-  /// Composites fans[0, count) in front of everything composited since Begin, the first
-  /// farthest (visibility order).
-  void Composite(const Fan* fans, std::size_t count, int threads);
+  /**
+   * Composites fans[0, count) in front of everything composited since Begin, the first
+   * farthest (visibility order). Shading (Lighting.h): with `lights` (count entries), each
+   * fragment of fan k has its colour c lit as clamp(scale c + offset, 0, 1) by lights[k]
+   * (composite blending only: the other blend modes ignore it, as VTK's ray caster does).
+   */
+  void Composite(
+    const Fan* fans, std::size_t count, int threads, const LightFactors* lights = nullptr);
 
   /// The pixels a fan was drawn in since Begin may lie in this region; outside it the image
   /// is transparent.
@@ -189,7 +195,8 @@ public:
    * buffers.
    */
   void Composite(const TetVertex* vertices, const std::uint32_t* indices, std::size_t count,
-    const CompositeSettings& settings, std::vector<float>& rgba, int threads);
+    const CompositeSettings& settings, std::vector<float>& rgba, int threads,
+    const LightFactors* lights = nullptr);
 
   const CompositorStats& Stats() const { return this->Statistics; }
 
@@ -206,7 +213,7 @@ private:
   void ListEntries(std::size_t count, int blocks);
   template <typename T>
   void ResolveInto(const PixelRegion& region, const T* below, T* rgba, int threads);
-  void Rasterize(const Fan* fans, int threads);
+  void Rasterize(const Fan* fans, const LightFactors* lights, int threads);
   float* Tile(int tile);
 
   /// Tiles a fan touches (inclusive; empty when x0 > x1).
@@ -227,7 +234,8 @@ private:
   std::vector<std::uint32_t> Entries; ///< fans of the last Composite, tile by tile, in order
   std::vector<int> Tiles;             ///< tiles with fans in the last Composite
   PixelRegion Touched;
-  std::vector<Fan> SlotFans; ///< the slot entry point's fans
+  std::vector<Fan> SlotFans;          ///< the slot entry point's fans
+  std::vector<LightFactors> SlotLights; ///< and their lighting
 };
 
 } // namespace mtpt

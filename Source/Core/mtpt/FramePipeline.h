@@ -37,6 +37,7 @@
 #include "mtpt/Decompose.h"
 #include "mtpt/DepthKeys.h"
 #include "mtpt/LevelOfDetail.h"
+#include "mtpt/Lighting.h"
 #include "mtpt/NearPlane.h"
 #include "mtpt/Transform.h"
 #include "mtpt/VisibilityOrder.h"
@@ -54,11 +55,11 @@ namespace mtpt
 /// Wall-clock seconds of each CPU stage of the last frame. `cull` is the opacity culling
 /// (cell scalar ranges and the visible-cell list); `select` the level of detail's subset
 /// (LevelOfDetail.h); `decompose` includes inverting the order and sums over the frame's
-/// batches.
+/// batches, as `light` (shading: LightWindow) does.
 struct StageTimes
 {
-  double transform = 0, cull = 0, select = 0, keys = 0, order = 0, decompose = 0;
-  double Total() const { return transform + cull + select + keys + order + decompose; }
+  double transform = 0, cull = 0, select = 0, keys = 0, order = 0, decompose = 0, light = 0;
+  double Total() const { return transform + cull + select + keys + order + decompose + light; }
 };
 
 /// What the last frame did: cell counts at each culling step and what it reused.
@@ -186,6 +187,18 @@ public:
    * frame may use either, or both.
    */
   void DecomposeFans(std::size_t first, std::size_t count, int threads);
+
+  /**
+   * Shading (Lighting.h): the factors of the order's window [first, first + count) (clamped
+   * to SortedCount()), entry k for rank first + k, into `factors`: each cell lit by
+   * LightCell at its centroid with its normal of `normals` (CellNormals, 3 floats per cell,
+   * model coordinates) taken to eye coordinates by `modelView`; a near-plane piece as its
+   * cell. Call after Prepare, for the same input; the slots and fans of that window (entry k
+   * for slot or fan k) then need no other change.
+   */
+  void LightWindow(std::size_t first, std::size_t count, const Lighting& lighting,
+    const float* normals, const Matrix4& modelView, std::vector<LightFactors>& factors,
+    int threads);
 
   /// Prepare, then decompose the whole order in one batch.
   bool Run(const FrameInput& input, int threads);

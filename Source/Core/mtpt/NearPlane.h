@@ -50,12 +50,14 @@ struct NearPlane
 bool HasFiniteEyeCoordinates(const ProjectedPoint& p);
 
 /// One piece of a cut tetrahedron: its 4 corners, projected, their scalars and, for
-/// dependent components, their colours (zero otherwise).
+/// dependent components, their colours (zero otherwise), and the cell it was cut from
+/// (set by NearPlaneStage; shading lights a piece as its cell).
 struct NearPiece
 {
   ProjectedPoint corners[4];
   float scalars[4];
   float colours[4][4];
+  std::uint32_t cell = 0;
 };
 
 /**

@@ -48,6 +48,7 @@
 #ifndef mtpt_ReferenceRenderer_h
 #define mtpt_ReferenceRenderer_h
 
+#include "mtpt/Lighting.h"
 #include "mtpt/MeshView.h"
 #include "mtpt/Shading.h"
 
@@ -142,6 +143,14 @@ struct ReferenceSettings
   double scalarRange[2] = { 0.0, 1.0 };
   /// Average intensity: only the stretches whose (clamped) scalar lies in this range count.
   double averageRange[2] = { -1e300, 1e300 };
+  /**
+   * Shading (Lighting.h; ScalarMapping::TransferFunctions, composite blending): with
+   * `normals` set (CellNormals: 3 floats per cell, model coordinates), each cell is lit by
+   * LightCell at its centroid with its normal, and a segment through it of colour C and
+   * opacity A (integrated as without light) becomes clamp(scale C + offset A, 0, A).
+   */
+  Lighting lighting;
+  const float* normals = nullptr;
   /// Segments gathered at most per pass; the image is done in bands of rows that stay
   /// below it (memory: 32 bytes per segment with one scalar, as much in all with more).
   std::size_t maxSegmentsPerPass = std::size_t(1) << 23;
