@@ -10,6 +10,7 @@
 #include "Input/VolumeInput.h"
 
 #include "mtpt/FramePipeline.h"
+#include "mtpt/Gradients.h"
 #include "mtpt/ImageSampling.h"
 #include "mtpt/Threads.h"
 #include "mtpt/Timing.h"
@@ -95,6 +96,12 @@ public:
   mtpt::TransferFunctionTables Tables;
   mtpt::DependentColours Colours; ///< of dependent components
   bool Dependent = false;         ///< the last input has dependent components
+  /// Shading: each cell's normal (mtpt/Lighting.h), computed for NormalsKey, counted by
+  /// NormalsVersion; and the last frame's lighting.
+  std::vector<float> Normals;
+  mtpt::MeshKey NormalsKey;
+  std::uint64_t NormalsVersion = 0;
+  mtpt::Lighting Lighting;
   mtpt::VolumetricPeel Peel;
   /// The pass peeling volumes this frame (depth peeling for volumes), and the volume drawn.
   vtkOpenGLRenderPass* PeelPass = nullptr;
@@ -331,6 +338,10 @@ double vtkMultiThreadedProjectedTetrahedraMapper::GetOrderSeconds()
 double vtkMultiThreadedProjectedTetrahedraMapper::GetDecomposeSeconds()
 {
   return this->Internal->Pipeline.Times().decompose;
+}
+double vtkMultiThreadedProjectedTetrahedraMapper::GetLightingSeconds()
+{
+  return this->Internal->Pipeline.Times().light;
 }
 double vtkMultiThreadedProjectedTetrahedraMapper::GetCPUStageSeconds()
 {
@@ -632,11 +643,6 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
     return;
   }
   this->MoveToWindow(window);
-  if (volume->GetProperty()->GetShade(0) && in.Report(volume->GetProperty(), "shading"))
-  {
-    vtkWarningMacro(<< "the volume property's shading (ShadeOn) is not supported; drawing the "
-                       "volume unlit, as VTK's projected tetrahedra do");
-  }
   mtpt::FrameInput frame;
   if (!this->PrepareInput(volume->GetProperty(), frame))
   {
@@ -683,7 +689,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::RetrieveFrameCosts(
 {
   const Internals& in = *this->Internal;
   const mtpt::StageTimes& stages = in.Pipeline.Times();
-  cellSeconds = stages.keys + stages.order + stages.decompose;
+  cellSeconds = stages.keys + stages.order + stages.decompose + stages.light;
   sampleSeconds = -1;
   if (in.LastBackend == CPU_BACKEND && !in.Times.imageReused)
   {
@@ -826,6 +832,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetUpFrame(vtkRenderer* renderer
     }
   }
   this->SetUpBlending(frame, draw);
+  this->SetUpShading(renderer, volume->GetProperty(), frame, draw);
   // Orthographic projections give the linear default.
   draw.interpolation = mtpt::PerspectiveInterpolation::FromProjection(frame.projection);
   draw.threads = this->NumberOfThreads;
@@ -877,6 +884,52 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetUpBlending(
   draw.averageRange[0] = this->AverageIPScalarRange[0];
   draw.averageRange[1] = this->AverageIPScalarRange[1];
   frame.ordered = !mtpt::ReducesInAnyOrder(draw.blendMode);
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::SetUpShading(vtkRenderer* renderer,
+  vtkVolumeProperty* property, const mtpt::FrameInput& frame, mtpt::BackendFrame& draw)
+{
+  Internals& in = *this->Internal;
+  draw.lighting = nullptr;
+  // VTK's GPU ray caster shades composite blending only, and ignores the shading otherwise.
+  if (!property->GetShade(0) || draw.blendMode != mtpt::BlendMode::Composite)
+  {
+    return;
+  }
+  if (in.Dependent || frame.scalars.association == mtpt::ScalarsView::Association::Cells)
+  {
+    if (in.Report(property, "shading without point scalars"))
+    {
+      vtkWarningMacro(<< "shading (ShadeOn) lights the gradient of one point scalar; "
+                      << (in.Dependent ? "with dependent components (IndependentComponents off)"
+                                       : "cell scalars have none, and")
+                      << " the volume is drawn unlit");
+    }
+    return;
+  }
+  const mtpt::MeshKey key =
+    mtpt::MeshKey::Of(frame.points, frame.cells, frame.scalars, nullptr, frame.dataVersion);
+  if (in.NormalsVersion == 0 || !(key == in.NormalsKey))
+  {
+    // Once per change of the data: the points' gradients, then each cell's normal.
+    std::vector<float> gradients;
+    mtpt::PointGradients(frame.points, frame.cells, frame.scalars, gradients, this->NumberOfThreads);
+    mtpt::CellNormals(
+      frame.cells, frame.points.count, gradients, in.Normals, this->NumberOfThreads);
+    in.NormalsKey = key;
+    ++in.NormalsVersion;
+  }
+  int ignored = 0;
+  in.Lighting = mtpt::VolumeLighting(renderer, property, ignored);
+  if (ignored > 0 && in.Report(renderer, "too many lights"))
+  {
+    vtkWarningMacro(<< "shading with the first " << mtpt::Lighting::MaxLights << " of "
+                    << mtpt::Lighting::MaxLights + ignored << " lights");
+  }
+  draw.lighting = &in.Lighting;
+  draw.normals = in.Normals.data();
+  draw.normalsVersion = in.NormalsVersion;
+  draw.modelView = frame.modelView;
 }
 
 void vtkMultiThreadedProjectedTetrahedraMapper::SetUpClipping(
@@ -1034,7 +1087,8 @@ void vtkMultiThreadedProjectedTetrahedraMapper::PrintSelf(ostream& os, vtkIndent
   os << indent << "Last frame: " << this->Internal->Tetrahedra << " tetrahedra; transform "
      << this->GetTransformSeconds() << " s, cull " << this->GetCullSeconds() << " s, depth keys "
      << this->GetDepthKeySeconds() << " s, order " << this->GetOrderSeconds() << " s, decompose "
-     << this->GetDecomposeSeconds() << " s, composite " << this->GetCompositeSeconds()
+     << this->GetDecomposeSeconds() << " s, lighting " << this->GetLightingSeconds()
+     << " s, composite " << this->GetCompositeSeconds()
      << " s, upload " << this->GetUploadSeconds() << " s, draw " << this->GetDrawSeconds()
      << " s\n";
 }

@@ -199,6 +199,8 @@ public:
   double GetDepthKeySeconds();
   double GetOrderSeconds();
   double GetDecomposeSeconds();
+  /// Shading: lighting the drawn cells (0 unshaded).
+  double GetLightingSeconds();
   /// OpenGL backend: buffer upload. CPU backend: depth read-back and image upload.
   double GetUploadSeconds();
   /// OpenGL backend: the draw call. CPU backend: the quad that blends the image in.
@@ -485,6 +487,8 @@ private:
   /// The eye ray's depth clipping and the clipping planes of the frame, in eye coordinates.
   /// The blend mode the frame draws with (reported when another is asked for and cannot be).
   void SetUpBlending(mtpt::FrameInput& frame, mtpt::BackendFrame& draw);
+  void SetUpShading(vtkRenderer* renderer, vtkVolumeProperty* property,
+    const mtpt::FrameInput& frame, mtpt::BackendFrame& draw);
   void SetUpClipping(
     vtkRenderer* renderer, const mtpt::FrameInput& frame, mtpt::BackendFrame& draw);
   /// The pipeline's settings for the frame, and its progress and abort callback.

@@ -104,14 +104,12 @@ protected:
   vtkSmartPointer<Mapper> MapperUnderTest;
 };
 
-TEST_F(MapperRobustness, UnknownBlendModeAndShadingAreReportedOnce)
+TEST_F(MapperRobustness, UnknownBlendModeIsReportedOnce)
 {
-  // A blend mode beyond vtkVolumeMapper's 0 to 4 is an error, and the property's shading a
-  // warning, each reported once; the volume is drawn composited and unlit, the image of a
-  // mapper without them.
+  // A blend mode beyond vtkVolumeMapper's 0 to 4 is an error, reported once; the volume is
+  // drawn composited, the image of a mapper without it.
   const auto plain = FreshBoxImage();
   this->MapperUnderTest->SetBlendMode(7);
-  this->Property->ShadeOn();
   auto image = Render(SceneOf(this->Box), this->MapperUnderTest, 3);
   auto count = [&](const std::vector<std::string>& messages, const char* text)
   {
@@ -119,7 +117,6 @@ TEST_F(MapperRobustness, UnknownBlendModeAndShadingAreReportedOnce)
       [text](const std::string& w) { return w.find(text) != std::string::npos; });
   };
   EXPECT_EQ(count(this->Observer->errors, "blend mode 7 is none of 0 (composite) to 4"), 1);
-  EXPECT_EQ(count(this->Observer->warnings, "shading (ShadeOn) is not supported"), 1);
   EXPECT_EQ(Compare(image, plain).worst, 0.0);
 }
 

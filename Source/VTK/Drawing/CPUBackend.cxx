@@ -69,6 +69,12 @@ CPUBackend::ImageKey CPUBackend::ImageKey::Of(const BackendFrame& frame)
   key.blendMode = frame.blendMode;
   key.averageRange[0] = frame.averageRange[0];
   key.averageRange[1] = frame.averageRange[1];
+  key.lit = frame.lighting != nullptr;
+  if (key.lit)
+  {
+    key.lighting = *frame.lighting;
+    key.normals = frame.normalsVersion;
+  }
   return key;
 }
 
@@ -82,7 +88,8 @@ bool CPUBackend::ImageKey::operator==(const ImageKey& o) const
     a.inverseWOffset == b.inverseWOffset && a.scaleX == b.scaleX && a.shiftX == b.shiftX &&
     a.scaleY == b.scaleY && a.shiftY == b.shiftY && clipPlanes == o.clipPlanes &&
     blendMode == o.blendMode && averageRange[0] == o.averageRange[0] &&
-    averageRange[1] == o.averageRange[1];
+    averageRange[1] == o.averageRange[1] && lit == o.lit && lighting == o.lighting &&
+    normals == o.normals;
 }
 
 bool CPUBackend::DrawPeel(const BackendFrame& frame, BackendTimes& times)
@@ -158,11 +165,19 @@ void CPUBackend::Composite(const BackendFrame& frame, BackendTimes& times, const
   ForEachBatch(
     frame, times,
     [&](std::size_t first, std::size_t count)
-    { pipeline.DecomposeFans(first, count, frame.threads); },
+    {
+      pipeline.DecomposeFans(first, count, frame.threads);
+      if (frame.lighting)
+      {
+        pipeline.LightWindow(first, count, *frame.lighting, frame.normals, frame.modelView,
+          this->Lights, frame.threads);
+      }
+    },
     [&]
     {
       const auto start = Clock::now();
-      this->Compositing.Composite(pipeline.Fans().data(), pipeline.FanCount(), frame.threads);
+      this->Compositing.Composite(pipeline.Fans().data(), pipeline.FanCount(), frame.threads,
+        frame.lighting ? this->Lights.data() : nullptr);
       times.composite += SecondsSince(start);
       return true;
     });

@@ -71,6 +71,9 @@ private:
     ClipPlanes clipPlanes;
     BlendMode blendMode = BlendMode::Composite;
     double averageRange[2] = { 0.0, 0.0 };
+    bool lit = false; ///< shading: `lighting` and the normals' version count
+    Lighting lighting;
+    std::uint64_t normals = 0;
 
     static ImageKey Of(const BackendFrame& frame);
     bool operator==(const ImageKey& other) const;
@@ -86,6 +89,7 @@ private:
   ImageKey Kept; ///< with the opaque depth the image path kept (ImagePath::KeepDepth)
   ImagePath Path;
   std::vector<float> PeelRanges[2], PeelColours[2]; ///< depth peeling: front, back
+  std::vector<LightFactors> Lights;                  ///< shading: the batch's fans' lighting
 };
 
 } // namespace mtpt

@@ -442,17 +442,28 @@ bool OpenGLBackend::DrawBatches(
   this->IntegralsLow->Activate();
   this->IntensityPrefix->Activate();
   this->SetUniforms(frame, program);
+  // Shading: per slot, the factors of its cell's lighting (mtpt/Lighting.h).
+  const bool lit = frame.lighting && frame.blendMode == BlendMode::Composite;
+  program->SetUniformi("lit", lit ? 1 : 0);
 
   // Batch after batch: decompose, upload, draw. Draw calls return before the rasterizer is
   // done, so the next batch's decomposition overlaps the previous batch's drawing.
   FramePipeline& pipeline = *frame.pipeline;
+  std::size_t batchFirst = 0, batchCount = 0;
   const bool drawn = ForEachBatch(
     frame, times,
     [&](std::size_t first, std::size_t count)
-    { pipeline.DecomposeBatch(first, count, frame.threads); },
+    {
+      pipeline.DecomposeBatch(first, count, frame.threads);
+      batchFirst = first;
+      batchCount = count;
+    },
     [&]
     {
       this->Upload(frame, times);
+      this->UploadLights(frame, lit, batchFirst, batchCount, times);
+      this->LightTexture->Activate();
+      program->SetUniformi("lightFactors", this->LightTexture->GetTextureUnit());
       const auto start = Clock::now();
       this->DrawUploaded(program);
       if (frame.synchronizedTiming)
@@ -460,6 +471,7 @@ bool OpenGLBackend::DrawBatches(
         glFinish();
       }
       times.draw += SecondsSince(start);
+      this->LightTexture->Deactivate();
       return OpenGLSucceeded("drawing the tetrahedra", this->ErrorMessage);
     });
   this->TransferFunction->Deactivate();
@@ -494,6 +506,40 @@ void OpenGLBackend::Upload(const BackendFrame& frame, BackendTimes& times)
   times.upload += SecondsSince(start);
 }
 
+void OpenGLBackend::UploadLights(const BackendFrame& frame, bool lit, std::size_t first,
+  std::size_t count, BackendTimes& times)
+{
+  FramePipeline& pipeline = *frame.pipeline;
+  LightKey key;
+  if (lit)
+  {
+    key = { pipeline.BufferVersion(), true, *frame.lighting, frame.normalsVersion,
+      frame.modelView };
+  }
+  if (this->LightTexture->GetHandle() != 0 && key == this->UploadedLights)
+  {
+    return; // the texture holds these slots lit so already (a frame that moved nothing)
+  }
+  const LightFactors unlit = Unlit();
+  if (lit)
+  {
+    pipeline.LightWindow(
+      first, count, *frame.lighting, frame.normals, frame.modelView, this->Lights, frame.threads);
+  }
+  const auto start = Clock::now();
+  // A texture buffer is never empty: an unlit frame still binds one slot.
+  const bool any = lit && !this->Lights.empty();
+  const std::size_t slots = any ? this->Lights.size() : 1;
+  this->LightBuffer->SetType(vtkOpenGLBufferObject::TextureBuffer);
+  this->LightBuffer->Upload(reinterpret_cast<const float*>(any ? this->Lights.data() : &unlit),
+    slots * sizeof(LightFactors) / sizeof(float), vtkOpenGLBufferObject::TextureBuffer);
+  this->LightTexture->SetContext(frame.window);
+  this->LightTexture->CreateTextureBuffer(
+    static_cast<unsigned int>(2 * slots), 4, VTK_FLOAT, this->LightBuffer);
+  this->UploadedLights = key;
+  times.upload += SecondsSince(start);
+}
+
 void OpenGLBackend::DrawUploaded(vtkShaderProgram* program)
 {
   this->VertexBuffer->Bind();
@@ -521,6 +567,8 @@ void OpenGLBackend::DrawUploaded(vtkShaderProgram* program)
   for (std::size_t offset = 0; offset < indices; offset += chunk)
   {
     const std::size_t size = std::min(chunk, indices - offset);
+    // gl_PrimitiveID counts from 0 in each call: the lighting's slots from this one's first.
+    program->SetUniformi("lightSlotBase", static_cast<int>(offset / IndicesPerTetrahedron));
     glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(size), GL_UNSIGNED_INT,
       reinterpret_cast<const void*>(offset * sizeof(std::uint32_t)));
   }
@@ -532,6 +580,7 @@ void OpenGLBackend::DrawUploaded(vtkShaderProgram* program)
 void OpenGLBackend::ReleaseGraphicsResources(vtkWindow* window)
 {
   this->VertexBuffer->ReleaseGraphicsResources();
+  this->LightBuffer->ReleaseGraphicsResources();
   this->Triangles.ReleaseGraphicsResources(window);
   if (window)
   {
@@ -539,6 +588,7 @@ void OpenGLBackend::ReleaseGraphicsResources(vtkWindow* window)
     this->IntegralsHigh->ReleaseGraphicsResources(window);
     this->IntegralsLow->ReleaseGraphicsResources(window);
     this->IntensityPrefix->ReleaseGraphicsResources(window);
+    this->LightTexture->ReleaseGraphicsResources(window);
     if (this->ReduceQuad)
     {
       this->ReduceQuad->ReleaseGraphicsResources(window);
@@ -548,6 +598,7 @@ void OpenGLBackend::ReleaseGraphicsResources(vtkWindow* window)
   this->Target.ReleaseGraphicsResources(window);
   this->SampledTarget.ReleaseGraphicsResources(window);
   this->UploadedBuffers = this->UploadedTables = 0;
+  this->UploadedLights = LightKey{};
   this->FloatTargetFailed = this->SampledTargetFailed = false;
   this->MaxTargetSize = 0;
 }

@@ -33,8 +33,10 @@
 
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 VTK_ABI_NAMESPACE_BEGIN
+class vtkOpenGLBufferObject;
 class vtkOpenGLQuadHelper;
 class vtkOpenGLVertexBufferObject;
 class vtkShaderProgram;
@@ -93,6 +95,26 @@ private:
   bool ResolveReduced(const BackendFrame& frame, vtkTextureObject* reduced);
   void Upload(const BackendFrame& frame, BackendTimes& times);
   void DrawUploaded(vtkShaderProgram* program);
+  /// Shading: the lighting of the batch's slots [first, first + count) of the order
+  /// (FramePipeline::LightWindow), or one unlit slot when `lit` is false, into the buffer
+  /// texture the fragment shader reads per slot; nothing when it holds them already.
+  void UploadLights(const BackendFrame& frame, bool lit, std::size_t first, std::size_t count,
+    BackendTimes& times);
+
+  /// What the light texture holds: the buffers' version, the lighting and the view.
+  struct LightKey
+  {
+    std::uint64_t buffers = 0;
+    bool lit = false;
+    Lighting lighting;
+    std::uint64_t normals = 0;
+    Matrix4 modelView{};
+    bool operator==(const LightKey& o) const
+    {
+      return buffers == o.buffers && lit == o.lit && lighting == o.lighting &&
+        normals == o.normals && modelView == o.modelView;
+    }
+  };
 
   vtkNew<vtkOpenGLVertexBufferObject> VertexBuffer;
   vtkOpenGLHelper Triangles;
@@ -100,11 +122,15 @@ private:
   vtkNew<vtkTextureObject> IntegralsHigh, IntegralsLow; // pre-integrated shading
   vtkNew<vtkTextureObject> IntensityPrefix;             // average and additive blending
   std::unique_ptr<vtkOpenGLQuadHelper> ReduceQuad;      // blend modes: reduced to colour
+  vtkNew<vtkOpenGLBufferObject> LightBuffer;            // shading: factors per slot
+  vtkNew<vtkTextureObject> LightTexture;                // ... read as a buffer texture
+  std::vector<LightFactors> Lights;                     // ... of the batch
   BlendTarget Target;
   BlendTarget SampledTarget; ///< at an image sample distance other than 1
 
   std::uint64_t UploadedBuffers = 0; ///< FramePipeline::BufferVersion() in the buffers
   std::uint64_t UploadedTables = 0;  ///< TransferFunctionTables::Version() in the textures
+  LightKey UploadedLights;           ///< in LightTexture
   bool FloatTargetFailed = false;    ///< no float target in this context: do not retry
   bool FloatTargetUsed = false;
   bool PeelTargetUsed = false;      ///< DrawBatches draws into the peel's colour target

@@ -17,6 +17,8 @@
 #define mtpt_RenderBackend_h
 
 #include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
+#include "mtpt/Lighting.h"
+#include "mtpt/MeshView.h"
 #include "mtpt/Records.h"
 #include "mtpt/Shading.h"
 
@@ -73,6 +75,15 @@ struct BackendFrame
   /// them in any order (the pipeline then sorted nothing), with the scalars, not colours.
   BlendMode blendMode = BlendMode::Composite;
   double averageRange[2] = { -1e300, 1e300 }; ///< AverageIPScalarRange, scalar units
+  /**
+   * Shading (mtpt/Lighting.h; composite blending only): the lights and coefficients, each
+   * cell's normal (3 floats per cell, model coordinates; `normalsVersion` changes with them)
+   * and the frame's model-view matrix. Null `lighting`: unlit.
+   */
+  const Lighting* lighting = nullptr;
+  const float* normals = nullptr;
+  std::uint64_t normalsVersion = 0;
+  Matrix4 modelView = IdentityMatrix();
   double unitDistance = 1.0;       ///< ScalarOpacityUnitDistance, positive
   std::size_t batchSize = 1;       ///< tetrahedra decomposed per batch (>= 1)
   int threads = 0;                 ///< OpenMP threads (<= 0: the default)

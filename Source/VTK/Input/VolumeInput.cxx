@@ -5,6 +5,8 @@
 #include "vtkCamera.h"
 #include "vtkColorTransferFunction.h"
 #include "vtkDataArray.h"
+#include "vtkLight.h"
+#include "vtkLightCollection.h"
 #include "vtkMatrix4x4.h"
 #include "vtkNew.h"
 #include "vtkPlane.h"
@@ -14,6 +16,7 @@
 #include "vtkVolume.h"
 #include "vtkVolumeProperty.h"
 
+#include <cmath>
 #include <sstream>
 
 namespace mtpt
@@ -215,6 +218,67 @@ double UnitDistance(vtkVolumeProperty* property, std::string* warning)
     *warning = message.str();
   }
   return 1.0;
+}
+
+Lighting VolumeLighting(vtkRenderer* renderer, vtkVolumeProperty* property, int& ignored)
+{
+  Lighting lighting;
+  lighting.ambient = property->GetAmbient(0);
+  lighting.diffuse = property->GetDiffuse(0);
+  lighting.specular = property->GetSpecular(0);
+  lighting.specularPower = property->GetSpecularPower(0);
+  lighting.twoSided = renderer->GetTwoSidedLighting() != 0;
+  lighting.count = 0;
+  ignored = 0;
+  vtkMatrix4x4* view = renderer->GetActiveCamera()->GetModelViewTransformMatrix();
+  vtkLightCollection* lights = renderer->GetLights();
+  vtkCollectionSimpleIterator it;
+  lights->InitTraversal(it);
+  bool headlightOnly = true;
+  int on = 0;
+  while (vtkLight* light = lights->GetNextLight(it))
+  {
+    if (!(light->GetSwitch() > 0))
+    {
+      continue;
+    }
+    const double intensity = light->GetIntensity();
+    headlightOnly = headlightOnly && on == 0 && intensity == 1.0 && light->LightTypeIsHeadlight();
+    ++on;
+    if (lighting.count == Lighting::MaxLights)
+    {
+      ++ignored;
+      continue;
+    }
+    Light& l = lighting.lights[lighting.count++];
+    double position[4], focal[4], eyePosition[4], eyeFocal[4];
+    light->GetTransformedPosition(position);
+    light->GetTransformedFocalPoint(focal);
+    position[3] = focal[3] = 1;
+    view->MultiplyPoint(position, eyePosition);
+    view->MultiplyPoint(focal, eyeFocal);
+    double length = 0;
+    for (int k = 0; k < 3; ++k)
+    {
+      l.ambient[k] = light->GetAmbientColor()[k] * intensity;
+      l.diffuse[k] = light->GetDiffuseColor()[k] * intensity;
+      l.specular[k] = light->GetSpecularColor()[k] * intensity;
+      l.position[k] = eyePosition[k];
+      l.direction[k] = eyeFocal[k] - eyePosition[k];
+      l.attenuation[k] = light->GetAttenuationValues()[k];
+      length += l.direction[k] * l.direction[k];
+    }
+    length = std::sqrt(length);
+    for (int k = 0; k < 3; ++k)
+    {
+      l.direction[k] = length > 0 ? l.direction[k] / length : (k == 2 ? -1.0 : 0.0);
+    }
+    l.positional = light->GetPositional() != 0;
+    l.coneAngle = light->GetConeAngle();
+    l.exponent = light->GetExponent();
+  }
+  lighting.headlight = on == 1 && headlightOnly;
+  return lighting;
 }
 
 } // namespace mtpt

@@ -8,6 +8,7 @@
 #define mtpt_VolumeInput_h
 
 #include "vtkMTPTVTKCompatibility.h" // VTK_ABI_NAMESPACE_BEGIN/END
+#include "mtpt/Lighting.h"
 #include "mtpt/MeshView.h"
 #include "mtpt/Shading.h"
 
@@ -79,6 +80,15 @@ void ViewMatrices(
  * are.
  */
 ClipPlanes EyeClipPlanes(vtkAbstractMapper* mapper, vtkRenderer* renderer, int& ignored);
+
+/**
+ * The lighting of `property`'s component 0 by `renderer`'s lights that are switched on, in
+ * the eye coordinates of its active camera, as VTK's GPU ray caster reads them: colours times
+ * intensity, directions from position to focal point, the renderer's two-sided lighting,
+ * and its "default lighting" (Lighting::headlight) for a single headlight of intensity 1.
+ * The first Lighting::MaxLights lights; `ignored` receives how many more there are.
+ */
+Lighting VolumeLighting(vtkRenderer* renderer, vtkVolumeProperty* property, int& ignored);
 
 /**
  * The property's ScalarOpacityUnitDistance, or 1 when it is not positive (then `warning`

@@ -131,16 +131,15 @@ def add_volume(plotter, volume, *, backend=None, shading_mode=None, image_sample
         ``opacity_unit_distance``, ``name``, ``reset_camera``, ``preference``,
         ``categories``, ``annotations``, ``log_scale``, ``pickable``, ``render``,
         ``user_matrix``, ``ambient``, ``diffuse``, ``specular``, ``specular_power``.
-        ``mapper`` is not taken (this function chooses it) and ``shade`` must be false:
-        MTPT draws volumes without lighting. ``blending`` takes PyVista's names of the five
-        blend modes, which MTPT draws as VTK's GPU ray caster does.
+        ``mapper`` is not taken (this function chooses it). ``shade`` lights the volume by
+        the renderer's lights with ``ambient``, ``diffuse``, ``specular`` and
+        ``specular_power``, and ``blending`` takes PyVista's names of the five blend modes,
+        both as VTK's GPU ray caster draws them.
     """
     if "mapper" in kwargs:
         raise TypeError("add_volume() chooses the mapper itself: leave out mapper=")
     # Set on MTPT's mapper below: PyVista's own unstructured-grid mapper takes only two modes.
     blending = _choice("blending", kwargs.pop("blending", "composite"), BLEND_MODES)
-    if kwargs.get("shade"):
-        raise ValueError("MTPT draws volumes without lighting: leave out shade=True")
     backend = _choice("backend", backend, BACKENDS)
     shading_mode = _choice("shading_mode", shading_mode, SHADING_MODES)
     if image_sample_distance is not None and not image_sample_distance >= 1:

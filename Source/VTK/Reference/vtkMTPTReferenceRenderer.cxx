@@ -6,6 +6,7 @@
 #include "Input/Tetrahedralizer.h"
 #include "Input/VolumeInput.h"
 
+#include "mtpt/Gradients.h"
 #include "mtpt/ReferenceRenderer.h"
 
 #include "vtkAbstractVolumeMapper.h"
@@ -246,6 +247,29 @@ bool SetBlending(vtkAbstractMapper* mapper, const double dataRange[2],
   return known;
 }
 
+/**
+ * Shading, as the mapper lights the cells (mtpt/Lighting.h): the same normals (into `normals`,
+ * which `settings` then refers to) and the renderer's lights; nothing where the mapper draws
+ * unlit (shading off, dependent components, cell scalars, blend modes other than composite).
+ */
+void SetShading(vtkRenderer* renderer, vtkVolumeProperty* property,
+  const mtpt::MeshAdapter& adapter, const mtpt::ScalarsView& scalars, int threads,
+  std::vector<float>& normals, mtpt::ReferenceSettings& settings)
+{
+  if (!property->GetShade(0) || settings.mapping != mtpt::ScalarMapping::TransferFunctions ||
+    scalars.association != mtpt::ScalarsView::Association::Points ||
+    settings.blendMode != mtpt::BlendMode::Composite)
+  {
+    return;
+  }
+  std::vector<float> gradients;
+  mtpt::PointGradients(adapter.Points(), adapter.Cells(), scalars, gradients, threads);
+  mtpt::CellNormals(adapter.Cells(), adapter.Points().count, gradients, normals, threads);
+  int ignored = 0;
+  settings.lighting = mtpt::VolumeLighting(renderer, property, ignored);
+  settings.normals = normals.data();
+}
+
 /// How `channels` values per tuple become colour and opacity (VTK's PT's mappings).
 mtpt::ScalarMapping MappingOf(int channels)
 {
@@ -414,7 +438,6 @@ bool vtkMTPTReferenceRenderer::Render(
   double dataRange[2];
   vtkIdType nonFinite = 0;
   const float* values = adapter.Scalars(selected.array, selected.component, dataRange, nonFinite);
-
   mtpt::ReferenceSettings settings;
   this->ExactTransferFunctions =
     ConvertTransferFunctions(property, dataRange, this->TransferFunctionSamples, settings);
@@ -439,6 +462,8 @@ bool vtkMTPTReferenceRenderer::Render(
   const mtpt::ScalarsView view{ values,
     selected.cellData ? mtpt::ScalarsView::Association::Cells
                       : mtpt::ScalarsView::Association::Points };
+  std::vector<float> normals;
+  SetShading(renderer, property, adapter, view, this->NumberOfThreads, normals, settings);
   std::vector<double> rgb;
   std::string error;
   mtpt::ReferenceStats stats;

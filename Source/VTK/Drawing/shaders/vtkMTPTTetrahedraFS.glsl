@@ -21,6 +21,25 @@ uniform sampler2D transferFunction;
 uniform sampler2D integralsHigh;
 uniform sampler2D integralsLow;
 
+// Shading by lights (mtpt/Lighting.h): each slot's factors, scale then offset, two texels per
+// slot; the triangles of slot k are primitives 4k to 4k + 3 of the batch.
+uniform int lit;
+uniform samplerBuffer lightFactors;
+uniform int lightSlotBase; // the slot of this draw call's first primitive
+
+// A fragment's colour c (not premultiplied) lit as clamp(scale c + offset, 0, 1).
+vec4 Lit(vec4 fragment)
+{
+  if (lit == 0)
+  {
+    return fragment;
+  }
+  int slot = lightSlotBase + gl_PrimitiveID / 4;
+  vec4 scale = texelFetch(lightFactors, 2 * slot);
+  vec4 offset = texelFetch(lightFactors, 2 * slot + 1);
+  return vec4(clamp(scale.rgb * fragment.rgb + offset.rgb, 0.0, 1.0), fragment.a);
+}
+
 // 1 - exp(-d) without cancellation for small d.
 float Opacity(float d)
 {
@@ -375,8 +394,8 @@ void main()
   if (peelRanges == 1)
   {
     ivec2 pixel = ivec2(gl_FragCoord.xy);
-    gl_FragData[0] = ShadeInRange(segment, texelFetch(peelFront, pixel, 0));
-    gl_FragData[1] = ShadeInRange(segment, texelFetch(peelBack, pixel, 0));
+    gl_FragData[0] = Lit(ShadeInRange(segment, texelFetch(peelFront, pixel, 0)));
+    gl_FragData[1] = Lit(ShadeInRange(segment, texelFetch(peelBack, pixel, 0)));
     return;
   }
   float t0 = 0.0;
@@ -395,5 +414,5 @@ void main()
   {
     discard;
   }
-  gl_FragData[0] = fragment;
+  gl_FragData[0] = Lit(fragment);
 }
