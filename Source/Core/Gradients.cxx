@@ -4,6 +4,7 @@
 #include "detail/MeshAccess.h"
 #include "detail/Parallel.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
@@ -146,12 +147,19 @@ void PointGradients(const PointsView& points, const CellsView& cells, const Scal
   for (std::size_t p = 0; p < points.count; ++p)
   {
     const double* sum = sums.data() + 4 * p;
-    if (sum[3] > 0)
+    if (!(sum[3] > 0))
     {
-      for (int k = 0; k < 3; ++k)
-      {
-        gradients[3 * p + k] = static_cast<float>(sum[k] / sum[3]);
-      }
+      continue;
+    }
+    const double g[3] = { sum[0] / sum[3], sum[1] / sum[3], sum[2] / sum[3] };
+    // Beyond float's range (cells far smaller than their scalar steps) the direction is kept
+    // at a magnitude of 1e30: shading reads only the direction.
+    const double largest = std::max({ std::fabs(g[0]), std::fabs(g[1]), std::fabs(g[2]) });
+    const double scale = largest > 1e30 && std::isfinite(largest) ? 1e30 / largest : 1.0;
+    for (int k = 0; k < 3; ++k)
+    {
+      const double v = g[k] * scale;
+      gradients[3 * p + k] = std::isfinite(v) ? static_cast<float>(v) : 0.0f;
     }
   }
 }

@@ -183,6 +183,20 @@ TEST(Lighting, LinearFieldsHaveTheirExactGradient)
   std::vector<float> one;
   mtpt::PointGradients(mesh.Points(), mesh.Cells(), scalars, one, 1);
   EXPECT_EQ(one, gradients);
+  // A gradient beyond float's range keeps its direction at a magnitude of 1e30.
+  mtpt::test::TetMesh tiny;
+  tiny.points = { 0, 0, 0, 1e-20f, 0, 0, 0, 1e-20f, 0, 0, 0, 1e-20f };
+  tiny.scalars = { 0, 1e25f, 0, 0 };
+  tiny.AddTetrahedron(0, 1, 2, 3);
+  std::vector<float> steep;
+  mtpt::PointGradients(tiny.Points(), tiny.Cells(),
+    { tiny.scalars.data(), mtpt::ScalarsView::Association::Points }, steep, 1);
+  for (std::size_t p = 0; p < 4; ++p)
+  {
+    EXPECT_FLOAT_EQ(steep[3 * p], 1e30f);
+    EXPECT_EQ(steep[3 * p + 1], 0.0f);
+    EXPECT_EQ(steep[3 * p + 2], 0.0f);
+  }
   // Cell scalars have no gradient: zero everywhere.
   std::vector<float> perCell(mesh.CellCount(), 1.0f);
   mtpt::PointGradients(mesh.Points(), mesh.Cells(),

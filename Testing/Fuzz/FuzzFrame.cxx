@@ -663,6 +663,10 @@ void CheckShading(FuzzedDataProvider& in, mtpt::FramePipeline& pipeline,
   mtpt::PointGradients(frame.points, frame.cells, frame.scalars, gradients, threadsA);
   mtpt::PointGradients(frame.points, frame.cells, frame.scalars, one, threadsB);
   FUZZ_CHECK(one == gradients, "gradients: %d and %d threads differ", threadsA, threadsB);
+  for (float g : gradients)
+  {
+    FUZZ_CHECK(std::isfinite(g), "a gradient that is not finite: %g", g);
+  }
   mtpt::CellNormals(frame.cells, frame.points.count, gradients, normals, threadsA);
   for (std::size_t c = 0; c < normals.size() / 3; ++c)
   {

@@ -20,7 +20,8 @@ namespace mtpt
  * coordinates): the mean of the constant gradients of the tetrahedra around it, each
  * weighted by its volume. Cells that are not tetrahedra, have ids out of range, no volume or
  * non-finite values count for nothing; a point no tetrahedron counts for gets zero. A linear
- * field gets its exact gradient everywhere. Requires point scalars.
+ * field gets its exact gradient everywhere. A gradient beyond 1e30 keeps its direction at
+ * that magnitude (float's range). Requires point scalars (zero everywhere otherwise).
  * Thread safety: reentrant; `threads` OpenMP threads. Bit-identical for any thread count.
  */
 void PointGradients(const PointsView& points, const CellsView& cells, const ScalarsView& scalars,
