@@ -70,6 +70,12 @@ void SetBlending(const BackendFrame& frame, vtkOpenGLState* state)
   state->vtkglBlendFuncSeparate(GL_ONE, GL_ONE, GL_ONE, GL_ONE);
 }
 
+/// Whether the frame is lit (shading applies to composite blending only).
+bool Lit(const BackendFrame& frame)
+{
+  return frame.lighting && frame.blendMode == BlendMode::Composite;
+}
+
 } // namespace
 
 OpenGLBackend::OpenGLBackend() = default;
@@ -99,22 +105,25 @@ int OpenGLBackend::SampledImageLimit(vtkOpenGLRenderWindow*)
   return this->MaxTargetSize;
 }
 
-vtkShaderProgram* OpenGLBackend::ReadyProgram(vtkOpenGLRenderWindow* window)
+vtkShaderProgram* OpenGLBackend::ReadyProgram(vtkOpenGLRenderWindow* window, bool lit)
 {
   vtkShaderProgram* program = this->Triangles.Program;
-  if (program)
+  if (program && this->ProgramLit == lit)
   {
     window->GetShaderCache()->ReadyShaderProgram(program);
     return program;
   }
-  // The fragment shader computes segments with the core's constants and series.
+  // The fragment shader computes segments with the core's constants and series. Only the lit
+  // variant declares the light texture: an unlit frame binds no buffer texture at all.
   std::string fragment = vtkMTPTTetrahedraFS;
   vtkShaderProgram::Substitute(fragment, "//MTPT::SegmentShared", vtkMTPTSegmentShared);
+  vtkShaderProgram::Substitute(fragment, "//MTPT::Lit", lit ? "#define MTPT_LIT" : "");
   program = window->GetShaderCache()->ReadyShaderProgram(
     vtkMTPTTetrahedraVS, fragment.c_str(), "");
   if (program)
   {
     this->Triangles.Program = program;
+    this->ProgramLit = lit;
     this->Triangles.VAO->ShaderProgramChanged();
     this->Triangles.ShaderSourceTime.Modified();
   }
@@ -196,11 +205,14 @@ void OpenGLBackend::SetUniforms(const BackendFrame& frame, vtkShaderProgram* pro
   program->SetUniform2f("rayShift", rayShift);
   program->SetUniformf("inverseUnitDistance", static_cast<float>(1.0 / frame.unitDistance));
   program->SetUniformi("peelRanges", frame.peel ? 1 : 0);
-  if (frame.peel)
-  {
-    program->SetUniformi("peelFront", frame.peel->Ranges(0)->GetTextureUnit());
-    program->SetUniformi("peelBack", frame.peel->Ranges(1)->GetTextureUnit());
-  }
+  // Unused, the peel's samplers still name a unit: the transfer function's, of their own type
+  // (samplers of different types on one unit fail the draw, and the light texture may get
+  // the unit they would otherwise default to).
+  const int transferUnit = this->TransferFunction->GetTextureUnit();
+  program->SetUniformi(
+    "peelFront", frame.peel ? frame.peel->Ranges(0)->GetTextureUnit() : transferUnit);
+  program->SetUniformi(
+    "peelBack", frame.peel ? frame.peel->Ranges(1)->GetTextureUnit() : transferUnit);
   this->SetClippingUniforms(frame, program);
 }
 
@@ -253,7 +265,7 @@ bool OpenGLBackend::DrawPeel(const BackendFrame& frame, BackendTimes& times)
 {
   this->ErrorMessage.clear();
   TakeOpenGLErrors(); // errors left by others are not this backend's to report
-  vtkShaderProgram* program = this->ReadyProgram(frame.window);
+  vtkShaderProgram* program = this->ReadyProgram(frame.window, Lit(frame));
   if (!program)
   {
     this->ErrorMessage = "could not compile the MTPT shaders";
@@ -282,7 +294,7 @@ bool OpenGLBackend::Draw(const BackendFrame& frame, BackendTimes& times)
   this->WarningMessage.clear();
   TakeOpenGLErrors(); // errors left by others are not this backend's to report
   vtkOpenGLRenderWindow* window = frame.window;
-  vtkShaderProgram* program = this->ReadyProgram(window);
+  vtkShaderProgram* program = this->ReadyProgram(window, Lit(frame));
   if (!program)
   {
     this->ErrorMessage = "could not compile the MTPT shaders";
@@ -443,8 +455,7 @@ bool OpenGLBackend::DrawBatches(
   this->IntensityPrefix->Activate();
   this->SetUniforms(frame, program);
   // Shading: per slot, the factors of its cell's lighting (mtpt/Lighting.h).
-  const bool lit = frame.lighting && frame.blendMode == BlendMode::Composite;
-  program->SetUniformi("lit", lit ? 1 : 0);
+  const bool lit = Lit(frame);
 
   // Batch after batch: decompose, upload, draw. Draw calls return before the rasterizer is
   // done, so the next batch's decomposition overlaps the previous batch's drawing.
@@ -461,9 +472,10 @@ bool OpenGLBackend::DrawBatches(
     [&]
     {
       this->Upload(frame, times);
-      this->UploadLights(frame, lit, batchFirst, batchCount, times);
-      this->LightTexture->Activate();
-      program->SetUniformi("lightFactors", this->LightTexture->GetTextureUnit());
+      if (lit)
+      {
+        this->BindLights(frame, program, batchFirst, batchCount, times);
+      }
       const auto start = Clock::now();
       this->DrawUploaded(program);
       if (frame.synchronizedTiming)
@@ -471,7 +483,6 @@ bool OpenGLBackend::DrawBatches(
         glFinish();
       }
       times.draw += SecondsSince(start);
-      this->LightTexture->Deactivate();
       return OpenGLSucceeded("drawing the tetrahedra", this->ErrorMessage);
     });
   this->TransferFunction->Deactivate();
@@ -506,36 +517,39 @@ void OpenGLBackend::Upload(const BackendFrame& frame, BackendTimes& times)
   times.upload += SecondsSince(start);
 }
 
-void OpenGLBackend::UploadLights(const BackendFrame& frame, bool lit, std::size_t first,
-  std::size_t count, BackendTimes& times)
+void OpenGLBackend::BindLights(const BackendFrame& frame, vtkShaderProgram* program,
+  std::size_t first, std::size_t count, BackendTimes& times)
+{
+  this->UploadLights(frame, first, count, times);
+  this->LightTexture->Activate();
+  program->SetUniformi("lightFactors", this->LightTexture->GetTextureUnit());
+}
+
+void OpenGLBackend::UploadLights(
+  const BackendFrame& frame, std::size_t first, std::size_t count, BackendTimes& times)
 {
   FramePipeline& pipeline = *frame.pipeline;
-  LightKey key;
-  if (lit)
-  {
-    key = { pipeline.BufferVersion(), true, *frame.lighting, frame.normalsVersion,
-      frame.modelView };
-  }
+  const LightKey key{ pipeline.BufferVersion(), *frame.lighting, frame.normalsVersion,
+    frame.modelView };
   if (this->LightTexture->GetHandle() != 0 && key == this->UploadedLights)
   {
     return; // the texture holds these slots lit so already (a frame that moved nothing)
   }
-  const LightFactors unlit = Unlit();
-  if (lit)
-  {
-    pipeline.LightWindow(
-      first, count, *frame.lighting, frame.normals, frame.modelView, this->Lights, frame.threads);
-  }
+  pipeline.LightWindow(
+    first, count, *frame.lighting, frame.normals, frame.modelView, this->Lights, frame.threads);
   const auto start = Clock::now();
-  // A texture buffer is never empty: an unlit frame still binds one slot.
-  const bool any = lit && !this->Lights.empty();
-  const std::size_t slots = any ? this->Lights.size() : 1;
+  // A texture buffer is never empty.
+  if (this->Lights.empty())
+  {
+    this->Lights.push_back(Unlit());
+  }
   this->LightBuffer->SetType(vtkOpenGLBufferObject::TextureBuffer);
-  this->LightBuffer->Upload(reinterpret_cast<const float*>(any ? this->Lights.data() : &unlit),
-    slots * sizeof(LightFactors) / sizeof(float), vtkOpenGLBufferObject::TextureBuffer);
+  this->LightBuffer->Upload(reinterpret_cast<const float*>(this->Lights.data()),
+    this->Lights.size() * sizeof(LightFactors) / sizeof(float),
+    vtkOpenGLBufferObject::TextureBuffer);
   this->LightTexture->SetContext(frame.window);
   this->LightTexture->CreateTextureBuffer(
-    static_cast<unsigned int>(2 * slots), 4, VTK_FLOAT, this->LightBuffer);
+    static_cast<unsigned int>(2 * this->Lights.size()), 4, VTK_FLOAT, this->LightBuffer);
   this->UploadedLights = key;
   times.upload += SecondsSince(start);
 }
@@ -568,13 +582,20 @@ void OpenGLBackend::DrawUploaded(vtkShaderProgram* program)
   {
     const std::size_t size = std::min(chunk, indices - offset);
     // gl_PrimitiveID counts from 0 in each call: the lighting's slots from this one's first.
-    program->SetUniformi("lightSlotBase", static_cast<int>(offset / IndicesPerTetrahedron));
+    if (this->ProgramLit)
+    {
+      program->SetUniformi("lightSlotBase", static_cast<int>(offset / IndicesPerTetrahedron));
+    }
     glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(size), GL_UNSIGNED_INT,
       reinterpret_cast<const void*>(offset * sizeof(std::uint32_t)));
   }
   this->Triangles.IBO->Release();
   this->Triangles.VAO->Release();
   this->VertexBuffer->Release();
+  if (this->ProgramLit)
+  {
+    this->LightTexture->Deactivate(); // bound by BindLights
+  }
 }
 
 void OpenGLBackend::ReleaseGraphicsResources(vtkWindow* window)

@@ -67,7 +67,8 @@ private:
   OpenGLBackend(const OpenGLBackend&) = delete;
   void operator=(const OpenGLBackend&) = delete;
 
-  vtkShaderProgram* ReadyProgram(vtkOpenGLRenderWindow* window);
+  /// The fragment shader's program, lit (reading the light texture) or not.
+  vtkShaderProgram* ReadyProgram(vtkOpenGLRenderWindow* window, bool lit);
   /// Binds the target the batches are drawn into: the sampled target, the float target (when
   /// `floatTarget`) or none (the window's framebuffer), setting SampledTargetUsed and
   /// FloatTargetUsed; a target that cannot be made leaves WarningMessage saying why.
@@ -96,23 +97,25 @@ private:
   void Upload(const BackendFrame& frame, BackendTimes& times);
   void DrawUploaded(vtkShaderProgram* program);
   /// Shading: the lighting of the batch's slots [first, first + count) of the order
-  /// (FramePipeline::LightWindow), or one unlit slot when `lit` is false, into the buffer
-  /// texture the fragment shader reads per slot; nothing when it holds them already.
-  void UploadLights(const BackendFrame& frame, bool lit, std::size_t first, std::size_t count,
-    BackendTimes& times);
+  /// (FramePipeline::LightWindow) into the buffer texture the lit fragment shader reads per
+  /// slot; nothing when it holds them already.
+  void UploadLights(
+    const BackendFrame& frame, std::size_t first, std::size_t count, BackendTimes& times);
+  /// UploadLights, then the texture bound for `program` (DrawUploaded unbinds it).
+  void BindLights(const BackendFrame& frame, vtkShaderProgram* program, std::size_t first,
+    std::size_t count, BackendTimes& times);
 
   /// What the light texture holds: the buffers' version, the lighting and the view.
   struct LightKey
   {
     std::uint64_t buffers = 0;
-    bool lit = false;
     Lighting lighting;
     std::uint64_t normals = 0;
     Matrix4 modelView{};
     bool operator==(const LightKey& o) const
     {
-      return buffers == o.buffers && lit == o.lit && lighting == o.lighting &&
-        normals == o.normals && modelView == o.modelView;
+      return buffers == o.buffers && lighting == o.lighting && normals == o.normals &&
+        modelView == o.modelView;
     }
   };
 
@@ -131,6 +134,7 @@ private:
   std::uint64_t UploadedBuffers = 0; ///< FramePipeline::BufferVersion() in the buffers
   std::uint64_t UploadedTables = 0;  ///< TransferFunctionTables::Version() in the textures
   LightKey UploadedLights;           ///< in LightTexture
+  bool ProgramLit = false;           ///< Triangles.Program is the lit variant
   bool FloatTargetFailed = false;    ///< no float target in this context: do not retry
   bool FloatTargetUsed = false;
   bool PeelTargetUsed = false;      ///< DrawBatches draws into the peel's colour target

@@ -21,23 +21,26 @@ uniform sampler2D transferFunction;
 uniform sampler2D integralsHigh;
 uniform sampler2D integralsLow;
 
-// Shading by lights (mtpt/Lighting.h): each slot's factors, scale then offset, two texels per
-// slot; the triangles of slot k are primitives 4k to 4k + 3 of the batch.
-uniform int lit;
+// Shading by lights (mtpt/Lighting.h): the backend defines MTPT_LIT here in the lit variant.
+//MTPT::Lit
+#ifdef MTPT_LIT
+// Each slot's factors, scale then offset, two texels per slot; the triangles of slot k are
+// primitives 4k to 4k + 3 of the batch.
 uniform samplerBuffer lightFactors;
 uniform int lightSlotBase; // the slot of this draw call's first primitive
+#endif
 
 // A fragment's colour c (not premultiplied) lit as clamp(scale c + offset, 0, 1).
 vec4 Lit(vec4 fragment)
 {
-  if (lit == 0)
-  {
-    return fragment;
-  }
+#ifdef MTPT_LIT
   int slot = lightSlotBase + gl_PrimitiveID / 4;
   vec4 scale = texelFetch(lightFactors, 2 * slot);
   vec4 offset = texelFetch(lightFactors, 2 * slot + 1);
   return vec4(clamp(scale.rgb * fragment.rgb + offset.rgb, 0.0, 1.0), fragment.a);
+#else
+  return fragment;
+#endif
 }
 
 // 1 - exp(-d) without cancellation for small d.
