@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "mtpt/Gradients.h"
 
+#include "mtpt/Lighting.h"
+
 #include "detail/MeshAccess.h"
 #include "detail/Parallel.h"
 
@@ -12,26 +14,6 @@ namespace mtpt
 {
 namespace
 {
-
-double Dot(const double a[3], const double b[3])
-{
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-/// v normalized in place; false (v unchanged) when its length is 0 or not finite.
-bool Normalize(double v[3])
-{
-  const double length = std::sqrt(Dot(v, v));
-  if (!(length > 0) || !std::isfinite(length))
-  {
-    return false;
-  }
-  for (int k = 0; k < 3; ++k)
-  {
-    v[k] /= length;
-  }
-  return true;
-}
 
 /// The model coordinates of every point, as doubles (a mesh of parts part after part).
 std::vector<double> ModelCoordinates(const PointsView& points)
@@ -84,7 +66,7 @@ bool WeightedGradient(const double* xyz, const float* scalars, const std::int64_
   Cross(e[1], e[2], c23);
   Cross(e[2], e[0], c31);
   Cross(e[0], e[1], c12);
-  const double det = Dot(e[0], c23);
+  const double det = Dot3(e[0], c23);
   if (!(det != 0) || !std::isfinite(det))
   {
     return false;
@@ -164,8 +146,8 @@ void PointGradients(const PointsView& points, const CellsView& cells, const Scal
   }
 }
 
-void CellNormals(const CellsView& cells, std::size_t pointCount, const std::vector<float>& gradients,
-  std::vector<float>& normals, int threads)
+void CellNormals(const CellsView& cells, std::size_t pointCount,
+  const std::vector<float>& gradients, std::vector<float>& normals, int threads)
 {
   normals.assign(3 * cells.cellCount, 0.0f);
   if (gradients.size() < 3 * pointCount)
@@ -191,7 +173,7 @@ void CellNormals(const CellsView& cells, std::size_t pointCount, const std::vect
           mean[k] += gradients[3 * ids[i] + k];
         }
       }
-      if (Normalize(mean))
+      if (Normalize3(mean))
       {
         for (int k = 0; k < 3; ++k)
         {

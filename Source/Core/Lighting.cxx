@@ -9,26 +9,6 @@ namespace mtpt
 namespace
 {
 
-double Dot(const double a[3], const double b[3])
-{
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-/// v normalized in place; false (v unchanged) when its length is 0 or not finite.
-bool Normalize(double v[3])
-{
-  const double length = std::sqrt(Dot(v, v));
-  if (!(length > 0) || !std::isfinite(length))
-  {
-    return false;
-  }
-  for (int k = 0; k < 3; ++k)
-  {
-    v[k] /= length;
-  }
-  return true;
-}
-
 /**
  * normalize(2 nDotL n - d), as the shader computes the reflected direction. With nDotL = n.d
  * for unit n and d (or n zero) that is d's reflection, unit already: `unit` skips the
@@ -42,7 +22,7 @@ void Reflected(double nDotL, const double n[3], const double d[3], double r[3], 
   }
   if (!unit)
   {
-    Normalize(r);
+    Normalize3(r);
   }
 }
 
@@ -58,10 +38,10 @@ LightFactors HeadlightFactors(
 {
   const Light& light = lighting.lights[0];
   const double travel[3] = { -toEye[0], -toEye[1], -toEye[2] };
-  double nDotL = Dot(n, travel);
+  double nDotL = Dot3(n, travel);
   double r[3];
   Reflected(nDotL, n, travel, r, true);
-  const double vDotR = -Dot(r, toEye);
+  const double vDotR = -Dot3(r, toEye);
   if (nDotL < 0 && lighting.twoSided)
   {
     nDotL = -nDotL;
@@ -85,14 +65,14 @@ double Attenuation(const Light& light, const double position[3], double travel[3
   {
     travel[k] = position[k] - light.position[k];
   }
-  const double distance = std::sqrt(Dot(travel, travel));
-  Normalize(travel);
+  const double distance = std::sqrt(Dot3(travel, travel));
+  Normalize3(travel);
   double attenuation = 1.0 /
     (light.attenuation[0] + light.attenuation[1] * distance +
       light.attenuation[2] * distance * distance);
   if (light.coneAngle <= 90.0)
   {
-    const double coneDot = Dot(travel, light.direction);
+    const double coneDot = Dot3(travel, light.direction);
     const double pi = 3.14159265358979323846;
     attenuation = coneDot >= std::cos(light.coneAngle * pi / 180.0)
       ? attenuation * std::pow(coneDot, light.exponent)
@@ -112,7 +92,7 @@ LightFactors LightsFactors(
     const Light& light = lighting.lights[i];
     double travel[3] = { light.direction[0], light.direction[1], light.direction[2] };
     const double attenuation = light.positional ? Attenuation(light, position, travel) : 1.0;
-    double nDotL = Dot(n, travel);
+    double nDotL = Dot3(n, travel);
     const bool flipped = nDotL < 0 && lighting.twoSided;
     if (flipped)
     {
@@ -123,7 +103,7 @@ LightFactors LightsFactors(
       const double df = std::max(0.0, attenuation * nDotL);
       double r[3];
       Reflected(nDotL, n, travel, r, !flipped);
-      double rDotV = -Dot(r, toEye);
+      double rDotV = -Dot3(r, toEye);
       if (light.positional && rDotV < 0 && lighting.twoSided)
       {
         rDotV = -rDotV;
@@ -151,6 +131,20 @@ LightFactors LightsFactors(
 }
 
 } // namespace
+
+bool Normalize3(double v[3])
+{
+  const double length = std::sqrt(Dot3(v, v));
+  if (!(length > 0) || !std::isfinite(length))
+  {
+    return false;
+  }
+  for (int k = 0; k < 3; ++k)
+  {
+    v[k] /= length;
+  }
+  return true;
+}
 
 bool operator==(const Lighting& a, const Lighting& b)
 {
@@ -198,7 +192,7 @@ LightFactors Bounded(LightFactors f)
 LightFactors LightCell(const Lighting& lighting, const double normal[3], const double position[3])
 {
   double toEye[3] = { -position[0], -position[1], -position[2] };
-  if (!Normalize(toEye))
+  if (!Normalize3(toEye))
   {
     toEye[0] = toEye[1] = 0;
     toEye[2] = 1;
@@ -246,7 +240,7 @@ void EyeNormal(const double n[9], const float normal[3], double eye[3])
   {
     eye[r] = n[3 * r] * normal[0] + n[3 * r + 1] * normal[1] + n[3 * r + 2] * normal[2];
   }
-  if (!Normalize(eye))
+  if (!Normalize3(eye))
   {
     eye[0] = eye[1] = eye[2] = 0;
   }

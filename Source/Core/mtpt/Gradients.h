@@ -33,8 +33,8 @@ void PointGradients(const PointsView& points, const CellsView& cells, const Scal
  * out of range, or whose mean gradient is zero or not finite.
  * Thread safety: reentrant; `threads` OpenMP threads.
  */
-void CellNormals(const CellsView& cells, std::size_t pointCount, const std::vector<float>& gradients,
-  std::vector<float>& normals, int threads);
+void CellNormals(const CellsView& cells, std::size_t pointCount,
+  const std::vector<float>& gradients, std::vector<float>& normals, int threads);
 
 } // namespace mtpt
 

@@ -67,6 +67,15 @@ struct Lighting
   Light lights[MaxLights];
 };
 
+/// a . b of 3-vectors.
+inline double Dot3(const double a[3], const double b[3])
+{
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+/// v normalized in place; false (v unchanged) when its length is 0 or not finite.
+bool Normalize3(double v[3]);
+
 /// Whether two lightings light every sample alike (every field of their first `count` lights).
 bool operator==(const Lighting& a, const Lighting& b);
 inline bool operator!=(const Lighting& a, const Lighting& b)
