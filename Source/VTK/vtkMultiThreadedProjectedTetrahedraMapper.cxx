@@ -913,7 +913,8 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetUpShading(vtkRenderer* render
   {
     // Once per change of the data: the points' gradients, then each cell's normal.
     std::vector<float> gradients;
-    mtpt::PointGradients(frame.points, frame.cells, frame.scalars, gradients, this->NumberOfThreads);
+    mtpt::PointGradients(
+      frame.points, frame.cells, frame.scalars, gradients, this->NumberOfThreads);
     mtpt::CellNormals(
       frame.cells, frame.points.count, gradients, in.Normals, this->NumberOfThreads);
     in.NormalsKey = key;

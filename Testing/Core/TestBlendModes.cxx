@@ -120,14 +120,6 @@ struct Scene
     s.height = c.height;
     s.modelView = this->input.modelView;
     s.projection = this->input.projection;
-    const int n = c.transferFunction.size;
-    for (int i = 0; i < n; ++i)
-    {
-      const double scalar = Low + (High - Low) * i / (n - 1);
-      const float* e = this->table.data() + 4 * i;
-      s.color.push_back({ scalar, e[0], e[1], e[2] });
-      s.opacity.push_back({ scalar, e[3] });
-    }
     s.unitDistance = c.unitDistance;
     s.clipPlanes = c.clipPlanes;
     s.blendMode = c.blendMode;
@@ -135,12 +127,7 @@ struct Scene
     s.scalarRange[1] = High;
     s.averageRange[0] = c.averageRange[0];
     s.averageRange[1] = c.averageRange[1];
-    std::vector<double> rgb;
-    std::string error;
-    EXPECT_TRUE(mtpt::RenderReference(this->mesh.Points(), this->mesh.Cells(),
-      { this->mesh.scalars.data(), mtpt::ScalarsView::Association::Points }, s, rgb, 2, &error))
-      << error;
-    return rgb;
+    return mtpt::test::TableReference(this->mesh, this->table, Low, High, s);
   }
 };
 

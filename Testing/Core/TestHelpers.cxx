@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "TestHelpers.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -65,6 +67,25 @@ TetMesh LatticeTetrahedra(std::size_t cells, unsigned seed)
     mesh.AddTetrahedron(ids[0], ids[1], ids[2], ids[3]);
   }
   return mesh;
+}
+
+std::vector<double> TableReference(const TetMesh& mesh, const std::vector<float>& table,
+  double low, double high, ReferenceSettings settings)
+{
+  const std::size_t n = table.size() / 4;
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    const double scalar = low + (high - low) * static_cast<double>(i) / static_cast<double>(n - 1);
+    const float* e = table.data() + 4 * i;
+    settings.color.push_back({ scalar, e[0], e[1], e[2] });
+    settings.opacity.push_back({ scalar, e[3] });
+  }
+  std::vector<double> rgb;
+  std::string error;
+  EXPECT_TRUE(RenderReference(mesh.Points(), mesh.Cells(),
+    { mesh.scalars.data(), ScalarsView::Association::Points }, settings, rgb, 2, &error))
+    << error;
+  return rgb;
 }
 
 TetMesh JitteredGrid(int n, unsigned seed)

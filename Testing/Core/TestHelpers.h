@@ -5,6 +5,7 @@
 #define mtpt_TestHelpers_h
 
 #include "mtpt/MeshView.h"
+#include "mtpt/ReferenceRenderer.h"
 
 #include <array>
 #include <cmath>
@@ -177,6 +178,14 @@ void ObliqueView(Input& input, bool perspective)
     perspective ? Perspective(45, 1.2, 1.5, 6) : Ortho(-1.8, 1.8, -1.5, 1.5, 1.5, 6);
   input.perspective = perspective;
 }
+
+/**
+ * The exact reference image (RGB over black) of `mesh` with its point scalars and `settings`,
+ * the transfer functions' nodes the entries of `table` (RGBA, 4 floats each) evenly over
+ * [low, high], as a TransferFunctionTable spans them. A failure is a gtest failure.
+ */
+std::vector<double> TableReference(const TetMesh& mesh, const std::vector<float>& table,
+  double low, double high, ReferenceSettings settings);
 
 /// Random tetrahedra whose corners are drawn from a 3x3x3 lattice in [-1, 1]^3 (projected by
 /// an axis-aligned view, its points coincide and line up: every projection class and every

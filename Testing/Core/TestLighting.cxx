@@ -99,22 +99,10 @@ struct LitScene
     s.height = Height;
     s.modelView = this->input.modelView;
     s.projection = this->input.projection;
-    for (int i = 0; i < 64; ++i)
-    {
-      const double scalar = Low + (High - Low) * i / 63.0;
-      const float* e = this->table.data() + 4 * i;
-      s.color.push_back({ scalar, e[0], e[1], e[2] });
-      s.opacity.push_back({ scalar, e[3] });
-    }
     s.unitDistance = 0.5;
     s.lighting = lighting;
     s.normals = this->normals.data();
-    std::vector<double> rgb;
-    std::string error;
-    EXPECT_TRUE(mtpt::RenderReference(this->mesh.Points(), this->mesh.Cells(),
-      { this->mesh.scalars.data(), mtpt::ScalarsView::Association::Points }, s, rgb, 2, &error))
-      << error;
-    return rgb;
+    return mtpt::test::TableReference(this->mesh, this->table, Low, High, s);
   }
 };
 

@@ -694,7 +694,10 @@ void CheckShading(FuzzedDataProvider& in, mtpt::FramePipeline& pipeline,
   }
   const double inf = std::numeric_limits<double>::infinity();
   auto value = [&]
-  { return in.PickValueInArray({ 0.0, 1.0, -1.0, 0.3, 0.7, 1e30, -1e-30, inf, std::nan(""), 8.0 }); };
+  {
+    return in.PickValueInArray(
+      { 0.0, 1.0, -1.0, 0.3, 0.7, 1e30, -1e-30, inf, std::nan(""), 8.0 });
+  };
   mtpt::Lighting lighting;
   lighting.headlight = in.ConsumeBool();
   lighting.twoSided = in.ConsumeBool();
