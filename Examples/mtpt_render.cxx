@@ -65,6 +65,8 @@ struct Options
   bool compareMerged = false;
   double updateRate = 15; ///< frames a second asked for while dragging (--interactive)
   std::vector<std::string> clipPlanes; ///< --clip-plane: "ox,oy,oz,nx,ny,nz" each
+  bool shade = false;                  ///< --shade, with vtkVolumeProperty's coefficients
+  double ambient = 0.1, diffuse = 0.7, specular = 0.2, specularPower = 10;
 };
 
 /// Adds the --clip-plane planes to `mapper`; false (and a message) for a malformed one.
@@ -147,6 +149,11 @@ vtkSmartPointer<vtkVolumeProperty> MakeTransferFunctions(
   property->SetColor(color);
   property->SetScalarOpacity(opacity);
   property->SetScalarOpacityUnitDistance(o.unitDistance > 0 ? o.unitDistance : diagonal / 40);
+  property->SetShade(o.shade ? 1 : 0);
+  property->SetAmbient(o.ambient);
+  property->SetDiffuse(o.diffuse);
+  property->SetSpecular(o.specular);
+  property->SetSpecularPower(o.specularPower);
   return property;
 }
 
@@ -432,6 +439,17 @@ int main(int argc, char** argv)
     "composite; maximum or minimum intensity; average intensity; additive (VTK's blend modes; "
     "VTK's PT composites in --compare-vtk)")
     ->check(CLI::IsMember(BlendModeNames()));
+  app.add_flag("--shade", o.shade,
+    "light the volume by the renderer's headlight, as VTK's GPU ray caster lights image data "
+    "(VTK's PT ignores it in --compare-vtk)");
+  app.add_option("--ambient", o.ambient, "shading: ambient coefficient")
+    ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--diffuse", o.diffuse, "shading: diffuse coefficient")
+    ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--specular", o.specular, "shading: specular coefficient")
+    ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--specular-power", o.specularPower, "shading: specular exponent")
+    ->check(CLI::NonNegativeNumber);
   app.add_flag("--compare-vtk", o.compare,
     "also time vtkProjectedTetrahedraMapper (for a .vtm: "
     "vtkMultiBlockUnstructuredGridVolumeMapper), "
@@ -517,11 +535,11 @@ int main(int argc, char** argv)
 
   const Timed t = Time(stage, mapper, o);
   const StageFigures& f = t.figures;
-  std::printf("\nMTPT, %s backend, %s shading, %s blending, %s order, %d threads requested "
+  std::printf("\nMTPT, %s backend, %s shading, %s blending%s, %s order, %d threads requested "
               "(0: all), %dx%d; median of %d frames, the camera turning %.2f degrees before "
-              "each (ms):\n",
+              "each (ms; CPU stages include lighting the cells when shaded):\n",
     f.backend.c_str(), o.common.mapper.shading.c_str(), o.common.mapper.blend.c_str(),
-    o.common.mapper.order.c_str(),
+    o.shade ? ", lit by the headlight" : "", o.common.mapper.order.c_str(),
     o.common.mapper.threads, o.width, o.height, o.common.timing.repeat, o.common.timing.step);
   std::printf("| transform | cull | depth keys | order | decompose | CPU stages | composite (bin "
               "+ raster) | upload | draw | frame |%s\n",

@@ -178,6 +178,34 @@ def check_blend_modes(display, view):
     return ok
 
 
+def check_shading(display, view):
+    """Shade: the lit image differs from the unlit one, and more specular light brightens it;
+    Shade off gives the first image again. Expects the CPU backend and the settings of the
+    image out("mtpt_cpu")."""
+    ok = True
+    display.MTPTShade = 1
+    testing.save(view, out("mtpt_shaded"))
+    figures = testing.compare(out("mtpt_cpu"), out("mtpt_shaded"))
+    print("%s: shaded vs unshaded: covered RMSE %.4f" % (args["NAME"], figures["rmse_covered"]))
+    ok &= testing.check(figures["covered_b"] >= MIN_COVERED and
+                        figures["rmse_covered"] > MIN_RMSE_BLEND_MODES,
+                        "Shade lights the volume")
+    display.MTPTSpecular = 0.9
+    testing.save(view, out("mtpt_shaded_specular"))
+    _, dull = testing.read_rgb(out("mtpt_shaded"))
+    _, shiny = testing.read_rgb(out("mtpt_shaded_specular"))
+    ok &= testing.check(float(shiny.mean()) > float(dull.mean()),
+                        "Volume Specular brightens the highlights (mean %.4f > %.4f)" %
+                        (float(shiny.mean()), float(dull.mean())))
+    display.MTPTSpecular = 0.2
+    display.MTPTShade = 0
+    testing.save(view, out("mtpt_unshaded_again"))
+    rmse = testing.compare(out("mtpt_cpu"), out("mtpt_unshaded_again"))["rmse"]
+    ok &= testing.check(rmse <= MAX_RMSE_ORDER_METHODS,
+                        "Shade off: the first image again (RMSE %.2g)" % rmse)
+    return ok
+
+
 def main():
     ok = True
 
@@ -241,6 +269,7 @@ def main():
     ok &= check_level_of_detail(display, view)
     ok &= check_clipping_plane(display, view, reader)
     ok &= check_blend_modes(display, view)
+    ok &= check_shading(display, view)
     simple.Hide(reader, view)
 
     # A multi-block input: the mesh cut into two blocks of whole cells (the cells inside a

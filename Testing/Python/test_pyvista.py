@@ -228,10 +228,23 @@ def test_blending_takes_pyvistas_names(mesh, blending, mode):
     pl.close()
 
 
+def test_shade_lights_the_volume(mesh):
+    """shade=True lights the volume (PyVista's own unstructured-grid mapper ignores it)."""
+    images = []
+    for shade in (False, True):
+        pl = plotter()
+        actor = add_volume(pl, mesh, shade=shade, specular=0.3, backend="cpu")
+        assert actor.GetProperty().GetShade(0) == int(shade)
+        images.append(snapshot(pl))
+        pl.close()
+    covered = np.any(np.abs(images[0] - np.array(BACKGROUND)) > 2 / 255, axis=2)
+    assert covered.mean() > 0.05
+    assert np.abs(images[1] - images[0])[covered].mean() > 0.02
+
+
 @pytest.mark.parametrize("arguments, error", [
     (dict(mapper="gpu"), TypeError),
     (dict(blending="brightest"), ValueError),
-    (dict(shade=True), ValueError),
     (dict(backend="vulkan"), ValueError),
     (dict(shading_mode="phong"), ValueError),
     (dict(image_sample_distance=0.5), ValueError),

@@ -6,6 +6,7 @@
 #include "vtkPlaneCollection.h"
 #include "vtkPVLODVolume.h"
 #include "vtkPVView.h"
+#include "vtkVolumeProperty.h"
 
 vtkStandardNewMacro(vtkMTPTUnstructuredGridVolumeRepresentation);
 
@@ -91,6 +92,31 @@ int vtkMTPTUnstructuredGridVolumeRepresentation::GetBlendMode()
 void vtkMTPTUnstructuredGridVolumeRepresentation::SetAverageIPScalarRange(double low, double high)
 {
   this->MTPTMapper->SetAverageIPScalarRange(low, high);
+}
+
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetShade(int shade)
+{
+  this->Property->SetShade(shade);
+}
+
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetAmbient(double ambient)
+{
+  this->Property->SetAmbient(ambient);
+}
+
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetDiffuse(double diffuse)
+{
+  this->Property->SetDiffuse(diffuse);
+}
+
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetSpecular(double specular)
+{
+  this->Property->SetSpecular(specular);
+}
+
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetSpecularPower(double power)
+{
+  this->Property->SetSpecularPower(power);
 }
 
 // With automatic adjustment on, every render overwrites the mapper's distance (as in VTK's

@@ -56,6 +56,13 @@ public:
   void SetBlendMode(int mode);
   int GetBlendMode();
   void SetAverageIPScalarRange(double low, double high);
+  /// Shading (Documentation/shading.md), forwarded to the volume's property: the stock
+  /// unstructured-grid volume representation offers none of these.
+  void SetShade(int shade);
+  void SetAmbient(double ambient);
+  void SetDiffuse(double diffuse);
+  void SetSpecular(double specular);
+  void SetSpecularPower(double power);
   void SetImageSampleDistance(double distance);
   double GetImageSampleDistance();
   void SetMinimumImageSampleDistance(double distance);
