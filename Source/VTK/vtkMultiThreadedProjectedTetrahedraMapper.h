@@ -24,8 +24,9 @@
  * still frame is the full image.
  *
  * Blend modes 0 to 4 as VTK's GPU ray caster defines them; maximum and minimum intensity,
- * average and additive frames need no order and sort nothing. Unlit (the property's shading
- * is reported with a warning). Documentation/mapper.md explains each of these in full.
+ * average and additive frames need no order and sort nothing. The property's shading lights
+ * the volume by the renderer's lights, each tetrahedron at its centroid, as VTK's GPU ray
+ * caster lights a sample. Documentation/mapper.md explains each of these in full.
  *
  * @sa vtkProjectedTetrahedraMapper vtkUnstructuredGridVolumeMapper
  */
