@@ -3,12 +3,19 @@
 // windows as VTK makes them (multisampled): pre-integrated images against the exact reference,
 // which lights the cells from the same normals and the renderer's lights (the headlight, or a
 // light kit); the two backends against each other in VTK-compatible shading and at an image
-// sample distance; and shading that cannot apply reported once, the volume drawn unlit.
+// sample distance; against VTK's GPU ray caster on image data of the same field; and shading
+// that cannot apply reported once, the volume drawn unlit.
 #include "RenderingTestUtilities.h"
 
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
 
+#include "vtkCamera.h"
 #include "vtkCellData.h"
+#include "vtkColorTransferFunction.h"
+#include "vtkDataSetTriangleFilter.h"
+#include "vtkGPUVolumeRayCastMapper.h"
+#include "vtkPiecewiseFunction.h"
+#include "vtkRTAnalyticSource.h"
 #include "vtkDataArray.h"
 #include "vtkFloatArray.h"
 #include "vtkImageData.h"
@@ -171,6 +178,86 @@ TEST_P(MapperShading, WithoutPointScalarsIsReportedOnceAndDrawnUnlit)
     << messages->warnings.front();
   ExpectClose(Grab(stage.window, false), unlit, { 1e-9, 1e-9, 0 }, "shaded cell scalars");
   mapper->ReleaseGraphicsResources(stage.window);
+}
+
+/// `input` drawn by `mapper` (lit, with a light kit when `kit`), as the figures show it.
+vtkSmartPointer<vtkImageData> RenderLit(
+  vtkDataObject* input, vtkAbstractVolumeMapper* mapper, bool kit, bool shade = true)
+{
+  vtkNew<vtkColorTransferFunction> colour;
+  colour->AddRGBPoint(40, 0.2, 0.3, 0.9);
+  colour->AddRGBPoint(160, 0.95, 0.95, 0.6);
+  colour->AddRGBPoint(280, 0.9, 0.2, 0.1);
+  vtkNew<vtkPiecewiseFunction> opacity;
+  opacity->AddPoint(40, 0.0);
+  opacity->AddPoint(120, 0.15);
+  opacity->AddPoint(200, 0.6);
+  opacity->AddPoint(280, 0.9);
+  vtkNew<vtkVolumeProperty> property;
+  property->SetColor(colour);
+  property->SetScalarOpacity(opacity);
+  property->SetScalarOpacityUnitDistance(5.0);
+  property->SetInterpolationTypeToLinear();
+  property->SetShade(shade ? 1 : 0);
+  property->SetAmbient(0.2);
+  property->SetDiffuse(0.7);
+  property->SetSpecular(0.3);
+  property->SetSpecularPower(12.0);
+  mapper->SetInputDataObject(input);
+  vtkNew<vtkVolume> volume;
+  volume->SetMapper(mapper);
+  volume->SetProperty(property);
+  vtkNew<vtkRenderer> renderer;
+  renderer->SetBackground(Background[0], Background[1], Background[2]);
+  renderer->AddVolume(volume);
+  if (kit)
+  {
+    vtkNew<vtkLightKit> lights;
+    lights->AddLightsToRenderer(renderer);
+  }
+  vtkNew<vtkRenderWindow> window;
+  window->SetOffScreenRendering(1);
+  window->SetSize(200, 200);
+  window->AddRenderer(renderer);
+  renderer->ResetCamera();
+  renderer->GetActiveCamera()->Azimuth(35);
+  renderer->GetActiveCamera()->Elevation(20);
+  renderer->GetActiveCamera()->OrthogonalizeViewUp();
+  renderer->ResetCameraClippingRange();
+  window->Render();
+  return Grab(window, false);
+}
+
+TEST(MapperShadingAgainstVTK, LitAsVTKsGPURayCasterLightsImageData)
+{
+  // The whole chain against VTK itself: the wavelet as image data through VTK's GPU ray
+  // caster, and tetrahedralized through MTPT (pre-integrated), lit by the renderer's
+  // headlight and by a light kit, in VTK's default window.
+  vtkNew<vtkRTAnalyticSource> source;
+  source->SetWholeExtent(-10, 10, -10, 10, -10, 10);
+  source->Update();
+  vtkNew<vtkDataSetTriangleFilter> tetrahedra;
+  tetrahedra->SetInputConnection(source->GetOutputPort());
+  tetrahedra->Update();
+  for (bool kit : { false, true })
+  {
+    vtkNew<vtkGPUVolumeRayCastMapper> rayCast;
+    rayCast->AutoAdjustSampleDistancesOff();
+    rayCast->SetSampleDistance(0.05f);
+    auto theirs = RenderLit(source->GetOutput(), rayCast, kit);
+    auto mapper = MakeMapper(Mapper::CPU_BACKEND);
+    mapper->SetShadingMode(Mapper::PRE_INTEGRATED_SHADING);
+    auto ours = RenderLit(tetrahedra->GetOutput(), mapper, kit);
+    auto unlit = RenderLit(tetrahedra->GetOutput(), MakeMapper(Mapper::CPU_BACKEND), kit, false);
+    const std::string label = std::string("shading-vs-gpu-ray-cast-") + (kit ? "kit" : "headlight");
+    Save(ours, label);
+    Save(theirs, label + "-ray-cast");
+    // Measured: covered RMSE 8.3/255 with the headlight (2% of the pixels over 0.1, on the
+    // highlights), 5.5/255 with the kit; the goal is 10/255. Unlit, more than twice as far.
+    ExpectClose(ours, theirs, { 10.0 / 255, 1.0, 0.1 }, label, 0.1);
+    const double lit = Compare(ours, theirs).coveredRmse;
+    EXPECT_GT(Compare(unlit, theirs).coveredRmse, 2 * lit) << label << ": the light matters";
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, MapperShading,
