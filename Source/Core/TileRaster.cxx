@@ -442,7 +442,8 @@ HWY_INLINE hn::Mask<D> Transparent(D d, const TileRow& row, int x)
 /**
  * Blends fragments of opacity a and colour c under what the lanes `keep` of the vector at
  * tile column x of `row` hold (premultiplied colour C, coverage alpha A), front to back:
- * C += (1 - A) a c, A += (1 - A) a. Back to front with OpenGL's blending (VTK's PT's, over)
+ * C += (1 - A) a c, A += (1 - A) a, with c lit first by the row's fan (TileRow::light:
+ * clamp(scale c + offset, 0, 1)). Back to front with OpenGL's blending (VTK's PT's, over)
  * gives the same image up to rounding. Returns the lanes' alpha after the blend: a caller that
  * reads it again gets it from a register, not from the store just made (a masked store, which
  * the processor cannot forward to a load).
@@ -470,8 +471,8 @@ HWY_INLINE hn::Vec<D> BlendUnder(
   return blended;
 }
 
-/// BlendUnder for one pixel: a fragment of opacity a and colour (r, g, b) under what pixel x
-/// of `row` holds.
+/// BlendUnder for one pixel: a fragment of opacity a and colour (r, g, b), lit as there,
+/// under what pixel x of `row` holds.
 inline void BlendUnderPixel(const TileRow& row, int x, float a, float r, float g, float b)
 {
   if (row.light)
