@@ -390,17 +390,15 @@ void FramePipeline::LightWindow(std::size_t first, std::size_t count, const Ligh
       {
         return;
       }
-      double centroid[3] = { 0, 0, 0 };
+      double corners[4][3];
       for (int i = 0; i < 4; ++i)
       {
         const ProjectedPoint& p = in.points[ids[i]];
-        centroid[0] += 0.25 * p.eyeX;
-        centroid[1] += 0.25 * p.eyeY;
-        centroid[2] += 0.25 * p.eyeZ;
+        corners[i][0] = p.eyeX;
+        corners[i][1] = p.eyeY;
+        corners[i][2] = p.eyeZ;
       }
-      double normal[3];
-      EyeNormal(normalMatrix, normals + 3 * cell, normal);
-      factors[r - first] = LightCell(lighting, normal, centroid);
+      factors[r - first] = LightTetrahedron(lighting, normalMatrix, normals + 3 * cell, corners);
     };
     const auto n = static_cast<std::int64_t>(listed);
 #pragma omp parallel for num_threads(threads) schedule(static)

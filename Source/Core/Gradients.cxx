@@ -34,14 +34,6 @@ std::vector<double> ModelCoordinates(const PointsView& points)
   return xyz;
 }
 
-/// c = a x b.
-void Cross(const double a[3], const double b[3], double c[3])
-{
-  c[0] = a[1] * b[2] - a[2] * b[1];
-  c[1] = a[2] * b[0] - a[0] * b[2];
-  c[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 /**
  * A tetrahedron's volume times its gradient (weighted[0..2]) and its volume (weighted[3]):
  * with edges e_k = p_k - p_0 and differences d_k = s_k - s_0, the gradient is
@@ -63,9 +55,9 @@ bool WeightedGradient(const double* xyz, const float* scalars, const std::int64_
     d[k] = static_cast<double>(scalars[ids[k + 1]]) - scalars[ids[0]];
   }
   double c23[3], c31[3], c12[3];
-  Cross(e[1], e[2], c23);
-  Cross(e[2], e[0], c31);
-  Cross(e[0], e[1], c12);
+  Cross3(e[1], e[2], c23);
+  Cross3(e[2], e[0], c31);
+  Cross3(e[0], e[1], c12);
   const double det = Dot3(e[0], c23);
   if (!(det != 0) || !std::isfinite(det))
   {

@@ -246,4 +246,19 @@ void EyeNormal(const double n[9], const float normal[3], double eye[3])
   }
 }
 
+LightFactors LightTetrahedron(const Lighting& lighting, const double normalMatrix[9],
+  const float normal[3], const double corners[4][3])
+{
+  double centroid[3] = { 0, 0, 0 }, eye[3];
+  for (int i = 0; i < 4; ++i)
+  {
+    for (int k = 0; k < 3; ++k)
+    {
+      centroid[k] += 0.25 * corners[i][k];
+    }
+  }
+  EyeNormal(normalMatrix, normal, eye);
+  return LightCell(lighting, eye, centroid);
+}
+
 } // namespace mtpt

@@ -115,17 +115,6 @@ bool Invert(const Matrix4& m, Matrix4& out)
   return true;
 }
 
-inline double Dot(const double a[3], const double b[3])
-{
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-inline void Cross(const double a[3], const double b[3], double out[3])
-{
-  out[0] = a[1] * b[2] - a[2] * b[1];
-  out[1] = a[2] * b[0] - a[0] * b[2];
-  out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 /// The transfer functions as sorted node arrays, and every node scalar (the breakpoints).
 struct TransferFunctions
 {
@@ -435,11 +424,11 @@ bool SetUpCell(const EyePoint* eye, const std::int64_t ids[4], const double valu
     e1[d] = q[3][d] - q[1][d];
     e2[d] = q[2][d] - q[1][d];
   }
-  Cross(e1, e2, c.normal[0]);
-  Cross(q[2], q[3], c.normal[1]);
-  Cross(q[3], q[1], c.normal[2]);
-  Cross(q[1], q[2], c.normal[3]);
-  const double det = Dot(q[1], c.normal[1]);
+  Cross3(e1, e2, c.normal[0]);
+  Cross3(q[2], q[3], c.normal[1]);
+  Cross3(q[3], q[1], c.normal[2]);
+  Cross3(q[1], q[2], c.normal[3]);
+  const double det = Dot3(q[1], c.normal[1]);
   if (!(std::fabs(det) > 0) || !std::isfinite(det))
   {
     return false;
@@ -477,8 +466,8 @@ inline bool Clip(
   for (int k = 0; k < 4; ++k)
   {
     const double rel[3] = { o[0] - c.offset[k][0], o[1] - c.offset[k][1], o[2] - c.offset[k][2] };
-    num[k] = Dot(c.normal[k], rel);
-    den[k] = Dot(c.normal[k], direction);
+    num[k] = Dot3(c.normal[k], rel);
+    den[k] = Dot3(c.normal[k], direction);
     if (den[k] > 0)
     {
       enter = std::max(enter, -num[k] / den[k]);
@@ -544,16 +533,12 @@ std::vector<LightFactors> CellLights(const CellsView& cells, std::size_t pointCo
       {
         continue;
       }
-      double centroid[3] = { 0, 0, 0 }, normal[3];
+      double corners[4][3];
       for (int i = 0; i < 4; ++i)
       {
-        for (int k = 0; k < 3; ++k)
-        {
-          centroid[k] += 0.25 * eye[ids[i]].eye[k];
-        }
+        std::copy(eye[ids[i]].eye, eye[ids[i]].eye + 3, corners[i]);
       }
-      EyeNormal(normalMatrix, s.normals + 3 * c, normal);
-      lights[c] = LightCell(s.lighting, normal, centroid);
+      lights[c] = LightTetrahedron(s.lighting, normalMatrix, s.normals + 3 * c, corners);
     }
   });
   return lights;
@@ -792,17 +777,17 @@ double CrossTriangle(const ReferenceTriangle& t, const double origin[3], const d
     s[d] = origin[d] - t.eye[0][d];
   }
   double p[3], q[3];
-  Cross(direction, e2, p);
-  const double det = Dot(e1, p);
+  Cross3(direction, e2, p);
+  const double det = Dot3(e1, p);
   if (!(std::fabs(det) > 0) || !std::isfinite(det))
   {
     return -1; // parallel to the triangle, or degenerate
   }
   const double inverse = 1.0 / det;
-  const double a = Dot(s, p) * inverse;
-  Cross(s, e1, q);
-  const double b = Dot(direction, q) * inverse;
-  const double u = Dot(e2, q) * inverse;
+  const double a = Dot3(s, p) * inverse;
+  Cross3(s, e1, q);
+  const double b = Dot3(direction, q) * inverse;
+  const double u = Dot3(e2, q) * inverse;
   const bool inside = a >= 0 && b >= 0 && a + b <= 1 && u >= 0 && u <= 1;
   return inside ? u : -1;
 }
@@ -1296,7 +1281,7 @@ void IntegratePixels(const Scene& scene, int bandStart, int bandEnd,
     const int y = bandStart + static_cast<int>(i / width);
     double origin[3], direction[3];
     scene.ray(x, y, origin, direction);
-    const double scale = std::sqrt(Dot(direction, direction));
+    const double scale = std::sqrt(Dot3(direction, direction));
     if (scene.settings.clipPlanes.count > 0)
     {
       double low, high;

@@ -25,7 +25,6 @@
 
 #include "mtpt/MeshView.h"
 
-
 namespace mtpt
 {
 
@@ -73,6 +72,14 @@ inline double Dot3(const double a[3], const double b[3])
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
+/// out = a x b of 3-vectors.
+inline void Cross3(const double a[3], const double b[3], double out[3])
+{
+  out[0] = a[1] * b[2] - a[2] * b[1];
+  out[1] = a[2] * b[0] - a[0] * b[2];
+  out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
 /// v normalized in place; false (v unchanged) when its length is 0 or not finite.
 bool Normalize3(double v[3]);
 
@@ -111,6 +118,15 @@ bool NormalMatrix(const Matrix4& modelView, double normalMatrix[9]);
 
 /// `normal` (model coordinates) in eye coordinates, unit length (zero stays zero).
 void EyeNormal(const double normalMatrix[9], const float normal[3], double eye[3]);
+
+/**
+ * The model's lighting of one tetrahedron: LightCell at the centroid of its `corners` (eye
+ * coordinates) with its `normal` (model coordinates) taken to eye coordinates by
+ * `normalMatrix` (NormalMatrix). The one definition the frame pipeline and the reference
+ * share. Thread safety: pure function.
+ */
+LightFactors LightTetrahedron(const Lighting& lighting, const double normalMatrix[9],
+  const float normal[3], const double corners[4][3]);
 
 } // namespace mtpt
 

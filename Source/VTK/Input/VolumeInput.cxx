@@ -16,7 +16,6 @@
 #include "vtkVolume.h"
 #include "vtkVolumeProperty.h"
 
-#include <cmath>
 #include <sstream>
 
 namespace mtpt
@@ -257,7 +256,6 @@ Lighting VolumeLighting(vtkRenderer* renderer, vtkVolumeProperty* property, int&
     position[3] = focal[3] = 1;
     view->MultiplyPoint(position, eyePosition);
     view->MultiplyPoint(focal, eyeFocal);
-    double length = 0;
     for (int k = 0; k < 3; ++k)
     {
       l.ambient[k] = light->GetAmbientColor()[k] * intensity;
@@ -266,12 +264,11 @@ Lighting VolumeLighting(vtkRenderer* renderer, vtkVolumeProperty* property, int&
       l.position[k] = eyePosition[k];
       l.direction[k] = eyeFocal[k] - eyePosition[k];
       l.attenuation[k] = light->GetAttenuationValues()[k];
-      length += l.direction[k] * l.direction[k];
     }
-    length = std::sqrt(length);
-    for (int k = 0; k < 3; ++k)
+    if (!Normalize3(l.direction)) // a light at its focal point: down the view axis
     {
-      l.direction[k] = length > 0 ? l.direction[k] / length : (k == 2 ? -1.0 : 0.0);
+      l.direction[0] = l.direction[1] = 0;
+      l.direction[2] = -1;
     }
     l.positional = light->GetPositional() != 0;
     l.coneAngle = light->GetConeAngle();
