@@ -40,7 +40,6 @@
 #include "vtkPlotPoints.h"
 #include "vtkPointData.h"
 #include "vtkProjectedTetrahedraMapper.h"
-#include "vtkRenderWindow.h"
 #include "vtkRenderer.h"
 #include "vtkTable.h"
 #include "vtkUnstructuredGrid.h"
@@ -819,22 +818,6 @@ void PlotSummary(const std::vector<Row>& rows, const std::string& path)
   }
 }
 
-std::string OpenGLRendererName()
-{
-  vtkNew<vtkRenderWindow> probe;
-  probe->SetOffScreenRendering(1);
-  probe->Render();
-  const std::string caps = probe->ReportCapabilities();
-  const auto at = caps.find("OpenGL renderer string:");
-  if (at == std::string::npos)
-  {
-    return "unknown";
-  }
-  std::string name = caps.substr(at + 23, caps.find('\n', at) - at - 23);
-  name.erase(0, name.find_first_not_of(' '));
-  return name;
-}
-
 /// Every contender in every kind of window of --multisampling, in table order.
 std::vector<std::string> ContenderRuns(const Options& o)
 {
@@ -983,7 +966,7 @@ int main(int argc, char** argv)
   }
   o.loadAfter = LoadAverage();
   // Only now an OpenGL context in this process (no more forks).
-  o.renderer = OpenGLRendererName();
+  o.renderer = QueryOpenGL().renderer;
   WriteOutputs(rows, o);
   PlotSummary(rows, o.out + "/accuracy.png");
   std::printf("%s", Markdown(rows, o).c_str());

@@ -10,6 +10,9 @@
 // window; --rounds repeats everything with the contenders alternating.
 // --unchanged also times frames whose view does not change, as a separate column.
 // --csv writes every figure; run under a display (Testing/xvfb-launch.sh without one).
+// "gpu-raycast" (VTK's GPU ray caster) draws the scenes that have image data (the wavelet)
+// and is left out of the others. --opengl-info prints OpenGL's vendor, renderer and version
+// and exits; every run prints them first.
 #include "Harness.h"
 
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
@@ -40,6 +43,7 @@ struct Options
   std::string sizes = "16,512,1024";
   std::string contenders = "mtpt-cpu,mtpt-gl,vtk-pt,raycast,zsweep";
   bool unchanged = false;
+  bool openglInfo = false;
   std::string csv;
 };
 
@@ -204,11 +208,21 @@ int main(int argc, char* argv[])
     "scenes (Harness.h: wavelet, grid:N, bluntfin, cubes, "
     "blocks, comb, kiefer, ...)");
   app.add_option("--sizes", o.sizes, "window sizes: 512 (square) or 1920x1080, comma-separated");
-  app.add_option("--contenders", o.contenders, "mtpt-cpu, mtpt-gl, vtk-pt, raycast, zsweep");
+  app.add_option("--contenders", o.contenders,
+    "mtpt-cpu, mtpt-gl, vtk-pt, raycast, zsweep, gpu-raycast (image data: the wavelet)");
   app.add_flag("--unchanged", o.unchanged, "also time frames whose view does not change");
+  app.add_flag(
+    "--opengl-info", o.openglInfo, "print OpenGL's vendor, renderer and version, and exit");
   app.add_option("--csv", o.csv, "append every figure to this CSV file");
   CLI11_PARSE(app, argc, argv);
   ApplyImageSamplingOptions(app, o.common);
+  const OpenGLInfo gl = QueryOpenGL();
+  std::printf("OpenGL vendor: %s\nOpenGL renderer: %s\nOpenGL version: %s\n", gl.vendor.c_str(),
+    gl.renderer.c_str(), gl.version.c_str());
+  if (o.openglInfo)
+  {
+    return 0;
+  }
 
   std::vector<std::pair<int, int>> sizes;
   for (const std::string& text : SplitList(o.sizes))
@@ -224,7 +238,7 @@ int main(int argc, char* argv[])
   const std::vector<std::string> names = SplitList(o.contenders);
   for (const std::string& name : names)
   {
-    if (!MakeMapper(name))
+    if (!MakeContender(name))
     {
       std::fprintf(stderr, "mtpt_bench_frames: unknown contender '%s'\n", name.c_str());
       return 2;
@@ -256,12 +270,27 @@ int main(int argc, char* argv[])
       return 1;
     }
     auto property = MakeProperty(scene);
+    std::vector<std::string> drawn;
+    for (const std::string& name : names)
+    {
+      if (DrawsImageData(name) && !scene.image)
+      {
+        std::printf(
+          "%s: left out on %s, which has no image data\n", name.c_str(), meshName.c_str());
+        continue;
+      }
+      drawn.push_back(name);
+    }
     for (const auto& size : sizes)
     {
       const auto results =
-        MeasureContenders(scene, property, names, size.first, size.second, o.common, o.unchanged);
-      PrintScene(scene, size.first, size.second, names, results, o, csv);
+        MeasureContenders(scene, property, drawn, size.first, size.second, o.common, o.unchanged);
+      PrintScene(scene, size.first, size.second, drawn, results, o, csv);
       std::fflush(stdout);
+      if (csv.is_open())
+      {
+        csv.flush(); // a run cut short keeps every scene it finished
+      }
     }
   }
   return 0;

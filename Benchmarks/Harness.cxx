@@ -21,6 +21,7 @@
 #include "vtkColorTransferFunction.h"
 #include "vtkDataSetTriangleFilter.h"
 #include "vtkDoubleArray.h"
+#include "vtkGPUVolumeRayCastMapper.h"
 #include "vtkImageData.h"
 #include "vtkPiecewiseFunction.h"
 #include "vtkPointData.h"
@@ -86,6 +87,7 @@ Scene Wavelet()
   scene.name = "wavelet";
   scene.grid = tetrahedralize->GetOutput();
   scene.grid->GetPointData()->GetScalars()->GetRange(scene.range);
+  scene.image = source->GetOutput();
   return scene;
 }
 
@@ -149,7 +151,8 @@ bool LoadScene(
     return true;
   }
   std::string path, scalar;
-  if (name == "bluntfin")
+  if (name == "bluntfin" &&
+    vtksys::SystemTools::FileExists(MTPT_SOURCE_DIR "/Data/bluntfin_tets.vtu"))
   {
     path = MTPT_SOURCE_DIR "/Data/bluntfin_tets.vtu";
     scalar = "Density";
@@ -193,10 +196,22 @@ bool EndsWith(const std::string& s, const std::string& suffix)
 namespace
 {
 /// Whether `mapper` takes a composite data set as its input.
-bool TakesBlocks(vtkUnstructuredGridVolumeMapper* mapper)
+bool TakesBlocks(vtkAbstractVolumeMapper* mapper)
 {
   return vtkMultiThreadedProjectedTetrahedraMapper::SafeDownCast(mapper) ||
     vtkMultiBlockUnstructuredGridVolumeMapper::SafeDownCast(mapper);
+}
+
+/// What `mapper` draws of `scene`: its image data for a mapper of image data, its blocks for
+/// a mapper that takes them, else its grid.
+vtkDataObject* InputOf(const Scene& scene, vtkAbstractVolumeMapper* mapper)
+{
+  if (!vtkUnstructuredGridVolumeMapper::SafeDownCast(mapper))
+  {
+    return scene.image;
+  }
+  return scene.blocks && TakesBlocks(mapper) ? scene.blocks.Get()
+                                             : static_cast<vtkDataObject*>(scene.grid);
 }
 
 /// A multi-block file: its blocks kept, the array chosen in the first block with cells.
@@ -372,7 +387,7 @@ vtkSmartPointer<vtkVolumeProperty> MakeProperty(const Scene& scene)
 const std::vector<std::string>& ContenderNames()
 {
   static const std::vector<std::string> names = { "mtpt", "mtpt-cpu", "mtpt-gl", "vtk-pt",
-    "vtk-multiblock", "raycast", "zsweep" };
+    "vtk-multiblock", "raycast", "zsweep", "gpu-raycast" };
   return names;
 }
 
@@ -432,14 +447,55 @@ vtkSmartPointer<vtkUnstructuredGridVolumeMapper> MakeMapper(
   return nullptr;
 }
 
-Stage::Stage(const Scene& scene, vtkVolumeProperty* property,
-  vtkUnstructuredGridVolumeMapper* mapper, int width, int height, const StageOptions& options)
+vtkSmartPointer<vtkAbstractVolumeMapper> MakeContender(
+  const std::string& name, const MapperSettings& settings)
+{
+  if (name == "gpu-raycast")
+  {
+    auto mapper = vtkSmartPointer<vtkGPUVolumeRayCastMapper>::New();
+    mapper->AutoAdjustSampleDistancesOff();
+    mapper->SetImageSampleDistance(1.0);
+    return mapper;
+  }
+  return MakeMapper(name, settings);
+}
+
+bool DrawsImageData(const std::string& name)
+{
+  return name == "gpu-raycast";
+}
+
+OpenGLInfo QueryOpenGL()
+{
+  vtkNew<vtkRenderWindow> probe;
+  probe->SetOffScreenRendering(1);
+  probe->Render();
+  const std::string caps = probe->ReportCapabilities();
+  OpenGLInfo info;
+  const std::pair<const char*, std::string*> fields[] = { { "OpenGL vendor string:", &info.vendor },
+    { "OpenGL renderer string:", &info.renderer }, { "OpenGL version string:", &info.version } };
+  for (const auto& field : fields)
+  {
+    const auto at = caps.find(field.first);
+    if (at == std::string::npos)
+    {
+      *field.second = "unknown";
+      continue;
+    }
+    const std::size_t from = at + std::char_traits<char>::length(field.first);
+    std::string value = caps.substr(from, caps.find('\n', from) - from);
+    value.erase(0, value.find_first_not_of(' '));
+    *field.second = value;
+  }
+  return info;
+}
+
+Stage::Stage(const Scene& scene, vtkVolumeProperty* property, vtkAbstractVolumeMapper* mapper,
+  int width, int height, const StageOptions& options)
   : Mapper(mapper)
   , StartCamera(options.view)
 {
-  mapper->SetInputDataObject(scene.blocks && TakesBlocks(mapper)
-      ? scene.blocks.Get()
-      : static_cast<vtkDataObject*>(scene.grid));
+  mapper->SetInputDataObject(InputOf(scene, mapper));
   this->Volume->SetMapper(mapper);
   this->Volume->SetProperty(property);
   this->Renderer->SetBackground(
@@ -464,7 +520,7 @@ Stage::~Stage()
   this->Mapper->ReleaseGraphicsResources(this->Window);
 }
 
-void Stage::SetMapper(vtkUnstructuredGridVolumeMapper* mapper, vtkDataObject* input)
+void Stage::SetMapper(vtkAbstractVolumeMapper* mapper, vtkDataObject* input)
 {
   this->Mapper->ReleaseGraphicsResources(this->Window);
   mapper->SetInputDataObject(input ? input : this->Mapper->GetInputDataObject(0, 0));
@@ -572,7 +628,7 @@ bool ParseSize(const std::string& text, int& width, int& height)
   }
 }
 
-StageFigures FiguresOf(vtkUnstructuredGridVolumeMapper* mapper)
+StageFigures FiguresOf(vtkAbstractVolumeMapper* mapper)
 {
   StageFigures f;
   auto* ours = vtkMultiThreadedProjectedTetrahedraMapper::SafeDownCast(mapper);
@@ -608,7 +664,7 @@ Measurement Measure(const Scene& scene, vtkVolumeProperty* property, const std::
   const StageOptions& stageOptions)
 {
   Measurement m;
-  auto mapper = MakeMapper(name, options.mapper);
+  auto mapper = MakeContender(name, options.mapper);
   StageOptions look = stageOptions;
   if (options.desiredUpdateRate > 0)
   {

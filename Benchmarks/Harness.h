@@ -49,6 +49,7 @@ class App;
 }
 
 VTK_ABI_NAMESPACE_BEGIN
+class vtkAbstractVolumeMapper;
 class vtkDataObject;
 class vtkRenderWindow;
 class vtkRenderer;
@@ -75,14 +76,18 @@ struct Scene
   /// A composite data set (a multi-block file): drawn instead of `grid` by the mappers that
   /// take one (MTPT, VTK's multi-block mapper); `grid` then holds its blocks appended.
   vtkSmartPointer<vtkDataObject> blocks;
+  /// The same field as image data, for the scenes made from one (the wavelet): what VTK's
+  /// GPU ray caster draws (DrawsImageData). Null for the others.
+  vtkSmartPointer<vtkImageData> image;
 };
 
 /**
  * Scenes by name: "wavelet" (vtkRTAnalyticSource over [-30, 30]^3 tetrahedralized:
- * 1,080,000 tetrahedra), "grid:N" (a generated jittered grid of at least N tetrahedra),
- * "bluntfin" (the repository's data set, 187,395), "cubes" (two cubes of 5 tetrahedra, as
- * VTK's small PT tests), "blocks" (a 10^3 block source of 6,000 tetrahedra, as VTK's
- * vector-component test), and the real meshes of a data folder ("comb", "kiefer",
+ * 1,080,000 tetrahedra, with its image data), "grid:N" (a generated jittered grid of at least
+ * N tetrahedra), "bluntfin" (the repository's data set, 187,395; from the data folder's
+ * bluntfin/ when the repository is not at hand, as in the device kit), "cubes" (two cubes of
+ * 5 tetrahedra, as VTK's small PT tests), "blocks" (a 10^3 block source of 6,000 tetrahedra,
+ * as VTK's vector-component test), and the real meshes of a data folder ("comb", "kiefer",
  * "pulley", "fire_ug", "ironProt"; see `SharedDataSets`). Returns false with `error` set
  * when the name is unknown or its file cannot be read.
  */
@@ -128,10 +133,28 @@ struct MapperSettings
 vtkSmartPointer<vtkUnstructuredGridVolumeMapper> MakeMapper(
   const std::string& name, const MapperSettings& settings = {});
 
+/**
+ * Every contender of MakeMapper, and "gpu-raycast": VTK's GPU ray caster
+ * (vtkGPUVolumeRayCastMapper, full resolution every frame) of the scene's image data, for
+ * scale where a scene has one. Null for an unknown name.
+ */
+vtkSmartPointer<vtkAbstractVolumeMapper> MakeContender(
+  const std::string& name, const MapperSettings& settings = {});
+
+/// Whether contender `name` draws the scene's image data (Scene::image) instead of its grid.
+bool DrawsImageData(const std::string& name);
+
+/// OpenGL's vendor, renderer and version strings in a window as VTK makes it here.
+struct OpenGLInfo
+{
+  std::string vendor, renderer, version;
+};
+OpenGLInfo QueryOpenGL();
+
 /// The blend modes' names, in the order of their values (vtkVolumeMapper's enum).
 const std::vector<std::string>& BlendModeNames();
 
-/// Every contender name MakeMapper knows.
+/// Every contender name MakeContender knows.
 const std::vector<std::string>& ContenderNames();
 
 /// The camera of a stage's start view, after it is reset on the volume (VTK's default
@@ -161,12 +184,13 @@ struct StageOptions
 const char* WindowName(bool multisampling);
 
 /// A volume in a renderer in a window as VTK makes it by default. Its input is the scene's
-/// blocks for the mappers that take a composite data set, else its grid.
+/// blocks for the mappers that take a composite data set, its image data for those that draw
+/// image data, else its grid.
 class Stage
 {
 public:
-  Stage(const Scene& scene, vtkVolumeProperty* property, vtkUnstructuredGridVolumeMapper* mapper,
-    int width, int height, const StageOptions& options = {});
+  Stage(const Scene& scene, vtkVolumeProperty* property, vtkAbstractVolumeMapper* mapper, int width,
+    int height, const StageOptions& options = {});
   ~Stage();
 
   /// The starting view (StageOptions::view).
@@ -178,7 +202,7 @@ public:
   /// The window's RGB image as drawn by the last frame.
   vtkSmartPointer<vtkImageData> Image();
   /// Draws the volume with another mapper from now on, of `input` (null: the same input).
-  void SetMapper(vtkUnstructuredGridVolumeMapper* mapper, vtkDataObject* input = nullptr);
+  void SetMapper(vtkAbstractVolumeMapper* mapper, vtkDataObject* input = nullptr);
 
   vtkRenderer* GetRenderer() { return this->Renderer; }
   vtkRenderWindow* GetWindow() { return this->Window; }
@@ -188,7 +212,7 @@ private:
   vtkNew<vtkVolume> Volume;
   vtkNew<vtkRenderer> Renderer;
   vtkNew<vtkRenderWindow> Window;
-  vtkUnstructuredGridVolumeMapper* Mapper;
+  vtkAbstractVolumeMapper* Mapper;
   View StartCamera;
 };
 
@@ -244,7 +268,7 @@ struct StageFigures
 };
 
 /// The figures of the last frame `mapper` drew.
-StageFigures FiguresOf(vtkUnstructuredGridVolumeMapper* mapper);
+StageFigures FiguresOf(vtkAbstractVolumeMapper* mapper);
 
 /// What one contender measured on one scene and window size.
 struct Measurement
