@@ -11,13 +11,7 @@ set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="$here/build"
 
-"$here/scripts/install-deps.sh"
-cmake -S "$here" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$build" --parallel "$(nproc)"
-cmake --install "$build" --prefix "$build/install" >/dev/null
-cmake -S "$here/Examples" -B "$build/example" -G Ninja -DCMAKE_BUILD_TYPE=Release \
-  -DCMAKE_PREFIX_PATH="$build/install" >/dev/null
-cmake --build "$build/example"
+"$here/scripts/build-example.sh"
 
 args=(--compare-vtk --azimuth 35 --elevation 25 --zoom 1.3
   --output "$build/mtpt_default.png")
