@@ -89,6 +89,7 @@ struct Options
   std::string meshes = "grid,pulley,bluntfin,comb";
   long long gridTets = 200000;
   bool images = false;               ///< also save every image as PNG under out/images
+  std::string contenders;            ///< only the contenders whose names contain one of these
   std::string loadBefore, loadAfter; ///< /proc/loadavg at the start and the end of the run
   std::string renderer = "unknown";  ///< the OpenGL renderer string
 };
@@ -818,15 +819,23 @@ void PlotSummary(const std::vector<Row>& rows, const std::string& path)
   }
 }
 
-/// Every contender in every kind of window of --multisampling, in table order.
+/// Every contender (of --contenders) in every kind of window of --multisampling, in table
+/// order.
 std::vector<std::string> ContenderRuns(const Options& o)
 {
   std::vector<std::string> runs;
+  const std::vector<std::string> wanted = SplitList(o.contenders);
   for (const Contender& c : Contenders())
   {
+    const bool chosen = wanted.empty() ||
+      std::any_of(wanted.begin(), wanted.end(),
+        [&](const std::string& part) { return c.name.find(part) != std::string::npos; });
     for (bool multisampling : o.common.windows)
     {
-      runs.push_back(InWindow(c, multisampling));
+      if (chosen)
+      {
+        runs.push_back(InWindow(c, multisampling));
+      }
     }
   }
   return runs;
@@ -857,6 +866,9 @@ int main(int argc, char** argv)
   app.add_option("--grid-tets", o.gridTets, "tetrahedra of the generated grid")
     ->check(CLI::PositiveNumber);
   app.add_flag("--images", o.images, "also write every image as PNG under <out>/images");
+  app.add_option("--contenders", o.contenders,
+    "only the contenders whose names contain one of these, comma-separated (e.g. "
+    "\"pre-integrated CPU 2t,VTK PT\"); default: all");
   CLI11_PARSE(app, argc, argv);
   mkdir(o.out.c_str(), 0755);
 

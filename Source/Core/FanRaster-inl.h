@@ -29,10 +29,13 @@
 //   precision) by rounding, a few units in the last place of a float;
 // - the fragment math is ShadeVector's, operation for operation, blended under what the tile
 //   holds (BlendUnder; fans come front to back) where it is not yet opaque.
+// Pre-integrated shading and the blend modes other than Composite take the same path with
+// the corners' scalars instead of their colours (ScalarFanValues): each lane's segment is
+// shaded by SegmentOfLanes (TileRaster.cxx), as the triangle path's queued fragments are.
 // Fans that are not convex, whose centre is not strictly inside (a triangle without area or
 // folded over), that reach beyond the fixed-point range or are large (FanExtentLimit), single
-// triangles (the slot entry point's), fans with dependent components' colours, and every
-// fan in pre-integrated shading take the triangle path.
+// triangles (the slot entry point's), and fans with dependent components' colours take the
+// triangle path.
 
 /// Fans at most this large (fixed point, the larger side of the bounding box) take the fan
 /// path: over the pixels it tests (the box, widened by a vector's lanes across), every edge
@@ -523,25 +526,20 @@ HWY_INLINE hn::Vec<D> ShadeFanLanes(D d, const RasterFrame& f, const TileRow& ro
 }
 
 /**
- * A blend mode other than Composite: folds the lanes `keep` of the vector at tile column x
- * of tile row y (image), `offset` columns right of the row's first vector, each with the
- * values of its triangle's planes (ScalarFanValues).
+ * The ray segments of the lanes of the vector at tile column x of tile row y (image), from
+ * the values of their triangles' planes (ScalarFanValues): the scalars at the front and the
+ * back and, unless `scalarsOnly`, the segment's eye length.
  */
 template <class D>
-HWY_INLINE void ReduceFanLanes(D d, const RasterFrame& f, const TileTarget& tile, Mode mode,
-  const TileRow& row, const FanPlanes& p, const EdgeLanes<D>* spokes, int x, int y, int offset,
-  hn::Mask<D> keep)
+HWY_INLINE void LaneSegments(D d, const RasterFrame& f, const TileTarget& tile, Mode mode,
+  const hn::Vec<D> value[6], int x, int y, bool scalarsOnly, hn::Vec<D>& front,
+  hn::Vec<D>& back, hn::Vec<D>& length)
 {
-  hn::Vec<D> value[6];
-  FanLaneValues(d, p, spokes, x, offset, value);
-  const auto front = hn::Div(value[0], value[1]), back = hn::Div(value[2], value[3]);
-  if (f.blendMode == BlendMode::MaximumIntensity || f.blendMode == BlendMode::MinimumIntensity)
-  {
-    FoldExtremes(d, f, row, x, front, back, value[5], keep);
-    return;
-  }
-  auto length = value[4];
-  if (mode == Mode::ExactIntegral)
+  // Mode::Integrated's denominators are 1.
+  front = mode == Mode::ExactIntegral ? hn::Div(value[0], value[1]) : value[0];
+  back = mode == Mode::ExactIntegral ? hn::Div(value[2], value[3]) : value[2];
+  length = value[4];
+  if (mode == Mode::ExactIntegral && !scalarsOnly)
   {
     // The eye ray through the lanes' pixel centres (PerspectiveInterpolation), and the
     // segment between the faces' depths 1 / value[1] and 1 / value[3].
@@ -557,7 +555,62 @@ HWY_INLINE void ReduceFanLanes(D d, const RasterFrame& f, const TileTarget& tile
     length = hn::Mul(hn::ZeroIfNegative(hn::Sub(hn::Div(hn::Set(d, 1.0f), value[3]),
                        hn::Div(hn::Set(d, 1.0f), value[1]))), ray);
   }
+}
+
+/**
+ * A blend mode other than Composite: folds the lanes `keep` of the vector at tile column x
+ * of tile row y (image), `offset` columns right of the row's first vector, each with the
+ * values of its triangle's planes (ScalarFanValues).
+ */
+template <class D>
+HWY_INLINE void ReduceFanLanes(D d, const RasterFrame& f, const TileTarget& tile, Mode mode,
+  const TileRow& row, const FanPlanes& p, const EdgeLanes<D>* spokes, int x, int y, int offset,
+  hn::Mask<D> keep)
+{
+  hn::Vec<D> value[6];
+  FanLaneValues(d, p, spokes, x, offset, value);
+  const bool extremes =
+    f.blendMode == BlendMode::MaximumIntensity || f.blendMode == BlendMode::MinimumIntensity;
+  hn::Vec<D> front, back, length;
+  LaneSegments(d, f, tile, mode, value, x, y, extremes, front, back, length);
+  if (extremes)
+  {
+    FoldExtremes(d, f, row, x, front, back, value[5], keep);
+    return;
+  }
   FoldIntegrals(d, f, row, x, front, back, length, value[5], keep);
+}
+
+/**
+ * Pre-integrated shading of the lanes `keep` of the vector at tile column x of tile row y
+ * (image), `offset` columns right of the row's first vector: each lane's segment from its
+ * triangle's planes (ScalarFanValues), shaded as SegmentOfLanes (the tables read through
+ * `reader`) and blended under what the tile holds where it is inside the depth range.
+ * Returns the lanes' alpha after it.
+ */
+template <class D, class Reader>
+HWY_INLINE hn::Vec<D> IntegrateFanLanes(D d, const RasterFrame& f, const TileTarget& tile,
+  Mode mode, const SegmentTable& table, const Reader& reader, const TileRow& row,
+  const FanPlanes& p, const EdgeLanes<D>* spokes, int x, int y, int offset, hn::Mask<D> keep)
+{
+  hn::Vec<D> value[6];
+  FanLaneValues(d, p, spokes, x, offset, value);
+  const auto z = value[5];
+  keep = hn::And(keep, hn::And(hn::Ge(z, hn::Set(d, -1.0f)), hn::Le(z, hn::Set(d, 1.0f))));
+  if (row.depth)
+  {
+    const auto depth = hn::MulAdd(z, hn::Set(d, 0.5f), hn::Set(d, 0.5f));
+    keep = hn::And(keep, hn::Le(depth, hn::LoadU(d, row.depth + x)));
+  }
+  if (hn::AllFalse(d, keep))
+  {
+    return hn::LoadU(d, row.a + x); // clipped or behind opaque geometry: no segment to shade
+  }
+  hn::Vec<D> front, back, length, colour[3];
+  LaneSegments(d, f, tile, mode, value, x, y, false, front, back, length);
+  const auto opacity = SegmentOfLanes(d, table, reader, front, back, length, colour);
+  keep = hn::And(keep, hn::Gt(opacity, hn::Zero(d)));
+  return BlendUnder(d, row, x, opacity, colour, keep);
 }
 
 /**
@@ -567,15 +620,20 @@ HWY_INLINE void ReduceFanLanes(D d, const RasterFrame& f, const TileTarget& tile
 class FanPath
 {
 public:
-  FanPath(const RasterFrame& f, const TileTarget& tile, Mode mode)
+  /// `waiting`: the triangle path's pre-integrated fragments, shaded before a fan is drawn
+  /// so that the tile's fragments are blended in the fans' order.
+  FanPath(const RasterFrame& f, const TileTarget& tile, Mode mode, WaitingFragments& waiting)
     : Frame(f)
     , Target(tile)
+    , Waiting(waiting)
     , Lookup(f.transferFunction)
     , FanMode(mode)
     , Reduces(ReducesInAnyOrder(f.blendMode))
+    , Integrates(!this->Reduces && mode != Mode::Compatible)
     , Applies(f.fanPath && !f.vertexColours && !f.clipToRange &&
         hn::Lanes(FragmentTag()) >= MaxFanTriangles &&
-        (this->Reduces || mode == Mode::Compatible))
+        (!this->Integrates || f.preIntegration->Covers(f.transferFunction)))
+    , Segments(this->Applies && this->Integrates ? SegmentTable(f) : SegmentTable())
   {
     this->Planes.Clear();
     for (int j = 0; j < T && this->Applies; ++j)
@@ -589,9 +647,9 @@ public:
   }
 
   /**
-   * VTK-compatible shading of `fan` into the tile, or its reduction in a blend mode other
-   * than Composite, as its triangles would be drawn. Returns false, having drawn nothing,
-   * when the fan path does not apply: the caller draws the triangles instead.
+   * VTK-compatible or pre-integrated shading of `fan` into the tile, or its reduction in a
+   * blend mode other than Composite, as its triangles would be drawn. Returns false, having
+   * drawn nothing, when the fan path does not apply: the caller draws the triangles instead.
    */
   bool Draw(const Fan& fan, RasterCounts& counts)
   {
@@ -664,6 +722,7 @@ private:
         }
         if (!ready)
         {
+          ShadeWaiting(this->Frame, tile, this->Waiting); // what came before, first
           this->SetUp(fan, g);
           ready = true;
           counts.triangles += static_cast<std::size_t>(g.triangles);
@@ -679,8 +738,15 @@ private:
             x - start, keep);
           continue;
         }
+        if (!this->Integrates)
+        {
+          this->MarkOpaque(y - tile.y0, x,
+            ShadeFanLanes(d, this->Frame, row, this->Planes, spokes, x, x - start, keep));
+          continue;
+        }
         this->MarkOpaque(y - tile.y0, x,
-          ShadeFanLanes(d, this->Frame, row, this->Planes, spokes, x, x - start, keep));
+          IntegrateFanLanes(d, this->Frame, tile, this->FanMode, this->Segments,
+            TableRows(this->Segments), row, this->Planes, spokes, x, y, x - start, keep));
       }
       for (int k = 0; k < g.triangles; ++k)
       {
@@ -724,7 +790,7 @@ private:
   void SetUp(const Fan& fan, const FanGeometry& g)
   {
     hn::Vec<CornerTag> value[6], centre[6];
-    if (this->Reduces)
+    if (this->FanMode != Mode::Compatible)
     {
       ScalarFanValues(this->Frame, this->FanMode, fan, value, centre);
     }
@@ -737,10 +803,13 @@ private:
 
   const RasterFrame& Frame;
   const TileTarget& Target;
+  WaitingFragments& Waiting;
   const TableLookup Lookup;
   const Mode FanMode;
-  const bool Reduces; ///< a blend mode other than Composite (else VTK-compatible shading)
+  const bool Reduces;    ///< a blend mode other than Composite
+  const bool Integrates; ///< pre-integrated shading (else, composite: VTK-compatible)
   const bool Applies;
+  const SegmentTable Segments; ///< pre-integrated shading's tables
   FanPlanes Planes;
   std::uint64_t Opaque[T]; ///< per tile row, bit i: column i opaque (OpaqueAlpha)
 };
@@ -750,7 +819,7 @@ private:
 class FanPath
 {
 public:
-  FanPath(const RasterFrame&, const TileTarget&, Mode) {}
+  FanPath(const RasterFrame&, const TileTarget&, Mode, WaitingFragments&) {}
   bool Draw(const Fan&, RasterCounts&) { return false; }
 };
 

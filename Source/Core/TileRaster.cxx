@@ -619,33 +619,54 @@ void ShadeSmall(const TileTarget& tile, const Edges& edges, GetPlanes&& planes, 
   }
 }
 
-/// Pre-integrated fragments are shaded this many at a time, a double-precision lane each.
-using SegmentTag = hn::CappedTag<double, 4>;
-constexpr int SegmentLanes = 4;
+/// Scalars in entry coordinates of `tf`, not clamped (NaN gives 0, as EntryCoordinate).
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE V EntryLanes(D d, const TransferFunctionTable& tf, V scalar)
+{
+  const double scale = (tf.size - 1) / (tf.high > tf.low ? tf.high - tf.low : 1.0);
+  const V u = hn::MulAdd(scalar, hn::Set(d, static_cast<float>(scale)),
+    hn::Set(d, static_cast<float>(-tf.low * scale)));
+  return hn::IfThenZeroElse(hn::IsNaN(u), u);
+}
 
 /**
- * What the vector functions below share: the transfer-function table and its prefix
- * integrals. They compute what PreIntegrationTable::Segment and its helpers
- * (TransferFunctionTable.cxx) compute, with the same formulas in the same order, one
- * fragment per lane; only the exponential is Highway's (within a few ulp of std::expm1).
- * Table reads are per lane: the table is small and stays in cache. Arrays hold
- * SegmentLanes values, of which the first hn::Lanes(d) are used.
+ * Pre-integrated shading in single precision, a fragment per lane of the fragment loops'
+ * vectors: what PreIntegrationTable::Segment computes (TransferFunctionTable.cxx, in double
+ * precision) with the same formulas, reading the table and the prefix integrals (as float
+ * sums high + low, so that differences of nearby entries keep their precision); the
+ * exponential is OpacityOfDensity's. Within 5e-5 of Segment in every channel of the
+ * premultiplied colour (PreIntegratedSegmentsMatchTheScalarIntegration). Most segments of a
+ * fine mesh are one step (PreIntegrationSteps); the steps' loop costs only what the thickest
+ * lane of a vector asks for. The tables are read a row per lane (TableRows).
  */
 struct SegmentTable
 {
-  const TransferFunctionTable& tf;
-  const double* integrals;
+  TransferFunctionTable tf;
+  const float* table = nullptr;     ///< RGBA (alpha: attenuation), padded (PreIntegrationTable)
+  const float* integrals = nullptr; ///< prefix integrals, high and low parts, padded
+  std::int32_t last = 0;        ///< size - 1
+  float lastInterval = 0;       ///< max(size - 2, 0): the last interval's first entry
+  float inverseUnit = 1;        ///< 1 / ScalarOpacityUnitDistance
+
+  SegmentTable() = default;
+  /// The frame's tables; `f` must have them (RasterFrame::preIntegration).
+  explicit SegmentTable(const RasterFrame& f)
+    : tf(f.transferFunction)
+    , table(f.preIntegration->paddedTable.data())
+    , integrals(f.preIntegration->integralsSplit.data())
+    , last(f.transferFunction.size - 1)
+    , lastInterval(static_cast<float>(std::max(f.transferFunction.size - 2, 0)))
+    , inverseUnit(f.inverseUnit)
+  {
+  }
 };
 
-/// Entry coordinate u as interval index (a whole number, in a double) and fraction, as
-/// Split: the index is clamped to the table's last interval and to 0, so lanes past the
-/// end of their segment (masked off later) read inside the table too.
+/// TransferFunctionTable::EntryCoordinate per lane: clamped to [0, size - 1], NaN gives 0.
 template <class D, class V = hn::Vec<D>>
-HWY_INLINE void SplitLanes(D d, const SegmentTable& t, V u, V& index, V& fraction)
+HWY_INLINE V ClampedEntryLanes(D d, const SegmentTable& t, V scalar)
 {
-  const double lastInterval = std::max(t.tf.size - 2, 0);
-  index = hn::Max(hn::Zero(d), hn::Min(hn::Floor(u), hn::Set(d, lastInterval)));
-  fraction = hn::Sub(u, index);
+  return hn::Min(hn::Max(EntryLanes(d, t.tf, scalar), hn::Zero(d)),
+    hn::Set(d, static_cast<float>(t.last)));
 }
 
 /// IntervalAt per lane: attenuation and colour at the interval's start and their changes.
@@ -655,252 +676,299 @@ struct IntervalLanes
   V tau, dTau, c[3], dC[3];
 };
 
-template <class D, class V = hn::Vec<D>>
-HWY_INLINE IntervalLanes<D> IntervalsAt(D d, const SegmentTable& t, V index)
+/**
+ * Eight consecutive floats for each lane, from base + offset[l] (l < Lanes(d)), transposed:
+ * lane l of out[k] is base[offset[l] + k]. A row load per lane and shuffles: on 8 and 4 lanes
+ * far fewer operations than eight gathers.
+ */
+template <class D>
+HWY_INLINE void LoadRows8(D d, const float* base, const std::int32_t* offset, hn::Vec<D> out[8])
 {
-  HWY_ALIGN double at[SegmentLanes] = {}, start[4][SegmentLanes] = {}, change[4][SegmentLanes] = {};
-  hn::Store(index, d, at);
-  for (std::size_t l = 0; l < hn::Lanes(d); ++l)
+#if HWY_TARGET != HWY_SCALAR // (one lane: the loop at the end)
+  constexpr std::size_t lanes = hn::MaxLanes(D());
+  if constexpr (lanes == 8)
   {
-    const int i = static_cast<int>(at[l]);
-    const int j = std::min(i + 1, t.tf.size - 1);
-    const float* a = t.tf.table + 4 * i;
-    const float* b = t.tf.table + 4 * j;
+    // Within each 128-bit half: pairs, then quadruples of rows; then the halves.
+    const hn::Repartition<double, D> dd;
+    hn::Vec<D> r[8], t[8];
+    for (int l = 0; l < 8; ++l)
+    {
+      r[l] = hn::LoadU(d, base + offset[l]);
+    }
+    for (int l = 0; l < 8; l += 2)
+    {
+      t[l] = hn::InterleaveLower(d, r[l], r[l + 1]);     // rows l, l + 1: items 0 1 | 4 5
+      t[l + 1] = hn::InterleaveUpper(d, r[l], r[l + 1]); // items 2 3 | 6 7
+    }
+    auto pairs = [&](hn::Vec<D> a, hn::Vec<D> b, bool upper)
+    {
+      const auto x = hn::BitCast(dd, a), y = hn::BitCast(dd, b);
+      return hn::BitCast(d, upper ? hn::InterleaveUpper(dd, x, y) : hn::InterleaveLower(dd, x, y));
+    };
+    for (int half = 0; half < 2; ++half) // rows 0-3, rows 4-7
+    {
+      const int o = 4 * half;
+      r[o] = pairs(t[o], t[o + 2], false);         // item 0 of four rows | item 4
+      r[o + 1] = pairs(t[o], t[o + 2], true);      // item 1 | item 5
+      r[o + 2] = pairs(t[o + 1], t[o + 3], false); // item 2 | item 6
+      r[o + 3] = pairs(t[o + 1], t[o + 3], true);  // item 3 | item 7
+    }
     for (int k = 0; k < 4; ++k)
     {
-      start[k][l] = a[k];
-      change[k][l] = static_cast<double>(b[k]) - a[k];
+      out[k] = hn::ConcatLowerLower(d, r[4 + k], r[k]);
+      out[4 + k] = hn::ConcatUpperUpper(d, r[4 + k], r[k]);
     }
   }
-  IntervalLanes<D> v;
-  v.tau = hn::Load(d, start[3]);
-  v.dTau = hn::Load(d, change[3]);
-  for (int k = 0; k < 3; ++k)
+  else if constexpr (lanes == 4)
   {
-    v.c[k] = hn::Load(d, start[k]);
-    v.dC[k] = hn::Load(d, change[k]);
+    for (int part = 0; part < 2; ++part) // items 0-3, items 4-7
+    {
+      hn::Vec<D> r[4];
+      for (int l = 0; l < 4; ++l)
+      {
+        r[l] = hn::LoadU(d, base + offset[l] + 4 * part);
+      }
+      const hn::Repartition<double, D> dd;
+      const auto t0 = hn::BitCast(dd, hn::InterleaveLower(d, r[0], r[1]));
+      const auto t1 = hn::BitCast(dd, hn::InterleaveLower(d, r[2], r[3]));
+      const auto t2 = hn::BitCast(dd, hn::InterleaveUpper(d, r[0], r[1]));
+      const auto t3 = hn::BitCast(dd, hn::InterleaveUpper(d, r[2], r[3]));
+      out[4 * part] = hn::BitCast(d, hn::InterleaveLower(dd, t0, t1));
+      out[4 * part + 1] = hn::BitCast(d, hn::InterleaveUpper(dd, t0, t1));
+      out[4 * part + 2] = hn::BitCast(d, hn::InterleaveLower(dd, t2, t3));
+      out[4 * part + 3] = hn::BitCast(d, hn::InterleaveUpper(dd, t2, t3));
+    }
   }
-  return v;
+  else
+#endif
+  {
+    HWY_ALIGN float items[8][MaxLanes];
+    for (std::size_t l = 0; l < hn::Lanes(d); ++l)
+    {
+      for (int k = 0; k < 8; ++k)
+      {
+        items[k][l] = base[offset[l] + k];
+      }
+    }
+    for (int k = 0; k < 8; ++k)
+    {
+      out[k] = hn::Load(d, items[k]);
+    }
+  }
+}
+
+/**
+ * Reads the tables a row per lane (LoadRows8): any interval of the table. The table's
+ * entries i and i + 1 are eight consecutive floats (the table is padded past its last
+ * entry), and so are the prefix integrals' high and low parts at entry i
+ * (PreIntegrationTable::integralsSplit).
+ */
+struct TableRows
+{
+  const SegmentTable& t;
+  float firstInterval = 0; ///< the intervals this reader reaches: [firstInterval, lastInterval]
+  float lastInterval;
+
+  explicit TableRows(const SegmentTable& table)
+    : t(table)
+    , lastInterval(table.lastInterval)
+  {
+  }
+
+  template <class D, class VI>
+  HWY_INLINE IntervalLanes<D> Intervals(D d, VI index) const
+  {
+    HWY_ALIGN std::int32_t offset[MaxLanes];
+    hn::Store(hn::ShiftLeft<2>(index), hn::RebindToSigned<D>(), offset);
+    hn::Vec<D> items[8]; // r, g, b, tau at entry i, then at entry i + 1
+    LoadRows8(d, this->t.table, offset, items);
+    IntervalLanes<D> v;
+    v.tau = items[3];
+    v.dTau = hn::Sub(items[7], items[3]);
+    for (int k = 0; k < 3; ++k)
+    {
+      v.c[k] = items[k];
+      v.dC[k] = hn::Sub(items[4 + k], items[k]);
+    }
+    return v;
+  }
+
+  /// The differences of the prefix integrals (T, E_r, E_g, E_b) between entries i1 and i0.
+  template <class D, class VI, class V = hn::Vec<D>>
+  HWY_INLINE void IntegralsBetween(D d, VI i0, VI i1, V sums[4]) const
+  {
+    HWY_ALIGN std::int32_t offset0[MaxLanes], offset1[MaxLanes];
+    hn::Store(hn::ShiftLeft<3>(i0), hn::RebindToSigned<D>(), offset0);
+    hn::Store(hn::ShiftLeft<3>(i1), hn::RebindToSigned<D>(), offset1);
+    V at0[8], at1[8]; // high parts of T, E_r, E_g, E_b, then the low parts
+    LoadRows8(d, this->t.integrals, offset0, at0);
+    LoadRows8(d, this->t.integrals, offset1, at1);
+    for (int k = 0; k < 4; ++k)
+    {
+      sums[k] = hn::Add(hn::Sub(at1[k], at0[k]), hn::Sub(at1[4 + k], at0[4 + k]));
+    }
+  }
+};
+
+/// An entry coordinate as its interval's first entry (clamped to the intervals the reader
+/// reaches, as Split clamps to the table's, so that lanes past the end of their segment read
+/// inside) and the fraction past it.
+template <class D, class Reader, class V = hn::Vec<D>>
+HWY_INLINE void SplitLanes(
+  D d, const Reader& r, V u, hn::Vec<hn::RebindToSigned<D>>& index, V& fraction)
+{
+  const V whole =
+    hn::Max(hn::Set(d, r.firstInterval), hn::Min(hn::Floor(u), hn::Set(d, r.lastInterval)));
+  index = hn::ConvertTo(hn::RebindToSigned<D>(), whole);
+  fraction = hn::Sub(u, whole);
 }
 
 /// Partial per lane: integrals of tau and c tau from the interval's start to fraction f.
 template <class D, class V = hn::Vec<D>>
 HWY_INLINE void PartialLanes(D d, const IntervalLanes<D>& v, V f, V& t, V e[3])
 {
-  const V half = hn::Set(d, 0.5), third = hn::Set(d, 3.0);
+  const V half = hn::Set(d, 0.5f), third = hn::Set(d, 1.0f / 3.0f);
   t = hn::Mul(f, hn::Add(v.tau, hn::Mul(hn::Mul(half, f), v.dTau)));
   for (int k = 0; k < 3; ++k)
   {
     const V linear =
       hn::Mul(hn::Mul(half, f), hn::Add(hn::Mul(v.c[k], v.dTau), hn::Mul(v.dC[k], v.tau)));
-    const V quadratic = hn::Div(hn::Mul(hn::Mul(hn::Mul(f, f), v.dC[k]), v.dTau), third);
+    const V quadratic = hn::Mul(hn::Mul(hn::Mul(hn::Mul(f, f), v.dC[k]), v.dTau), third);
     e[k] = hn::Mul(f, hn::Add(hn::Add(hn::Mul(v.c[k], v.tau), linear), quadratic));
   }
 }
 
-/// The prefix integrals (T, E_r, E_g, E_b) at each lane's interval index.
+/// One step of a segment per lane, over the entry coordinates [u0, u1] (SpanMeans and the
+/// step of Segment): its mean attenuation, its opacity and its colour (not premultiplied).
 template <class D, class V = hn::Vec<D>>
-HWY_INLINE void IntegralsAt(D d, const SegmentTable& t, V index, V values[4])
+struct StepLanes
 {
-  HWY_ALIGN double at[SegmentLanes] = {}, gathered[4][SegmentLanes] = {};
-  hn::Store(index, d, at);
-  for (std::size_t l = 0; l < hn::Lanes(d); ++l)
-  {
-    const double* source = t.integrals + 4 * static_cast<std::size_t>(at[l]);
-    for (int k = 0; k < 4; ++k)
-    {
-      gathered[k][l] = source[k];
-    }
-  }
-  for (int k = 0; k < 4; ++k)
-  {
-    values[k] = hn::Load(d, gathered[k]);
-  }
-}
+  V tau;       ///< the mean attenuation over the step
+  V opacity;   ///< 0 where the step is transparent
+  V colour[3]; ///< the attenuation-weighted colour, moved towards the front (see Segment)
+};
 
-/// SpanMeans per lane: means of tau and of c tau over the entry interval [u0, u1].
-template <class D, class V = hn::Vec<D>>
-HWY_INLINE void SpanMeansLanes(D d, const SegmentTable& t, V u0, V u1, V& tau, V e[3])
+template <class D, class Reader, class V = hn::Vec<D>>
+HWY_INLINE StepLanes<D> StepOfLanes(D d, const Reader& r, V u0, V u1, V depth)
 {
-  V i0, f0, i1, f1;
-  SplitLanes(d, t, u0, i0, f0);
-  SplitLanes(d, t, u1, i1, f1);
-  const auto same = hn::Eq(i0, i1);
-  const IntervalLanes<D> v0 = IntervalsAt(d, t, i0);
-  tau = hn::Zero(d);
+  hn::Vec<hn::RebindToSigned<D>> i0, i1;
+  V f0, f1;
+  SplitLanes(d, r, u0, i0, f0);
+  SplitLanes(d, r, u1, i1, f1);
+  const auto same = hn::RebindMask(d, hn::Eq(i0, i1));
+  const IntervalLanes<D> v0 = r.Intervals(d, i0);
+  const bool oneInterval = hn::AllTrue(d, same);
+  const IntervalLanes<D> v1 = oneInterval ? v0 : r.Intervals(d, i1);
+  // Means inside one interval in factored form, exact as u1 -> u0 (SpanMeans).
+  const V s1 = hn::Mul(hn::Set(d, 0.5f), hn::Add(f0, f1));
+  const V s2 = hn::Mul(hn::Add(hn::Add(hn::Mul(f0, f0), hn::Mul(f0, f1)), hn::Mul(f1, f1)),
+    hn::Set(d, 1.0f / 3.0f));
+  StepLanes<D> step;
+  V e[3];
+  step.tau = hn::Add(v0.tau, hn::Mul(s1, v0.dTau));
   for (int k = 0; k < 3; ++k)
   {
-    e[k] = hn::Zero(d);
+    e[k] = hn::Add(hn::Add(hn::Mul(v0.c[k], v0.tau),
+                     hn::Mul(s1, hn::Add(hn::Mul(v0.c[k], v0.dTau), hn::Mul(v0.dC[k], v0.tau)))),
+      hn::Mul(hn::Mul(s2, v0.dC[k]), v0.dTau));
   }
-  if (!hn::AllFalse(d, same))
+  if (!oneInterval)
   {
-    // Inside one interval: the means in factored form, exact as u1 -> u0.
-    const V s1 = hn::Mul(hn::Set(d, 0.5), hn::Add(f0, f1));
-    const V s2 =
-      hn::Div(hn::Add(hn::Add(hn::Mul(f0, f0), hn::Mul(f0, f1)), hn::Mul(f1, f1)), hn::Set(d, 3.0));
-    tau = hn::Add(v0.tau, hn::Mul(s1, v0.dTau));
+    // Across intervals: the prefix integrals' difference and the two partial intervals.
+    V t0, t1, e0[3], e1[3], sums[4];
+    PartialLanes(d, v0, f0, t0, e0);
+    PartialLanes(d, v1, f1, t1, e1);
+    r.IntegralsBetween(d, i0, i1, sums);
+    const V inverse = hn::Div(hn::Set(d, 1.0f), hn::Sub(u1, u0)); // 1 / 0 where same
+    step.tau =
+      hn::IfThenElse(same, step.tau, hn::Mul(hn::Sub(hn::Add(sums[0], t1), t0), inverse));
     for (int k = 0; k < 3; ++k)
     {
-      e[k] = hn::Add(hn::Add(hn::Mul(v0.c[k], v0.tau),
-                       hn::Mul(s1, hn::Add(hn::Mul(v0.c[k], v0.dTau), hn::Mul(v0.dC[k], v0.tau)))),
-        hn::Mul(hn::Mul(s2, v0.dC[k]), v0.dTau));
-    }
-    if (hn::AllTrue(d, same))
-    {
-      return;
+      e[k] = hn::IfThenElse(
+        same, e[k], hn::Mul(hn::Sub(hn::Add(sums[1 + k], e1[k]), e0[k]), inverse));
     }
   }
-  V t0, t1, e0[3], e1[3], below[4], above[4];
-  PartialLanes(d, v0, f0, t0, e0);
-  PartialLanes(d, IntervalsAt(d, t, i1), f1, t1, e1);
-  IntegralsAt(d, t, i0, below);
-  IntegralsAt(d, t, i1, above);
-  // Lanes inside one interval keep the factored form (their quotient may be 0 / 0).
-  const V inverse = hn::Div(hn::Set(d, 1.0), hn::Sub(u1, u0));
-  const V spanTau = hn::Mul(hn::Sub(hn::Sub(hn::Add(above[0], t1), below[0]), t0), inverse);
-  tau = hn::IfThenElse(same, tau, spanTau);
+  const auto seen = hn::Gt(step.tau, hn::Zero(d));
+  const V stepDepth = hn::IfThenElseZero(seen, hn::Mul(step.tau, depth));
+  const V opacity = OpacityOfDensity(d, stepDepth);
+  // h(d) = 1/d - 1/(e^d - 1) = 1/d - (1 - a) / a (Segment), its series for thin steps.
+  const V one = hn::Set(d, 1.0f), half = hn::Set(d, 0.5f);
+  const V series = hn::NegMulAdd(stepDepth,
+    hn::NegMulAdd(
+      hn::Mul(stepDepth, stepDepth), hn::Set(d, 1.0f / 720.0f), hn::Set(d, 1.0f / 12.0f)),
+    half);
+  const auto thin = hn::Lt(stepDepth, hn::Set(d, static_cast<float>(MTPT_WEIGHT_SERIES_DEPTH)));
+  const V thick = hn::Sub(hn::Div(one, stepDepth), hn::Div(hn::Sub(one, opacity), opacity));
+  const V shift = hn::Sub(half, hn::IfThenElse(thin, series, thick));
+  const V inverseTau = hn::Div(one, hn::IfThenElse(seen, step.tau, one));
   for (int k = 0; k < 3; ++k)
   {
-    const V span =
-      hn::Mul(hn::Sub(hn::Sub(hn::Add(above[1 + k], e1[k]), below[1 + k]), e0[k]), inverse);
-    e[k] = hn::IfThenElse(same, e[k], span);
+    // The colours at the step's ends (LookupEntry), the mean kept in [0, 1] and the colour
+    // within the three, as in Segment.
+    const V c0 = hn::MulAdd(f0, v0.dC[k], v0.c[k]);
+    const V c1 = hn::MulAdd(f1, v1.dC[k], v1.c[k]);
+    const V mean = hn::Min(one, hn::Max(hn::Zero(d), hn::Mul(e[k], inverseTau)));
+    const V lowest = hn::Min(hn::Min(mean, c0), c1), highest = hn::Max(hn::Max(mean, c0), c1);
+    const V c = hn::MulAdd(hn::Sub(c0, c1), shift, mean);
+    step.colour[k] = hn::IfThenElseZero(seen, hn::Min(highest, hn::Max(lowest, c)));
   }
-}
-
-/// LookupEntry per lane: the table's colour at entry coordinate u, rounded to float as
-/// LookupEntry rounds it.
-template <class D, class V = hn::Vec<D>>
-HWY_INLINE void LookupLanes(D d, const SegmentTable& t, V u, V rgb[3])
-{
-  V index, fraction;
-  SplitLanes(d, t, u, index, fraction);
-  HWY_ALIGN double at[SegmentLanes] = {}, start[3][SegmentLanes] = {}, change[3][SegmentLanes] = {};
-  hn::Store(index, d, at);
-  for (std::size_t l = 0; l < hn::Lanes(d); ++l)
-  {
-    const int i = static_cast<int>(at[l]);
-    const int j = std::min(i + 1, t.tf.size - 1);
-    for (int k = 0; k < 3; ++k)
-    {
-      start[k][l] = t.tf.table[4 * i + k];
-      change[k][l] = t.tf.table[4 * j + k] - t.tf.table[4 * i + k]; // in float, as there
-    }
-  }
-  const hn::Rebind<float, D> df;
-  for (int k = 0; k < 3; ++k)
-  {
-    const V value = hn::Add(hn::Load(d, start[k]), hn::Mul(fraction, hn::Load(d, change[k])));
-    rgb[k] = hn::PromoteTo(d, hn::DemoteTo(df, value));
-  }
-}
-
-/// TransferFunctionTable::EntryCoordinate per lane (NaN gives 0).
-template <class D, class V = hn::Vec<D>>
-HWY_INLINE V EntryCoordinates(D d, const TransferFunctionTable& tf, V scalar)
-{
-  const double span = tf.high > tf.low ? tf.high - tf.low : 1.0;
-  const V u = hn::Div(
-    hn::Mul(hn::Sub(scalar, hn::Set(d, tf.low)), hn::Set(d, tf.size - 1.0)), hn::Set(d, span));
-  return hn::IfThenElseZero(hn::Gt(u, hn::Zero(d)), hn::Min(u, hn::Set(d, tf.size - 1.0)));
-}
-
-/// Segment's result per lane from the premultiplied colour and the opacity: rgba[k][l] the
-/// colour (k < 3, not premultiplied; 0 where nothing was seen) and the opacity (k = 3).
-template <class D, class V = hn::Vec<D>>
-HWY_INLINE void StoreSegmentLanes(D d, const V colour[3], V alpha, float rgba[4][SegmentLanes])
-{
-  const auto seen = hn::Gt(alpha, hn::Zero(d));
-  const hn::Rebind<float, D> df;
-  HWY_ALIGN float out[SegmentLanes] = {};
-  for (int k = 0; k < 3; ++k)
-  {
-    hn::Store(hn::DemoteTo(df, hn::IfThenElseZero(seen, hn::Div(colour[k], alpha))), df, out);
-    std::copy(out, out + hn::Lanes(d), rgba[k]);
-  }
-  hn::Store(hn::DemoteTo(df, hn::IfThenElseZero(seen, alpha)), df, out);
-  std::copy(out, out + hn::Lanes(d), rgba[3]);
+  step.opacity = hn::IfThenElseZero(seen, opacity);
+  return step;
 }
 
 /**
- * PreIntegrationTable::Segment for the fragments front[l], back[l], length[l], l < Lanes(d):
- * rgba[k][l] its colour (k < 3, not premultiplied) and opacity (k = 3). The caller checks
- * PreIntegrationTable::Covers once.
+ * PreIntegrationTable::Segment per lane for the segments from scalar front to back of eye
+ * length `length`: opacity and colour (not premultiplied; 0 where nothing is seen), reading
+ * the tables through `r` (TableRows). The caller checks PreIntegrationTable::Covers.
  */
-template <class D, class V = hn::Vec<D>>
-void SegmentsOfLanes(D d, const SegmentTable& t, float inverseUnit, const float* front,
-  const float* back, const float* length, float rgba[4][SegmentLanes])
+template <class D, class Reader, class V = hn::Vec<D>>
+HWY_INLINE V SegmentOfLanes(
+  D d, const SegmentTable& t, const Reader& r, V front, V back, V length, V colour[3])
 {
-  HWY_ALIGN double in[3][SegmentLanes] = {};
-  for (std::size_t l = 0; l < hn::Lanes(d); ++l)
+  const V zero = hn::Zero(d), one = hn::Set(d, 1.0f);
+  const V ua = ClampedEntryLanes(d, t, front), ub = ClampedEntryLanes(d, t, back);
+  const auto drawn = hn::Gt(length, zero);
+  const V depth = hn::IfThenElseZero(drawn, hn::Mul(length, hn::Set(d, t.inverseUnit)));
+  const StepLanes<D> whole = StepOfLanes(d, r, ua, ub, depth);
+  // PreIntegrationSteps per lane: one per PreIntegrationStepDepth of optical depth.
+  const V wanted = hn::Ceil(hn::Mul(hn::Mul(whole.tau, depth),
+    hn::Set(d, static_cast<float>(1.0 / PreIntegrationStepDepth))));
+  const V steps = hn::IfThenElse(hn::Gt(wanted, one),
+    hn::Min(wanted, hn::Set(d, static_cast<float>(MaxPreIntegrationSteps))), one);
+  if (hn::AllTrue(d, hn::Eq(steps, one)))
   {
-    in[0][l] = front[l];
-    in[1][l] = back[l];
-    in[2][l] = length[l];
-  }
-  const V zero = hn::Zero(d), one = hn::Set(d, 1.0);
-  const V ua = EntryCoordinates(d, t.tf, hn::Load(d, in[0]));
-  const V ub = EntryCoordinates(d, t.tf, hn::Load(d, in[1]));
-  const V len = hn::Load(d, in[2]);
-  const auto drawn = hn::Gt(len, zero);
-  const V depth = hn::Mul(len, hn::Set(d, static_cast<double>(inverseUnit)));
-  // Steps: one per PreIntegrationStepEntries entries crossed and one per unit of optical
-  // depth, at most MaxPreIntegrationSteps.
-  V whole, wholeE[3];
-  SpanMeansLanes(d, t, ua, ub, whole, wholeE);
-  const V wanted = hn::Max(hn::Div(hn::Abs(hn::Sub(ub, ua)), hn::Set(d, PreIntegrationStepEntries)),
-    hn::Mul(whole, depth));
-  const V steps = hn::Min(
-    hn::Set(d, static_cast<double>(MaxPreIntegrationSteps)), hn::Max(one, hn::Ceil(wanted)));
-  HWY_ALIGN double stepCounts[SegmentLanes] = {};
-  hn::Store(hn::IfThenElseZero(drawn, steps), d, stepCounts);
-  const int most = static_cast<int>(*std::max_element(stepCounts, stepCounts + hn::Lanes(d)));
-  const auto several = hn::Gt(steps, one);
-  V colour[3] = { zero, zero, zero }, alpha = zero;
-  const V half = hn::Set(d, 0.5);
-  for (int s = 0; s < most; ++s)
-  {
-    const V u0 =
-      hn::Add(ua, hn::Div(hn::Mul(hn::Sub(ub, ua), hn::Set(d, static_cast<double>(s))), steps));
-    const V u1 = hn::Add(ua, hn::Div(hn::Mul(hn::Sub(ub, ua), hn::Set(d, s + 1.0)), steps));
-    V tau = whole, e[3] = { wholeE[0], wholeE[1], wholeE[2] };
-    if (most > 1)
-    {
-      V stepTau, stepE[3];
-      SpanMeansLanes(d, t, u0, u1, stepTau, stepE);
-      tau = hn::IfThenElse(several, stepTau, tau);
-      for (int k = 0; k < 3; ++k)
-      {
-        e[k] = hn::IfThenElse(several, stepE[k], e[k]);
-      }
-    }
-    const auto active = hn::And(hn::And(drawn, hn::Lt(hn::Set(d, s), steps)), hn::Gt(tau, zero));
-    if (hn::AllFalse(d, active))
-    {
-      continue;
-    }
-    const V depthOfStep = hn::Div(hn::Mul(tau, depth), steps);
-    const V a = hn::Neg(hn::Expm1(d, hn::Neg(depthOfStep)));
-    // 1 / (e^d - 1) = (1 - a) / a, as in Segment.
-    const V h = hn::IfThenElse(hn::Lt(depthOfStep, hn::Set(d, MTPT_SERIES_DEPTH)),
-      hn::Sub(half, hn::Div(depthOfStep, hn::Set(d, MTPT_WEIGHT_SERIES_DIVISOR))),
-      hn::Sub(hn::Div(one, depthOfStep), hn::Div(hn::Sub(one, a), a)));
-    V c0[3], c1[3];
-    LookupLanes(d, t, u0, c0);
-    LookupLanes(d, t, u1, c1);
-    const V weight = hn::Mul(hn::Sub(one, alpha), a);
+    const auto seen = hn::Gt(whole.opacity, zero); // not where the segment has no length
     for (int k = 0; k < 3; ++k)
     {
-      // The mean colour kept in [0, 1], as in Segment.
-      const V mean = hn::Min(one, hn::Max(zero, hn::Div(e[k], tau)));
-      const V low = hn::Min(hn::Min(mean, c0[k]), c1[k]);
-      const V high = hn::Max(hn::Max(mean, c0[k]), c1[k]);
-      const V c = hn::Add(mean, hn::Mul(hn::Sub(c0[k], c1[k]), hn::Sub(half, h)));
-      colour[k] = hn::IfThenElse(
-        active, hn::Add(colour[k], hn::Mul(weight, hn::Min(high, hn::Max(low, c)))), colour[k]);
+      colour[k] = hn::IfThenElseZero(seen, whole.colour[k]);
     }
-    alpha = hn::IfThenElse(active, hn::Add(alpha, hn::Mul(hn::Sub(one, alpha), a)), alpha);
+    return whole.opacity;
   }
-  StoreSegmentLanes(d, colour, alpha, rgba);
+  // Thick lanes: the steps composited front to back (Segment's loop), each lane its own count.
+  const V range = hn::Sub(ub, ua);
+  const V stepDepth = hn::Div(depth, steps);
+  const int most = static_cast<int>(hn::GetLane(hn::MaxOfLanes(d, steps)));
+  V premultiplied[3] = { zero, zero, zero }, alpha = zero;
+  for (int s = 0; s < most; ++s)
+  {
+    const auto active = hn::Lt(hn::Set(d, static_cast<float>(s)), steps);
+    const V u0 = hn::Add(ua, hn::Div(hn::Mul(range, hn::Set(d, static_cast<float>(s))), steps));
+    const V u1 = hn::Add(ua, hn::Div(hn::Mul(range, hn::Set(d, s + 1.0f)), steps));
+    const StepLanes<D> step = StepOfLanes(d, r, u0, u1, stepDepth);
+    const V weight = hn::IfThenElseZero(active, hn::Mul(hn::Sub(one, alpha), step.opacity));
+    for (int k = 0; k < 3; ++k)
+    {
+      premultiplied[k] = hn::MulAdd(weight, step.colour[k], premultiplied[k]);
+    }
+    alpha = hn::Add(alpha, weight);
+  }
+  const auto seen = hn::Gt(alpha, zero);
+  const V inverse = hn::Div(one, hn::IfThenElse(seen, alpha, one));
+  for (int k = 0; k < 3; ++k)
+  {
+    colour[k] = hn::IfThenElseZero(seen, hn::Mul(premultiplied[k], inverse));
+  }
+  return alpha;
 }
 
 /**
@@ -912,9 +980,9 @@ void SegmentsOfLanes(D d, const SegmentTable& t, float inverseUnit, const float*
  */
 struct WaitingFragments
 {
-  float front[SegmentLanes] = {}, back[SegmentLanes] = {}, length[SegmentLanes] = {};
-  int x[SegmentLanes] = {}, y[SegmentLanes] = {}; ///< tile column, image row
-  const LightFactors* light[SegmentLanes] = {};   ///< the lighting of each one's fan
+  HWY_ALIGN float front[MaxLanes] = {}, back[MaxLanes] = {}, length[MaxLanes] = {};
+  int x[MaxLanes] = {}, y[MaxLanes] = {};     ///< tile column, image row
+  const LightFactors* light[MaxLanes] = {}; ///< the lighting of each one's fan
   std::size_t count = 0;
 };
 
@@ -924,21 +992,27 @@ void ShadeWaiting(const RasterFrame& f, const TileTarget& tile, WaitingFragments
   {
     return;
   }
-  const SegmentTag d;
-  std::fill(w.length + w.count, w.length + SegmentLanes, 0.0f); // unused lanes: no segment
-  float rgba[4][SegmentLanes] = {};
-  SegmentsOfLanes(d, SegmentTable{ f.transferFunction, f.preIntegration->integrals.data() },
-    f.inverseUnit, w.front, w.back, w.length, rgba);
+  const FragmentTag d;
+  std::fill(w.length + w.count, w.length + MaxLanes, 0.0f); // unused lanes: no segment
+  hn::Vec<FragmentTag> colour[3];
+  const SegmentTable table(f);
+  const auto opacity = SegmentOfLanes(d, table, TableRows(table), hn::Load(d, w.front),
+    hn::Load(d, w.back), hn::Load(d, w.length), colour);
+  HWY_ALIGN float rgba[4][MaxLanes];
+  for (int k = 0; k < 3; ++k)
+  {
+    hn::Store(colour[k], d, rgba[k]);
+  }
+  hn::Store(opacity, d, rgba[3]);
   for (std::size_t l = 0; l < w.count; ++l)
   {
-    const float opacity = rgba[3][l];
-    if (!(opacity > 0.0f))
+    if (!(rgba[3][l] > 0.0f))
     {
       continue;
     }
     TileRow row = RowOf(tile, w.y[l]);
     row.light = w.light[l];
-    BlendUnderPixel(row, w.x[l], opacity, rgba[0][l], rgba[1][l], rgba[2][l]);
+    BlendUnderPixel(row, w.x[l], rgba[3][l], rgba[0][l], rgba[1][l], rgba[2][l]);
   }
   w.count = 0;
 }
@@ -954,9 +1028,13 @@ void ShadeIntegrated(const RasterFrame& f, const TileTarget& tile, Mode mode, co
   }
   const TileRow row = RowOf(tile, y);
   const float j = static_cast<float>(y - tile.y0);
-  const std::size_t lanes = hn::Lanes(SegmentTag());
+  const std::size_t lanes = hn::Lanes(FragmentTag());
   for (int x = lo - tile.x0; x <= hi - tile.x0; ++x)
   {
+    if (!(row.a[x] < OpaqueAlpha))
+    {
+      continue; // as the fan path: nothing behind can show (what waits may add to it)
+    }
     const float i = static_cast<float>(x);
     auto value = [&](int k) { return p.base[k] + p.dx[k] * i + p.dy[k] * j; };
     const std::size_t n = waiting.count;
@@ -1083,12 +1161,12 @@ void ShadeClipped(const RasterFrame& f, const TileTarget& tile, Mode mode, const
     return; // every segment transparent
   }
   const TileRow row = RowOf(tile, y);
-  const std::size_t lanes = hn::Lanes(SegmentTag());
+  const std::size_t lanes = hn::Lanes(FragmentTag());
   for (int x = lo - tile.x0; x <= hi - tile.x0; ++x)
   {
-    if (mode == Mode::Compatible && !(row.a[x] < OpaqueAlpha))
+    if (!(row.a[x] < OpaqueAlpha))
     {
-      continue; // as ShadeVector: nothing behind can show
+      continue; // as ShadeVector and the fan path: nothing behind can show
     }
     const FragmentSegment s = SegmentAt(f, tile, mode, p, x, y);
     double t0, t1;
@@ -1218,16 +1296,6 @@ HWY_INLINE hn::Mask<D> DrawnLanes(D d, const TileRow& row, int x, V z, hn::Mask<
     keep = hn::And(keep, hn::Le(depth, hn::LoadU(d, row.depth + x)));
   }
   return keep;
-}
-
-/// Scalars in entry coordinates of `tf`, not clamped (NaN gives 0, as EntryCoordinate).
-template <class D, class V = hn::Vec<D>>
-HWY_INLINE V EntryLanes(D d, const TransferFunctionTable& tf, V scalar)
-{
-  const double scale = (tf.size - 1) / (tf.high > tf.low ? tf.high - tf.low : 1.0);
-  const V u = hn::MulAdd(scalar, hn::Set(d, static_cast<float>(scale)),
-    hn::Set(d, static_cast<float>(-tf.low * scale)));
-  return hn::IfThenZeroElse(hn::IsNaN(u), u);
 }
 
 /// The integral of o x over the fractions [g0, g1] of table interval b (opacity a + dd g
@@ -1588,7 +1656,7 @@ void RasterizeTileImpl(const RasterFrame& f, const TileTarget& target, const Fan
     ? Mode::Compatible
     : (f.interpolation.perspective ? Mode::ExactIntegral : Mode::Integrated);
   WaitingFragments waiting; // pre-integrated fragments
-  FanPath fanPath(f, tile, mode); // fans drawn whole (VTK-compatible, maximum, minimum)
+  FanPath fanPath(f, tile, mode, waiting); // fans drawn whole
   for (std::size_t e = 0; e < count; ++e)
   {
     const Fan& fan = fans[e];
@@ -1651,17 +1719,28 @@ void PreIntegratedSegmentsImpl(const TransferFunctionTable& tf, const PreIntegra
   {
     return;
   }
-  const SegmentTag d;
-  const SegmentTable t{ tf, table.integrals.data() };
-  for (std::size_t i = 0; i < count; i += hn::Lanes(d))
+  RasterFrame f;
+  f.transferFunction = tf;
+  f.preIntegration = &table;
+  f.inverseUnit = inverseUnit;
+  const SegmentTable t(f);
+  const FragmentTag d;
+  const std::size_t lanes = hn::Lanes(d);
+  for (std::size_t i = 0; i < count; i += lanes)
   {
-    const std::size_t n = std::min(hn::Lanes(d), count - i);
-    float f[SegmentLanes] = {}, b[SegmentLanes] = {}, l[SegmentLanes] = {},
-          out[4][SegmentLanes] = {};
-    std::copy(front + i, front + i + n, f);
-    std::copy(back + i, back + i + n, b);
-    std::copy(length + i, length + i + n, l);
-    SegmentsOfLanes(d, t, inverseUnit, f, b, l, out);
+    const std::size_t n = std::min(lanes, count - i);
+    HWY_ALIGN float in[3][MaxLanes] = {}, out[4][MaxLanes] = {};
+    std::copy(front + i, front + i + n, in[0]);
+    std::copy(back + i, back + i + n, in[1]);
+    std::copy(length + i, length + i + n, in[2]);
+    hn::Vec<FragmentTag> colour[3];
+    hn::Store(SegmentOfLanes(d, t, TableRows(t), hn::Load(d, in[0]), hn::Load(d, in[1]),
+                hn::Load(d, in[2]), colour),
+      d, out[3]);
+    for (int c = 0; c < 3; ++c)
+    {
+      hn::Store(colour[c], d, out[c]);
+    }
     for (std::size_t k = 0; k < n; ++k)
     {
       for (int c = 0; c < 4; ++c)

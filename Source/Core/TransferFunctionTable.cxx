@@ -155,6 +155,20 @@ void PreIntegrationTable::Build(const TransferFunctionTable& tf)
       this->integrals[4 * (i + 1) + 1 + k] = this->integrals[4 * i + 1 + k] + e[k];
     }
   }
+  const std::size_t padded = static_cast<std::size_t>(n + Padding);
+  this->integralsSplit.assign(8 * padded, 0.0f);
+  this->paddedTable.assign(4 * padded, 0.0f);
+  for (std::size_t e = 0; n > 0 && e < padded; ++e)
+  {
+    const std::size_t at = 4 * std::min<std::size_t>(e, static_cast<std::size_t>(n) - 1);
+    for (int k = 0; k < 4; ++k)
+    {
+      const float high = static_cast<float>(this->integrals[at + k]);
+      this->integralsSplit[8 * e + k] = high;
+      this->integralsSplit[8 * e + 4 + k] = static_cast<float>(this->integrals[at + k] - high);
+      this->paddedTable[4 * e + k] = tf.table[at + k];
+    }
+  }
 }
 
 void PreIntegrationTable::Segment(const TransferFunctionTable& tf, float front, float back,
@@ -167,13 +181,10 @@ void PreIntegrationTable::Segment(const TransferFunctionTable& tf, float front, 
   }
   const double ua = tf.EntryCoordinate(front), ub = tf.EntryCoordinate(back);
   const double depth = static_cast<double>(length) * inverseUnit;
-  // Steps: one per PreIntegrationStepEntries entries crossed and one per unit of optical
-  // depth, at most MaxPreIntegrationSteps.
+  // Steps: one per PreIntegrationStepDepth of optical depth, at most MaxPreIntegrationSteps.
   double tau, e[3];
   SpanMeans(tf, this->integrals, ua, ub, tau, e);
-  const double wanted = std::max(std::fabs(ub - ua) / PreIntegrationStepEntries, tau * depth);
-  const int steps =
-    static_cast<int>(std::min<double>(MaxPreIntegrationSteps, std::max(1.0, std::ceil(wanted))));
+  const int steps = PreIntegrationSteps(tau * depth);
   double colour[3] = { 0, 0, 0 }, alpha = 0;
   for (int s = 0; s < steps; ++s)
   {
@@ -192,7 +203,7 @@ void PreIntegrationTable::Segment(const TransferFunctionTable& tf, float front, 
     // across the step from c0 to c1, the attenuation-weighted colour moves from the mean
     // by (c0 - c1) (1/2 - h(d)), h(d) = 1/d - 1/(e^d - 1) (exact for constant attenuation).
     // 1 / (e^d - 1) = e^-d / (1 - e^-d) = (1 - a) / a: no second exponential.
-    const double h = d < MTPT_SERIES_DEPTH ? WeightSeries(d) : 1.0 / d - (1.0 - a) / a;
+    const double h = d < MTPT_WEIGHT_SERIES_DEPTH ? WeightSeries(d) : 1.0 / d - (1.0 - a) / a;
     float c0[4], c1[4];
     tf.LookupEntry(u0, c0);
     tf.LookupEntry(u1, c1);

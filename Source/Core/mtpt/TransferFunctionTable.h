@@ -10,6 +10,8 @@
 
 #include "mtpt/SegmentShared.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <vector>
 
@@ -51,15 +53,24 @@ struct TransferFunctionTable
  * entry in closed form. A segment's optical depth is then exact for any transfer function
  * the table holds, however narrow its features: a peak between the two end scalars is
  * counted in full. The segment is composited front to back in up to
- * MaxPreIntegrationSteps equal scalar steps (one per PreIntegrationStepEntries entries
- * crossed or per unit of optical depth, whichever asks for more), each with its exact
- * optical depth and its attenuation-weighted mean colour; only the order of emission inside
- * one step is approximated.
+ * MaxPreIntegrationSteps equal scalar steps (PreIntegrationSteps: one per
+ * PreIntegrationStepDepth of optical depth), each with its exact optical depth and its
+ * attenuation-weighted mean colour; only the order of emission inside one step is
+ * approximated.
  */
 struct PreIntegrationTable
 {
   /// 4 * size prefix sums (T, E_r, E_g, E_b) at the entries, entry units.
   std::vector<double> integrals;
+  /// The same as float sums high + low, for single-precision code (the CPU compositor's
+  /// vectors, the OpenGL backend's shader), so that differences of nearby entries keep their
+  /// precision: 8 floats per entry, the four high parts then the four low parts. Followed by
+  /// Padding copies of the last entry, as is
+  std::vector<float> integralsSplit;
+  /// the table itself (4 * (size + Padding) floats): the CPU compositor loads an entry and
+  /// the next at once, which a table of one entry must hold too.
+  std::vector<float> paddedTable;
+  static constexpr int Padding = 1;
 
   /// Builds the prefix sums of `tf` (recompute whenever the table changes).
   void Build(const TransferFunctionTable& tf);
@@ -68,7 +79,10 @@ struct PreIntegrationTable
   /// is transparent.
   bool Covers(const TransferFunctionTable& tf) const
   {
-    return tf.size >= 1 && this->integrals.size() >= 4 * static_cast<std::size_t>(tf.size);
+    const std::size_t entries = static_cast<std::size_t>(std::max(tf.size, 0));
+    return tf.size >= 1 && this->integrals.size() >= 4 * entries &&
+      this->integralsSplit.size() >= 8 * (entries + Padding) &&
+      this->paddedTable.size() >= 4 * (entries + Padding);
   }
 
   /**
@@ -131,8 +145,16 @@ constexpr double AverageRangeBeyond = 1e30;
 
 /// At most this many compositing steps per segment (pre-integrated shading).
 constexpr int MaxPreIntegrationSteps = MTPT_MAX_SEGMENT_STEPS;
-/// One compositing step per this many table entries crossed (pre-integrated shading).
-constexpr double PreIntegrationStepEntries = MTPT_STEP_ENTRIES;
+/// One compositing step per this much optical depth (pre-integrated shading).
+constexpr double PreIntegrationStepDepth = MTPT_STEP_DEPTH;
+
+/// The compositing steps of a segment of optical depth `depth`: ceil(depth /
+/// PreIntegrationStepDepth) within [1, MaxPreIntegrationSteps] (1 for NaN).
+inline int PreIntegrationSteps(double depth)
+{
+  const double wanted = std::ceil(depth / PreIntegrationStepDepth);
+  return wanted > 1.0 ? static_cast<int>(std::min<double>(MaxPreIntegrationSteps, wanted)) : 1;
+}
 
 } // namespace mtpt
 

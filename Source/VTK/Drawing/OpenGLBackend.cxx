@@ -140,13 +140,13 @@ void OpenGLBackend::UploadTables(const BackendFrame& frame)
   const TransferFunctionTable table = tables.Table();
   MakeTableTexture(this->TransferFunction, frame.window, table.size, table.table, true);
   // The prefix integrals as float high + low parts, so that differences of nearby entries
-  // keep their precision in the shader.
-  const std::vector<double>& integrals = tables.PreIntegration().integrals;
-  std::vector<float> high(integrals.size()), low(integrals.size());
-  for (std::size_t i = 0; i < integrals.size(); ++i)
+  // keep their precision in the shader: a texture of each.
+  const std::vector<float>& split = tables.PreIntegration().integralsSplit;
+  std::vector<float> high(4 * static_cast<std::size_t>(table.size)), low(high.size());
+  for (std::size_t e = 0; e < high.size() / 4 && 8 * e + 8 <= split.size(); ++e)
   {
-    high[i] = static_cast<float>(integrals[i]);
-    low[i] = static_cast<float>(integrals[i] - high[i]);
+    std::copy_n(split.begin() + 8 * e, 4, high.begin() + 4 * e);
+    std::copy_n(split.begin() + 8 * e + 4, 4, low.begin() + 4 * e);
   }
   MakeTableTexture(this->IntegralsHigh, frame.window, table.size, high.data(), false);
   MakeTableTexture(this->IntegralsLow, frame.window, table.size, low.data(), false);

@@ -115,8 +115,7 @@ vec4 PreIntegrated(float ua, float ub, float len)
   float tau;
   vec3 e;
   SpanMeans(ua, ub, tau, e);
-  float wanted = max(abs(ub - ua) / MTPT_STEP_ENTRIES, tau * depth);
-  int steps = int(min(float(MTPT_MAX_SEGMENT_STEPS), max(1.0, ceil(wanted))));
+  int steps = int(min(float(MTPT_MAX_SEGMENT_STEPS), max(1.0, ceil(tau * depth / MTPT_STEP_DEPTH))));
   vec3 colour = vec3(0.0);
   float alpha = 0.0;
   for (int s = 0; s < steps; ++s)
@@ -133,7 +132,7 @@ vec4 PreIntegrated(float ua, float ub, float len)
     }
     float d = tau * depth / float(steps);
     float a = Opacity(d);
-    float h = d < MTPT_SERIES_DEPTH ? WeightSeries(d) : 1.0 / d - 1.0 / (exp(d) - 1.0);
+    float h = d < MTPT_WEIGHT_SERIES_DEPTH ? WeightSeries(d) : 1.0 / d - 1.0 / (exp(d) - 1.0);
     vec3 c0 = EntryAt(u0).rgb;
     vec3 c1 = EntryAt(u1).rgb;
     vec3 mean = clamp(e / tau, 0.0, 1.0); // as the CPU compositor: rounding kept in [0, 1]
