@@ -644,9 +644,9 @@ struct SegmentTable
   TransferFunctionTable tf;
   const float* table = nullptr;     ///< RGBA (alpha: attenuation), padded (PreIntegrationTable)
   const float* integrals = nullptr; ///< prefix integrals, high and low parts, padded
-  std::int32_t last = 0;        ///< size - 1
-  float lastInterval = 0;       ///< max(size - 2, 0): the last interval's first entry
-  float inverseUnit = 1;        ///< 1 / ScalarOpacityUnitDistance
+  std::int32_t last = 0;            ///< size - 1
+  float lastInterval = 0;           ///< max(size - 2, 0): the last interval's first entry
+  float inverseUnit = 1;            ///< 1 / ScalarOpacityUnitDistance
 
   SegmentTable() = default;
   /// The frame's tables; `f` must have them (RasterFrame::preIntegration).
@@ -981,7 +981,7 @@ HWY_INLINE V SegmentOfLanes(
 struct WaitingFragments
 {
   HWY_ALIGN float front[MaxLanes] = {}, back[MaxLanes] = {}, length[MaxLanes] = {};
-  int x[MaxLanes] = {}, y[MaxLanes] = {};     ///< tile column, image row
+  int x[MaxLanes] = {}, y[MaxLanes] = {};   ///< tile column, image row
   const LightFactors* light[MaxLanes] = {}; ///< the lighting of each one's fan
   std::size_t count = 0;
 };
