@@ -14,11 +14,17 @@
  *
  * Without VTK and X it runs the same under a profiler (valgrind --tool=callgrind, perf) as
  * alone; the frame benchmark (BenchFrames.cxx) measures whole frames against VTK's mappers.
+ *
+ * --floor measures instead the fragment loop's floor and the rungs above it
+ * (detail::FragmentFloor; Documentation/compositor.md, "The floor"), on one thread, with every
+ * instruction set this processor runs, beside the frame's nanoseconds per covered fragment
+ * with the same instruction set. --instruction-set runs everything with one instruction set.
  */
 #include "Camera.h"
 #include "Statistics.h"
 #include "TetrahedralGrid.h"
 
+#include "detail/TileRaster.h"
 #include "mtpt/Compositor.h"
 #include "mtpt/FramePipeline.h"
 #include "mtpt/Threads.h"
@@ -50,6 +56,8 @@ struct Options
   double step = 1.0;
   std::string shading = "vtk";
   double attenuation = 1.0; ///< the table's attenuations times this
+  bool floor = false;
+  std::string instructionSet; ///< empty: the best this processor has
 };
 
 /// The view of frame `frame`: the grid (within [-1, 1]^3) filling a 30 degree view from an
@@ -89,7 +97,7 @@ std::vector<float> Table(int entries, double opacity)
 struct FrameFigures
 {
   double stages = 0, decompose = 0, bin = 0, raster = 0, resolve = 0, total = 0;
-  double fragments = 0, hidden = 0;
+  double fragments = 0, hidden = 0, vectors = 0;
 };
 
 FrameFigures Frame(mtpt::FramePipeline& pipeline, mtpt::Compositor& compositor,
@@ -114,6 +122,7 @@ FrameFigures Frame(mtpt::FramePipeline& pipeline, mtpt::Compositor& compositor,
   f.resolve = 1e3 * stats.resolveSeconds;
   f.fragments = static_cast<double>(stats.fragments);
   f.hidden = static_cast<double>(stats.hiddenFans);
+  f.vectors = static_cast<double>(stats.fanVectors);
   return f;
 }
 
@@ -126,6 +135,179 @@ std::vector<float> Faint(std::vector<float> table)
     table[i] *= 1e-6f;
   }
   return table;
+}
+
+/// The medians of a size's timed frames, and every fragment its fans cover (counted with
+/// nothing opaque).
+struct SizeFigures
+{
+  FrameFigures median;
+  double covered = 0;        ///< every fragment covered, with nothing opaque
+  double coveredVectors = 0; ///< the fan path's vectors then
+
+  /// The rasterization's time per covered fragment and core.
+  double NanosecondsPerFragment(int threads) const
+  {
+    return this->covered > 0 ? 1e6 * this->median.raster * threads / this->covered : 0;
+  }
+};
+
+/// `o.frames` timed frames of `mesh` at size x size after one warm-up, the view turning.
+SizeFigures MeasureSize(const mtpt::bench::TetMesh& mesh, int size, const Options& o, int threads)
+{
+  const std::vector<float> table = Table(256, o.attenuation), faint = Faint(table);
+  mtpt::FrameInput input;
+  input.points = mesh.Points();
+  input.cells = mesh.Cells();
+  input.scalars = mesh.Scalars();
+  input.opacity = { table.data(), 256, 0.0, 1.0 };
+  mtpt::CompositeSettings settings;
+  settings.width = settings.height = size;
+  settings.transferFunction = input.opacity;
+  settings.unitDistance = 2 * std::sqrt(3.0) / 50;
+  mtpt::PreIntegrationTable integrals;
+  if (o.shading == "pre-integrated")
+  {
+    integrals.Build(settings.transferFunction);
+    settings.UsePreIntegration(integrals, mtpt::PerspectiveInterpolation{});
+  }
+  const std::vector<float> depth(static_cast<std::size_t>(size) * size, 1.0f);
+  settings.opaqueDepth = depth.data();
+  std::vector<float> image(4 * static_cast<std::size_t>(size) * size);
+  input.imageSize = { size, size };
+  mtpt::FramePipeline pipeline;
+  pipeline.SetReuse(true);
+  mtpt::Compositor compositor;
+  std::vector<FrameFigures> figures;
+  for (int frame = 0; frame <= o.frames; ++frame)
+  {
+    SetView(input, frame, o.step);
+    if (o.shading == "pre-integrated")
+    {
+      settings.interpolation = mtpt::PerspectiveInterpolation::FromProjection(input.projection);
+    }
+    const FrameFigures f = Frame(pipeline, compositor, input, settings, image, threads);
+    if (frame > 0)
+    {
+      figures.push_back(f);
+    }
+  }
+  SizeFigures result;
+  auto median = [&](double FrameFigures::*field)
+  {
+    std::vector<double> values;
+    for (const FrameFigures& f : figures)
+    {
+      values.push_back(f.*field);
+    }
+    return Median(values);
+  };
+  for (double FrameFigures::*field : { &FrameFigures::stages, &FrameFigures::decompose,
+         &FrameFigures::bin, &FrameFigures::raster, &FrameFigures::resolve, &FrameFigures::total,
+         &FrameFigures::fragments, &FrameFigures::hidden })
+  {
+    result.median.*field = median(field);
+  }
+  // Every covered fragment, counted at the first timed frame's view with nothing opaque.
+  mtpt::CompositeSettings faintSettings = settings;
+  faintSettings.transferFunction.table = faint.data();
+  SetView(input, 1, o.step);
+  if (o.shading == "pre-integrated")
+  {
+    faintSettings.interpolation = mtpt::PerspectiveInterpolation::FromProjection(input.projection);
+  }
+  const FrameFigures all = Frame(pipeline, compositor, input, faintSettings, image, threads);
+  result.covered = all.fragments;
+  result.coveredVectors = all.vectors;
+  return result;
+}
+
+std::string Join(const std::vector<std::string>& items)
+{
+  std::string text;
+  for (const std::string& item : items)
+  {
+    text += (text.empty() ? "" : ", ") + item;
+  }
+  return text;
+}
+
+/**
+ * --floor: per instruction set, the nanoseconds per fragment of each rung of the floor
+ * (detail::FragmentFloor, 2^22 vectors, the median of 5 runs), and the frame's rasterization
+ * per covered fragment at 1024x1024, all on one thread; for the frame with nothing opaque,
+ * how full the fan path's vectors are, what its vectors would cost at the top rung's rate,
+ * and the rest: what the fans' set-up and the triangle path cost per covered fragment.
+ */
+int Floor(const mtpt::bench::TetMesh& mesh, const Options& o)
+{
+  static const char* const rungs[mtpt::detail::FragmentFloorRungs] = { "registers (the floor)",
+    "+ memory", "+ planes", "+ lane lookups", "+ coverage" };
+  constexpr int T = mtpt::TileSize;
+  std::vector<float> rgba(4 * T * T, 0.0f), depth(T * T, 1.0f);
+  std::printf("The fragment loop's floor and its rungs, one thread, ns per fragment (every lane "
+              "a fragment); the frame: %zu tetrahedra at 1024x1024, ns per covered fragment\n\n"
+              "| instruction set | lanes |",
+    mesh.CellCount());
+  for (const char* rung : rungs)
+  {
+    std::printf(" %s |", rung);
+  }
+  std::printf(" frame, opaque where it becomes so | frame, nothing opaque | its vectors' lanes "
+              "covered | its vectors at the top rung's rate | the rest: set-up, triangle path |"
+              "\n|---|---:|");
+  for (int r = 0; r <= mtpt::detail::FragmentFloorRungs + 4; ++r)
+  {
+    std::printf("---:|");
+  }
+  std::printf("\n");
+  const std::vector<std::string> sets =
+    o.instructionSet.empty() ? mtpt::Compositor::InstructionSets()
+                             : std::vector<std::string>{ o.instructionSet };
+  for (const std::string& set : sets)
+  {
+    mtpt::Compositor::UseInstructionSet(set);
+    const std::size_t lanes = mtpt::detail::FragmentLanes();
+    std::printf("| %s | %zu |", set.c_str(), lanes);
+    const std::size_t vectors = std::size_t{ 1 } << 22;
+    float sink = 0;
+    double top = 0;
+    for (int r = 0; r < mtpt::detail::FragmentFloorRungs; ++r)
+    {
+      std::vector<double> ns;
+      for (int run = 0; run < 5; ++run)
+      {
+        const auto start = mtpt::Clock::now();
+        sink += mtpt::detail::FragmentFloor(r, vectors, rgba.data(), depth.data());
+        ns.push_back(1e9 * mtpt::SecondsSince(start) / (vectors * lanes));
+      }
+      top = Median(ns);
+      if (lanes > 1)
+      {
+        std::printf(" %.2f |", top);
+      }
+      else
+      {
+        std::printf(" - |");
+      }
+    }
+    SizeFigures f;
+    for (double attenuation : { o.attenuation, 0.01 })
+    {
+      Options frame = o;
+      frame.attenuation = attenuation;
+      f = MeasureSize(mesh, 1024, frame, 1);
+      std::printf(" %.2f |", f.NanosecondsPerFragment(1));
+    }
+    const double slots = f.coveredVectors * static_cast<double>(lanes);
+    const double loop = f.covered > 0 && lanes > 1 ? top * slots / f.covered : 0;
+    std::printf(" %.0f%% | %.2f | %.2f |", slots > 0 ? 100 * f.covered / slots : 0, loop,
+      f.NanosecondsPerFragment(1) - loop);
+    std::printf("%s\n", sink == 12345.0f ? " " : "");
+    std::fflush(stdout);
+  }
+  mtpt::Compositor::UseInstructionSet("");
+  return 0;
 }
 
 } // namespace
@@ -150,84 +332,41 @@ int main(int argc, char* argv[])
     .add_option("--attenuation", o.attenuation,
       "the opacity ramp's top (1: opaque pixels behind most of the image; 0.01: nearly none)")
     ->check(CLI::PositiveNumber);
+  app.add_flag("--floor", o.floor,
+    "the fragment loop's floor and its rungs, with every instruction set, on one thread");
+  app
+    .add_option("--instruction-set", o.instructionSet,
+      "run with this instruction set (" + Join(mtpt::Compositor::InstructionSets()) + ")")
+    ->check(CLI::IsMember(mtpt::Compositor::InstructionSets()));
   CLI11_PARSE(app, argc, argv);
+  mtpt::Compositor::UseInstructionSet(o.instructionSet);
 
   mtpt::bench::GridOptions grid;
   grid.cells = mtpt::bench::GridCellsForTetrahedra(
     static_cast<std::size_t>(o.tetrahedra), mtpt::bench::HexSplit::Five);
   grid.jitter = 0.3 * mtpt::bench::MaxJitter(grid.split);
   const mtpt::bench::TetMesh mesh = mtpt::bench::GenerateTetrahedralGrid(grid);
+  if (o.floor)
+  {
+    return Floor(mesh, o);
+  }
   const int threads = mtpt::ResolveThreadCount(o.threads);
-  const std::vector<float> table = Table(256, o.attenuation);
-  mtpt::FrameInput input;
-  input.points = mesh.Points();
-  input.cells = mesh.Cells();
-  input.scalars = mesh.Scalars();
-  input.opacity = { table.data(), 256, 0.0, 1.0 };
   std::printf("Generated grid, %zu tetrahedra, %d threads, %s shading, opacity 0 -> %g, the view "
-              "turning %.1f degrees before each frame; median of %d frames (ms)\n\n",
-    mesh.CellCount(), threads, o.shading.c_str(), o.attenuation, o.step, o.frames);
+              "turning %.1f degrees before each frame; median of %d frames (ms); compositor %s\n\n",
+    mesh.CellCount(), threads, o.shading.c_str(), o.attenuation, o.step, o.frames,
+    mtpt::Compositor::InstructionSet());
   std::printf("| image | CPU stages | of which decompose | Mtets/s (CPU stages) | bin | raster | "
               "resolve | frame | fragments covered | of the fans drawn | fans skipped behind "
               "opaque pixels | ns per covered fragment x core |\n"
               "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
-  const std::vector<float> faint = Faint(table);
   for (int size : o.sizes)
   {
-    mtpt::CompositeSettings settings;
-    settings.width = settings.height = size;
-    settings.transferFunction = input.opacity;
-    settings.unitDistance = 2 * std::sqrt(3.0) / 50;
-    mtpt::PreIntegrationTable integrals;
-    if (o.shading == "pre-integrated")
-    {
-      integrals.Build(settings.transferFunction);
-      settings.UsePreIntegration(
-        integrals, mtpt::PerspectiveInterpolation::FromProjection(input.projection));
-    }
-    const std::vector<float> depth(static_cast<std::size_t>(size) * size, 1.0f);
-    settings.opaqueDepth = depth.data();
-    std::vector<float> image(4 * static_cast<std::size_t>(size) * size);
-    input.imageSize = { size, size };
-    mtpt::FramePipeline pipeline;
-    pipeline.SetReuse(true);
-    mtpt::Compositor compositor;
-    std::vector<FrameFigures> figures;
-    for (int frame = 0; frame <= o.frames; ++frame)
-    {
-      SetView(input, frame, o.step);
-      if (o.shading == "pre-integrated")
-      {
-        settings.interpolation = mtpt::PerspectiveInterpolation::FromProjection(input.projection);
-      }
-      const FrameFigures f = Frame(pipeline, compositor, input, settings, image, threads);
-      if (frame > 0)
-      {
-        figures.push_back(f);
-      }
-    }
-    auto median = [&](double FrameFigures::*field)
-    {
-      std::vector<double> values;
-      for (const FrameFigures& f : figures)
-      {
-        values.push_back(f.*field);
-      }
-      return Median(values);
-    };
-    // Every covered fragment, counted at the first timed frame's view with nothing opaque.
-    mtpt::CompositeSettings faintSettings = settings;
-    faintSettings.transferFunction.table = faint.data();
-    SetView(input, 1, o.step);
-    const double covered =
-      Frame(pipeline, compositor, input, faintSettings, image, threads).fragments;
-    const double raster = median(&FrameFigures::raster), stages = median(&FrameFigures::stages);
+    const SizeFigures f = MeasureSize(mesh, size, o, threads);
     std::printf(
       "| %dx%d | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.0f | %.0f | %.0f | %.1f |\n",
-      size, size, stages, median(&FrameFigures::decompose), 1e-3 * mesh.CellCount() / stages,
-      median(&FrameFigures::bin), raster, median(&FrameFigures::resolve),
-      median(&FrameFigures::total), covered, median(&FrameFigures::fragments),
-      median(&FrameFigures::hidden), covered > 0 ? 1e6 * raster * threads / covered : 0);
+      size, size, f.median.stages, f.median.decompose, 1e-3 * mesh.CellCount() / f.median.stages,
+      f.median.bin, f.median.raster, f.median.resolve, f.median.total, f.covered,
+      f.median.fragments, f.median.hidden, f.NanosecondsPerFragment(threads));
     std::fflush(stdout);
   }
   return 0;

@@ -40,6 +40,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "mtpt/Compositor.h"
 #include "mtpt/Timing.h"
 
 #include <algorithm>
@@ -853,6 +854,12 @@ void AddCommonOptions(CLI::App& app, CommonOptions& options)
     ->check(CLI::IsMember({ "radix", "partition" }));
   app.add_option("--blend-mode", options.mapper.blend, "MTPT's blend mode")
     ->check(CLI::IsMember(BlendModeNames()));
+  app
+    .add_option_function<std::string>(
+      "--instruction-set",
+      [](const std::string& name) { mtpt::Compositor::UseInstructionSet(name); },
+      "MTPT's SIMD code with this instruction set (default: the best this processor has)")
+    ->check(CLI::IsMember(mtpt::Compositor::InstructionSets()));
   options.dataFolder = DefaultDataFolder();
   app.add_option("--data", options.dataFolder,
     "folder of real meshes beyond the repository's (comb, kiefer, pulley, ...; default "

@@ -330,8 +330,8 @@ struct ImageError
 };
 ImageError CompareImages(vtkImageData* a, vtkImageData* b);
 
-/// Adds --repeat, --rounds, --step, --slow-limit, --threads, --shading, --order, --data
-/// and --multisampling to `app`.
+/// Adds --repeat, --rounds, --step, --slow-limit, --threads, --shading, --order,
+/// --instruction-set, --data and --multisampling to `app`.
 void AddCommonOptions(CLI::App& app, CommonOptions& options);
 
 /// Adds --image-sample-distance, --desired-update-rate and --warm-up to `app` (the frame

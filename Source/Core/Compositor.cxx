@@ -5,6 +5,7 @@
 #include "detail/Streaming.h"
 #include "detail/TileRaster.h"
 
+#include <hwy/targets.h>
 #include <omp.h>
 
 #include <algorithm>
@@ -421,12 +422,12 @@ void Compositor::Rasterize(const Fan* fans, const LightFactors* lights, int thre
   const bool reduce = ReducesInAnyOrder(s.blendMode);
   const std::uint8_t* straddles = s.clipPlanes.count > 0 ? this->Straddles.data() : nullptr;
   const auto jobs = static_cast<std::int64_t>(this->Tiles.size());
-  std::size_t triangles = 0, fragments = 0, hidden = 0;
+  std::size_t triangles = 0, fragments = 0, hidden = 0, vectors = 0;
   // Threads take tiles: no more threads than tiles, nor than the binned fans are worth.
   const std::size_t entries = this->TileStart.empty() ? 0 : this->TileStart.back();
   const int team = std::min(ThreadsForWork(this->Tiles.size(), 1, threads),
     ThreadsForWork(entries, detail::FansPerThread, threads));
-#pragma omp parallel num_threads(team) reduction(+ : triangles, fragments, hidden)
+#pragma omp parallel num_threads(team) reduction(+ : triangles, fragments, hidden, vectors)
   {
     std::vector<float> depth(s.opaqueDepth ? TilePixels : 0), batch;
     std::vector<float> range(s.depthRange ? 2 * TilePixels : 0);
@@ -463,16 +464,70 @@ void Compositor::Rasterize(const Fan* fans, const LightFactors* lights, int thre
       triangles += counts.triangles;
       fragments += counts.fragments;
       hidden += counts.hidden;
+      vectors += counts.fanVectors;
     }
   }
   this->Statistics.triangles += triangles;
   this->Statistics.fragments += fragments;
   this->Statistics.hiddenFans += hidden;
+  this->Statistics.fanVectors += vectors;
 }
 
 const char* Compositor::InstructionSet()
 {
   return detail::RasterTargetName();
+}
+
+namespace
+{
+/// Every target of this build that this processor runs, whatever UseInstructionSet chose.
+std::vector<std::int64_t> RunnableTargets()
+{
+  // As hwy::SupportedAndGeneratedTargets, which the choice would restrict.
+  std::vector<std::int64_t> targets;
+  for (std::int64_t left = hwy::SupportedTargets() & HWY_TARGETS; left != 0; left &= left - 1)
+  {
+    targets.push_back(left & ~(left - 1)); // the lowest bit: Highway's best first
+  }
+  return targets;
+}
+
+/// The target UseInstructionSet chose (0: none, the best).
+std::int64_t chosenTarget = 0;
+} // namespace
+
+bool Compositor::UseInstructionSet(const std::string& name)
+{
+  const std::int64_t previous = chosenTarget;
+  hwy::SetSupportedTargetsForTest(0); // every target, to look the name up among
+  chosenTarget = 0;
+  for (const std::int64_t target : RunnableTargets())
+  {
+    if (name == hwy::TargetName(target))
+    {
+      chosenTarget = target;
+    }
+  }
+  if (!name.empty() && chosenTarget == 0)
+  {
+    chosenTarget = previous; // unknown: nothing changes
+    hwy::SetSupportedTargetsForTest(previous);
+    return false;
+  }
+  hwy::SetSupportedTargetsForTest(chosenTarget);
+  return true;
+}
+
+std::vector<std::string> Compositor::InstructionSets()
+{
+  hwy::SetSupportedTargetsForTest(0);
+  std::vector<std::string> names;
+  for (const std::int64_t target : RunnableTargets())
+  {
+    names.emplace_back(hwy::TargetName(target));
+  }
+  hwy::SetSupportedTargetsForTest(chosenTarget);
+  return names;
 }
 
 PixelRegion Compositor::TouchedRegion() const

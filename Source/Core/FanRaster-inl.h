@@ -713,6 +713,7 @@ private:
         }
         const std::size_t covered = hn::CountTrue(d, keep);
         counts.fragments += covered;
+        ++counts.fanVectors;
         // Fragments behind opaque pixels are skipped; a fan all behind them is not set up.
         // (In a reduction the alpha plane says only that a fragment came.)
         keep = this->Reduces ? keep : hn::And(keep, Transparent(d, row, x));

@@ -1639,6 +1639,7 @@ void DrawTriangle(const RasterFrame& f, const TileTarget& tile, Mode mode, Corne
 }
 
 #include "FanRaster-inl.h" // FanPath: this namespace's fan path (a fragment of this file)
+#include "FragmentFloor-inl.h" // the fragment loop's floor, for measurements
 
 void RasterizeTileImpl(const RasterFrame& f, const TileTarget& target, const Fan* fans,
   std::size_t count, RasterCounts& counts, const LightFactors* lights)
@@ -1786,6 +1787,18 @@ HWY_EXPORT(TargetName);
 HWY_EXPORT(OpacitiesOfDensitiesImpl);
 HWY_EXPORT(PreIntegratedSegmentsImpl);
 HWY_EXPORT(IntensityMeansImpl);
+HWY_EXPORT(FragmentFloorImpl);
+HWY_EXPORT(FragmentLanesImpl);
+
+float FragmentFloor(int rung, std::size_t vectors, float* rgba, const float* depth)
+{
+  return HWY_DYNAMIC_DISPATCH(FragmentFloorImpl)(rung, vectors, rgba, depth);
+}
+
+std::size_t FragmentLanes()
+{
+  return HWY_DYNAMIC_DISPATCH(FragmentLanesImpl)();
+}
 
 void RasterizeTile(const RasterFrame& frame, const TileTarget& tile, const Fan* fans,
   std::size_t count, RasterCounts& counts, const LightFactors* lights)

@@ -64,6 +64,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace mtpt
@@ -140,6 +141,9 @@ struct CompositorStats
   /// opaque (fans are drawn front to back; Compositor.h, "Rasterization").
   std::size_t fragments = 0;
   std::size_t hiddenFans = 0; ///< (fan, tile) pairs skipped whole behind opaque pixels
+  /// Vectors of fragments the fan path tested for coverage (its fans' boxes, row by row):
+  /// with `fragments`, how full its vectors are (Documentation/compositor.md, "The floor").
+  std::size_t fanVectors = 0;
   std::size_t tiles = 0;      ///< tiles that had fans
   double binSeconds = 0;      ///< binning
   double rasterSeconds = 0;   ///< set-up and fragments
@@ -203,6 +207,17 @@ public:
   /// The instruction set the fragment loops run with on this processor (e.g. "AVX2"),
   /// chosen at run time.
   static const char* InstructionSet();
+
+  /**
+   * For measurements: every SIMD kernel of the process (Google Highway's dispatch) runs with
+   * the instruction set named `name` (one of InstructionSets()) from now on, or, with an
+   * empty name, with the best this processor has again. False, changing nothing, for a name
+   * this build or this processor does not have. Not thread-safe: call it before any frame.
+   */
+  static bool UseInstructionSet(const std::string& name);
+
+  /// The instruction sets of this build that this processor runs, best first.
+  static std::vector<std::string> InstructionSets();
 
 private:
   void Bin(const Fan* fans, std::size_t count, int threads);

@@ -1,0 +1,244 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Internal: the fragment loop's floor, for measurements (mtpt_bench_compositor --floor). A
+// fragment of TileRaster.cxx, beside it, included inside its per-instruction-set namespace
+// after FanRaster-inl.h, whose helpers it uses; no include guard for that reason.
+//
+// A ladder of loops over one tile, each adding one cost of the fan path's fragment loop to
+// the one below, every vector's lanes all fragments (FloorRung):
+//   Registers  the floor: a fragment's exponential and its blend under eight pixel vectors
+//              held in registers, its values already in registers;
+//   Memory     the blend under the tile's pixels in memory (load, blend, store: BlendUnder);
+//   Planes     the six values from their planes (one multiply-add each), the fragment's depth
+//              against the near and far planes and the opaque depth (ShadeVector's);
+//   Lookups    each lane's values from its own triangle's planes, chosen by the spokes
+//              (FanLaneValues), as the fan path does;
+//   Coverage   the silhouette's edges and the pixels already opaque tested first (FanPath::Rows).
+// What the real loop costs beyond the top rung is the set-up per fan and the lanes a fan's
+// box leaves idle (Documentation/compositor.md, "The floor").
+
+/// The rungs of the floor's ladder (see above), in order.
+enum class FloorRung
+{
+  Registers,
+  Memory,
+  Planes,
+  Lookups,
+  Coverage
+};
+
+#if HWY_TARGET != HWY_SCALAR
+
+/// A fragment's density in the rungs: the pixels' alpha grows by about this much a fragment,
+/// so that none turns opaque (which would skip fragments) in billions of them per tile.
+constexpr float FloorDensity = 1e-10f;
+
+/// A fan of four triangles around the tile's centre, for the rungs with lane lookups: its
+/// spokes and edges, and planes of its triangles whose values stay within a fragment's range.
+struct FloorFan
+{
+  FanPlanes planes;
+  FanGeometry geometry;
+
+  FloorFan()
+  {
+    // A square of 60 pixels around the centre of the tile, corners on the diagonals.
+    this->geometry.triangles = 4;
+    this->geometry.cx = this->geometry.cy = 32 * 256;
+    const std::int32_t corner[4][2] = { { 30, 30 }, { -30, 30 }, { -30, -30 }, { 30, -30 } };
+    for (int k = 0; k < 4; ++k)
+    {
+      this->geometry.x[k] = corner[k][0] * 256;
+      this->geometry.y[k] = corner[k][1] * 256;
+    }
+    FanEdges(4, this->geometry);
+    this->planes.Clear();
+    for (int a = 0; a < 6; ++a)
+    {
+      for (int k = 0; k < 4; ++k)
+      {
+        // r, g, b in [0, 1], z inside the view, and an attenuation so small (FloorDensity)
+        // that the tile's pixels never turn opaque however often the loop goes over them.
+        this->planes.base[a][k] = a < 3 ? 0.2f + 0.1f * k
+          : a == 3                      ? FloorDensity * (1 + k)
+          : a == 4                      ? 0.5f
+                                        : -0.5f;
+        this->planes.dx[a][k] = a == 3 ? 0.0f : 1e-4f * (a + 1);
+        this->planes.dy[a][k] = a == 3 ? 0.0f : -1e-4f * (k + 1);
+      }
+    }
+    this->planes.triangles = 4;
+  }
+};
+
+/**
+ * `vectors` vectors of fragments through rung `R` over the tile `rgba` (T x T pixels, R, G,
+ * B, A planes) with opaque depth `depth`; returns a sum of the result, so that nothing is
+ * left out as unused.
+ */
+template <FloorRung R>
+HWY_NOINLINE float FloorLoop(std::size_t vectors, float* rgba, const float* depth)
+{
+  const FragmentTag d;
+  using V = hn::Vec<FragmentTag>;
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  const int perRow = T / lanes;
+  const V one = hn::Set(d, 1.0f);
+  RasterFrame frame;
+  frame.inverseUnit = 2.0f;
+  TileTarget tile;
+  tile.rgba = rgba;
+  tile.depth = depth;
+  tile.width = tile.height = T;
+  const FloorFan fan;
+  if constexpr (R == FloorRung::Registers)
+  {
+    // Eight independent pixel vectors (as a fan's consecutive vectors are), each fragment's
+    // density and colour already in registers, changed a little every time.
+    constexpr int pixels = 8;
+    V colour[pixels][3], alpha[pixels], density = hn::Set(d, FloorDensity);
+    const V step = hn::Set(d, FloorDensity * 1e-6f);
+    const V c[3] = { hn::Set(d, 0.3f), hn::Set(d, 0.5f), hn::Set(d, 0.7f) };
+    for (int p = 0; p < pixels; ++p)
+    {
+      alpha[p] = hn::Zero(d);
+      for (int k = 0; k < 3; ++k)
+      {
+        colour[p][k] = hn::Zero(d);
+      }
+    }
+    for (std::size_t v = 0; v < vectors; v += pixels)
+    {
+      for (int p = 0; p < pixels; ++p)
+      {
+        density = hn::Add(density, step);
+        const V opacity = OpacityOfDensity(d, hn::Mul(density, hn::Set(d, frame.inverseUnit)));
+        const V weight = hn::Mul(hn::Sub(one, alpha[p]), opacity);
+        for (int k = 0; k < 3; ++k)
+        {
+          colour[p][k] = hn::MulAdd(weight, c[k], colour[p][k]);
+        }
+        alpha[p] = hn::Add(alpha[p], weight);
+      }
+    }
+    V sum = hn::Zero(d);
+    for (int p = 0; p < pixels; ++p)
+    {
+      sum = hn::Add(sum, hn::Add(alpha[p], colour[p][0]));
+    }
+    return hn::GetLane(hn::SumOfLanes(d, sum));
+  }
+  else
+  {
+    EdgeLanes<FragmentTag> bounding[MaxFanTriangles], spokes[MaxFanTriangles];
+    const auto iota = hn::Iota(hn::RebindToSigned<FragmentTag>(), 0);
+    for (int k = 0; k < 4; ++k)
+    {
+      bounding[k].Start(fan.geometry.boundA[k], fan.geometry.boundB[k], fan.geometry.boundC[k],
+        -32 * 256 + 128, -32 * 256 + 128, iota);
+      spokes[k].Start(fan.geometry.spokeA[k], fan.geometry.spokeB[k], 0, -32 * 256 + 128,
+        -32 * 256 + 128, iota);
+    }
+    FanPlanes planes = fan.planes;
+    Planes flat;
+    for (int a = 0; a < 6; ++a)
+    {
+      flat.base[a] = fan.planes.base[a][0];
+      flat.dx[a] = fan.planes.dx[a][0];
+      flat.dy[a] = fan.planes.dy[a][0];
+    }
+    V density = hn::Set(d, FloorDensity); // changed a little every time, as in Registers
+    const V step = hn::Set(d, FloorDensity * 1e-6f);
+    const V colour[3] = { hn::Set(d, 0.3f), hn::Set(d, 0.5f), hn::Set(d, 0.7f) };
+    V sum = hn::Zero(d);
+    for (std::size_t v = 0; v < vectors; ++v)
+    {
+      const int y = static_cast<int>((v / perRow) % T), x = static_cast<int>(v % perRow) * lanes;
+      const TileRow row = RowOf(tile, y);
+      if constexpr (R == FloorRung::Memory)
+      {
+        density = hn::Add(density, step);
+        const V opacity = OpacityOfDensity(d, hn::Mul(density, hn::Set(d, frame.inverseUnit)));
+        sum = hn::Add(sum, BlendUnder(d, row, x, opacity, colour, hn::FirstN(d, lanes)));
+      }
+      else if constexpr (R == FloorRung::Planes)
+      {
+        float start[6];
+        RowStart(flat, y, start);
+        ShadeVector(d, frame, row, flat, start, x, hn::FirstN(d, lanes));
+      }
+      else
+      {
+        if (x == 0)
+        {
+          planes.Row(d, y);
+        }
+        auto keep = hn::FirstN(d, lanes);
+        if constexpr (R == FloorRung::Coverage)
+        {
+          for (int k = 0; k < 4; ++k)
+          {
+            keep = hn::And(keep, bounding[k].Inside(d, x));
+          }
+          keep = hn::And(keep, Transparent(d, row, x));
+        }
+        if (!hn::AllFalse(d, keep))
+        {
+          sum = hn::Add(sum, ShadeFanLanes(d, frame, row, planes, spokes, x, x, keep));
+        }
+      }
+      if (x + lanes == T)
+      {
+        for (int k = 0; k < 4; ++k)
+        {
+          bounding[k].NextRow();
+          spokes[k].NextRow();
+        }
+        if (y + 1 == T)
+        {
+          for (int k = 0; k < 4; ++k)
+          {
+            bounding[k].Start(fan.geometry.boundA[k], fan.geometry.boundB[k],
+              fan.geometry.boundC[k], -32 * 256 + 128, -32 * 256 + 128, iota);
+            spokes[k].Start(fan.geometry.spokeA[k], fan.geometry.spokeB[k], 0, -32 * 256 + 128,
+              -32 * 256 + 128, iota);
+          }
+        }
+      }
+    }
+    return hn::GetLane(hn::SumOfLanes(d, sum)) + rgba[0];
+  }
+}
+
+#endif
+
+/// FloorLoop for rung `rung` (FloorRung's order); 0 on one lane (no fan path there).
+float FragmentFloorImpl(int rung, std::size_t vectors, float* rgba, const float* depth)
+{
+#if HWY_TARGET != HWY_SCALAR
+  switch (static_cast<FloorRung>(rung))
+  {
+    case FloorRung::Registers:
+      return FloorLoop<FloorRung::Registers>(vectors, rgba, depth);
+    case FloorRung::Memory:
+      return FloorLoop<FloorRung::Memory>(vectors, rgba, depth);
+    case FloorRung::Planes:
+      return FloorLoop<FloorRung::Planes>(vectors, rgba, depth);
+    case FloorRung::Lookups:
+      return FloorLoop<FloorRung::Lookups>(vectors, rgba, depth);
+    case FloorRung::Coverage:
+      return FloorLoop<FloorRung::Coverage>(vectors, rgba, depth);
+  }
+#else
+  (void)rung;
+  (void)vectors;
+  (void)rgba;
+  (void)depth;
+#endif
+  return 0.0f;
+}
+
+/// The lanes of the fragment loops' vectors here.
+std::size_t FragmentLanesImpl()
+{
+  return hn::Lanes(FragmentTag());
+}
