@@ -859,19 +859,8 @@ HWY_INLINE StepLanes<D> StepOfLanes(D d, const Reader& r, V u0, V u1, V depth)
   const IntervalLanes<D> v0 = r.Intervals(d, i0);
   const bool oneInterval = hn::AllTrue(d, same);
   const IntervalLanes<D> v1 = oneInterval ? v0 : r.Intervals(d, i1);
-  // Means inside one interval in factored form, exact as u1 -> u0 (SpanMeans).
-  const V s1 = hn::Mul(hn::Set(d, 0.5f), hn::Add(f0, f1));
-  const V s2 = hn::Mul(hn::Add(hn::Add(hn::Mul(f0, f0), hn::Mul(f0, f1)), hn::Mul(f1, f1)),
-    hn::Set(d, 1.0f / 3.0f));
   StepLanes<D> step;
   V e[3];
-  step.tau = hn::Add(v0.tau, hn::Mul(s1, v0.dTau));
-  for (int k = 0; k < 3; ++k)
-  {
-    e[k] = hn::Add(hn::Add(hn::Mul(v0.c[k], v0.tau),
-                     hn::Mul(s1, hn::Add(hn::Mul(v0.c[k], v0.dTau), hn::Mul(v0.dC[k], v0.tau)))),
-      hn::Mul(hn::Mul(s2, v0.dC[k]), v0.dTau));
-  }
   if (!oneInterval)
   {
     // Across intervals: the prefix integrals' difference and the two partial intervals.
@@ -880,12 +869,27 @@ HWY_INLINE StepLanes<D> StepOfLanes(D d, const Reader& r, V u0, V u1, V depth)
     PartialLanes(d, v1, f1, t1, e1);
     r.IntegralsBetween(d, i0, i1, sums);
     const V inverse = hn::Div(hn::Set(d, 1.0f), hn::Sub(u1, u0)); // 1 / 0 where same
-    step.tau =
-      hn::IfThenElse(same, step.tau, hn::Mul(hn::Sub(hn::Add(sums[0], t1), t0), inverse));
+    step.tau = hn::Mul(hn::Sub(hn::Add(sums[0], t1), t0), inverse);
     for (int k = 0; k < 3; ++k)
     {
-      e[k] = hn::IfThenElse(
-        same, e[k], hn::Mul(hn::Sub(hn::Add(sums[1 + k], e1[k]), e0[k]), inverse));
+      e[k] = hn::Mul(hn::Sub(hn::Add(sums[1 + k], e1[k]), e0[k]), inverse);
+    }
+  }
+  if (!hn::AllFalse(d, same))
+  {
+    // Means inside one interval in factored form, exact as u1 -> u0 (SpanMeans).
+    const V s1 = hn::Mul(hn::Set(d, 0.5f), hn::Add(f0, f1));
+    const V s2 = hn::Mul(hn::Add(hn::Add(hn::Mul(f0, f0), hn::Mul(f0, f1)), hn::Mul(f1, f1)),
+      hn::Set(d, 1.0f / 3.0f));
+    const V tau = hn::Add(v0.tau, hn::Mul(s1, v0.dTau));
+    step.tau = oneInterval ? tau : hn::IfThenElse(same, tau, step.tau);
+    for (int k = 0; k < 3; ++k)
+    {
+      const V inside =
+        hn::Add(hn::Add(hn::Mul(v0.c[k], v0.tau),
+                  hn::Mul(s1, hn::Add(hn::Mul(v0.c[k], v0.dTau), hn::Mul(v0.dC[k], v0.tau)))),
+          hn::Mul(hn::Mul(s2, v0.dC[k]), v0.dTau));
+      e[k] = oneInterval ? inside : hn::IfThenElse(same, inside, e[k]);
     }
   }
   const auto seen = hn::Gt(step.tau, hn::Zero(d));
@@ -898,8 +902,16 @@ HWY_INLINE StepLanes<D> StepOfLanes(D d, const Reader& r, V u0, V u1, V depth)
       hn::Mul(stepDepth, stepDepth), hn::Set(d, 1.0f / 720.0f), hn::Set(d, 1.0f / 12.0f)),
     half);
   const auto thin = hn::Lt(stepDepth, hn::Set(d, static_cast<float>(MTPT_WEIGHT_SERIES_DEPTH)));
-  const V thick = hn::Sub(hn::Div(one, stepDepth), hn::Div(hn::Sub(one, opacity), opacity));
-  const V shift = hn::Sub(half, hn::IfThenElse(thin, series, thick));
+  V h = series;
+  if (!hn::AllTrue(d, thin))
+  {
+    // 1/d - (1 - a)/a as one quotient, (a - d (1 - a)) / (d a); where the series is taken
+    // instead, the quotient may be 0 / 0.
+    const V thick = hn::Div(hn::NegMulAdd(stepDepth, hn::Sub(one, opacity), opacity),
+      hn::Mul(stepDepth, opacity));
+    h = hn::IfThenElse(thin, series, thick);
+  }
+  const V shift = hn::Sub(half, h);
   const V inverseTau = hn::Div(one, hn::IfThenElse(seen, step.tau, one));
   for (int k = 0; k < 3; ++k)
   {
