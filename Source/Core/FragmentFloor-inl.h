@@ -70,19 +70,86 @@ struct FloorFan
   }
 };
 
+/// The floor: `vectors` vectors of fragments blended under eight independent pixel vectors
+/// (as a fan's consecutive vectors are), each fragment's density and colour already in
+/// registers, changed a little every time. Returns a sum of the pixels.
+HWY_NOINLINE float FloorInRegisters(std::size_t vectors)
+{
+  const FragmentTag d;
+  using V = hn::Vec<FragmentTag>;
+  constexpr int pixels = 8;
+  const V one = hn::Set(d, 1.0f), inverseUnit = hn::Set(d, 2.0f);
+  V colour[pixels][3], alpha[pixels], density = hn::Set(d, FloorDensity);
+  const V step = hn::Set(d, FloorDensity * 1e-6f);
+  const V c[3] = { hn::Set(d, 0.3f), hn::Set(d, 0.5f), hn::Set(d, 0.7f) };
+  for (int p = 0; p < pixels; ++p)
+  {
+    alpha[p] = hn::Zero(d);
+    for (int k = 0; k < 3; ++k)
+    {
+      colour[p][k] = hn::Zero(d);
+    }
+  }
+  for (std::size_t v = 0; v < vectors; v += pixels)
+  {
+    for (int p = 0; p < pixels; ++p)
+    {
+      density = hn::Add(density, step);
+      const V opacity = OpacityOfDensity(d, hn::Mul(density, inverseUnit));
+      const V weight = hn::Mul(hn::Sub(one, alpha[p]), opacity);
+      for (int k = 0; k < 3; ++k)
+      {
+        colour[p][k] = hn::MulAdd(weight, c[k], colour[p][k]);
+      }
+      alpha[p] = hn::Add(alpha[p], weight);
+    }
+  }
+  V sum = hn::Zero(d);
+  for (int p = 0; p < pixels; ++p)
+  {
+    sum = hn::Add(sum, hn::Add(alpha[p], colour[p][0]));
+  }
+  return hn::GetLane(hn::SumOfLanes(d, sum));
+}
+
+/// The FloorFan's silhouette edges and spokes over the tile, row by row from its first.
+struct FloorEdges
+{
+  EdgeLanes<FragmentTag> bounding[MaxFanTriangles], spokes[MaxFanTriangles];
+
+  /// At the tile's first row (pixel centres relative to the fan's centre).
+  void Start(const FanGeometry& g)
+  {
+    const auto iota = hn::Iota(hn::RebindToSigned<FragmentTag>(), 0);
+    const std::int64_t corner = -32 * 256 + 128; // the tile's first pixel centre
+    for (int k = 0; k < 4; ++k)
+    {
+      this->bounding[k].Start(g.boundA[k], g.boundB[k], g.boundC[k], corner, corner, iota);
+      this->spokes[k].Start(g.spokeA[k], g.spokeB[k], 0, corner, corner, iota);
+    }
+  }
+
+  void NextRow()
+  {
+    for (int k = 0; k < 4; ++k)
+    {
+      this->bounding[k].NextRow();
+      this->spokes[k].NextRow();
+    }
+  }
+};
+
 /**
- * `vectors` vectors of fragments through rung `R` over the tile `rgba` (T x T pixels, R, G,
- * B, A planes) with opaque depth `depth`; returns a sum of the result, so that nothing is
- * left out as unused.
+ * `vectors` vectors of fragments through rung `R` (above Registers) over the tile `rgba`
+ * (T x T pixels: R, G, B, A planes) with opaque depth `depth`, vector after vector along its
+ * rows; returns a sum of the results, so that nothing is left out as unused.
  */
 template <FloorRung R>
-HWY_NOINLINE float FloorLoop(std::size_t vectors, float* rgba, const float* depth)
+HWY_NOINLINE float FloorOverTile(std::size_t vectors, float* rgba, const float* depth)
 {
   const FragmentTag d;
   using V = hn::Vec<FragmentTag>;
   const int lanes = static_cast<int>(hn::Lanes(d));
-  const int perRow = T / lanes;
-  const V one = hn::Set(d, 1.0f);
   RasterFrame frame;
   frame.inverseUnit = 2.0f;
   TileTarget tile;
@@ -90,143 +157,87 @@ HWY_NOINLINE float FloorLoop(std::size_t vectors, float* rgba, const float* dept
   tile.depth = depth;
   tile.width = tile.height = T;
   const FloorFan fan;
-  if constexpr (R == FloorRung::Registers)
+  FloorEdges edges;
+  edges.Start(fan.geometry);
+  FanPlanes planes = fan.planes;
+  Planes flat; // the planes of its first triangle, for the Planes rung
+  for (int a = 0; a < 6; ++a)
   {
-    // Eight independent pixel vectors (as a fan's consecutive vectors are), each fragment's
-    // density and colour already in registers, changed a little every time.
-    constexpr int pixels = 8;
-    V colour[pixels][3], alpha[pixels], density = hn::Set(d, FloorDensity);
-    const V step = hn::Set(d, FloorDensity * 1e-6f);
-    const V c[3] = { hn::Set(d, 0.3f), hn::Set(d, 0.5f), hn::Set(d, 0.7f) };
-    for (int p = 0; p < pixels; ++p)
-    {
-      alpha[p] = hn::Zero(d);
-      for (int k = 0; k < 3; ++k)
-      {
-        colour[p][k] = hn::Zero(d);
-      }
-    }
-    for (std::size_t v = 0; v < vectors; v += pixels)
-    {
-      for (int p = 0; p < pixels; ++p)
-      {
-        density = hn::Add(density, step);
-        const V opacity = OpacityOfDensity(d, hn::Mul(density, hn::Set(d, frame.inverseUnit)));
-        const V weight = hn::Mul(hn::Sub(one, alpha[p]), opacity);
-        for (int k = 0; k < 3; ++k)
-        {
-          colour[p][k] = hn::MulAdd(weight, c[k], colour[p][k]);
-        }
-        alpha[p] = hn::Add(alpha[p], weight);
-      }
-    }
-    V sum = hn::Zero(d);
-    for (int p = 0; p < pixels; ++p)
-    {
-      sum = hn::Add(sum, hn::Add(alpha[p], colour[p][0]));
-    }
-    return hn::GetLane(hn::SumOfLanes(d, sum));
+    flat.base[a] = fan.planes.base[a][0];
+    flat.dx[a] = fan.planes.dx[a][0];
+    flat.dy[a] = fan.planes.dy[a][0];
   }
-  else
+  V density = hn::Set(d, FloorDensity); // changed a little every time, as in Registers
+  const V step = hn::Set(d, FloorDensity * 1e-6f);
+  const V colour[3] = { hn::Set(d, 0.3f), hn::Set(d, 0.5f), hn::Set(d, 0.7f) };
+  V sum = hn::Zero(d);
+  for (std::size_t v = 0; v < vectors; ++v)
   {
-    EdgeLanes<FragmentTag> bounding[MaxFanTriangles], spokes[MaxFanTriangles];
-    const auto iota = hn::Iota(hn::RebindToSigned<FragmentTag>(), 0);
-    for (int k = 0; k < 4; ++k)
+    const int y = static_cast<int>((v / (T / lanes)) % T);
+    const int x = static_cast<int>(v % (T / lanes)) * lanes;
+    const TileRow row = RowOf(tile, y);
+    auto keep = hn::FirstN(d, lanes);
+    if constexpr (R == FloorRung::Memory)
     {
-      bounding[k].Start(fan.geometry.boundA[k], fan.geometry.boundB[k], fan.geometry.boundC[k],
-        -32 * 256 + 128, -32 * 256 + 128, iota);
-      spokes[k].Start(fan.geometry.spokeA[k], fan.geometry.spokeB[k], 0, -32 * 256 + 128,
-        -32 * 256 + 128, iota);
+      density = hn::Add(density, step);
+      const V opacity = OpacityOfDensity(d, hn::Mul(density, hn::Set(d, frame.inverseUnit)));
+      sum = hn::Add(sum, BlendUnder(d, row, x, opacity, colour, keep));
     }
-    FanPlanes planes = fan.planes;
-    Planes flat;
-    for (int a = 0; a < 6; ++a)
+    else if constexpr (R == FloorRung::Planes)
     {
-      flat.base[a] = fan.planes.base[a][0];
-      flat.dx[a] = fan.planes.dx[a][0];
-      flat.dy[a] = fan.planes.dy[a][0];
+      float start[6];
+      RowStart(flat, y, start);
+      ShadeVector(d, frame, row, flat, start, x, keep);
     }
-    V density = hn::Set(d, FloorDensity); // changed a little every time, as in Registers
-    const V step = hn::Set(d, FloorDensity * 1e-6f);
-    const V colour[3] = { hn::Set(d, 0.3f), hn::Set(d, 0.5f), hn::Set(d, 0.7f) };
-    V sum = hn::Zero(d);
-    for (std::size_t v = 0; v < vectors; ++v)
+    else
     {
-      const int y = static_cast<int>((v / perRow) % T), x = static_cast<int>(v % perRow) * lanes;
-      const TileRow row = RowOf(tile, y);
-      if constexpr (R == FloorRung::Memory)
+      if (x == 0)
       {
-        density = hn::Add(density, step);
-        const V opacity = OpacityOfDensity(d, hn::Mul(density, hn::Set(d, frame.inverseUnit)));
-        sum = hn::Add(sum, BlendUnder(d, row, x, opacity, colour, hn::FirstN(d, lanes)));
+        planes.Row(d, y);
       }
-      else if constexpr (R == FloorRung::Planes)
-      {
-        float start[6];
-        RowStart(flat, y, start);
-        ShadeVector(d, frame, row, flat, start, x, hn::FirstN(d, lanes));
-      }
-      else
-      {
-        if (x == 0)
-        {
-          planes.Row(d, y);
-        }
-        auto keep = hn::FirstN(d, lanes);
-        if constexpr (R == FloorRung::Coverage)
-        {
-          for (int k = 0; k < 4; ++k)
-          {
-            keep = hn::And(keep, bounding[k].Inside(d, x));
-          }
-          keep = hn::And(keep, Transparent(d, row, x));
-        }
-        if (!hn::AllFalse(d, keep))
-        {
-          sum = hn::Add(sum, ShadeFanLanes(d, frame, row, planes, spokes, x, x, keep));
-        }
-      }
-      if (x + lanes == T)
+      if constexpr (R == FloorRung::Coverage)
       {
         for (int k = 0; k < 4; ++k)
         {
-          bounding[k].NextRow();
-          spokes[k].NextRow();
+          keep = hn::And(keep, edges.bounding[k].Inside(d, x));
         }
-        if (y + 1 == T)
-        {
-          for (int k = 0; k < 4; ++k)
-          {
-            bounding[k].Start(fan.geometry.boundA[k], fan.geometry.boundB[k],
-              fan.geometry.boundC[k], -32 * 256 + 128, -32 * 256 + 128, iota);
-            spokes[k].Start(fan.geometry.spokeA[k], fan.geometry.spokeB[k], 0, -32 * 256 + 128,
-              -32 * 256 + 128, iota);
-          }
-        }
+        keep = hn::And(keep, Transparent(d, row, x));
+      }
+      if (!hn::AllFalse(d, keep))
+      {
+        sum = hn::Add(sum, ShadeFanLanes(d, frame, row, planes, edges.spokes, x, x, keep));
       }
     }
-    return hn::GetLane(hn::SumOfLanes(d, sum)) + rgba[0];
+    if (x + lanes == T) // the row's last vector: the next row, or the tile again
+    {
+      edges.NextRow();
+      if (y + 1 == T)
+      {
+        edges.Start(fan.geometry);
+      }
+    }
   }
+  return hn::GetLane(hn::SumOfLanes(d, sum)) + rgba[0];
 }
 
 #endif
 
-/// FloorLoop for rung `rung` (FloorRung's order); 0 on one lane (no fan path there).
+/// The loop of rung `rung` (FloorRung's order); 0 on one lane (no fan path there).
 float FragmentFloorImpl(int rung, std::size_t vectors, float* rgba, const float* depth)
 {
 #if HWY_TARGET != HWY_SCALAR
   switch (static_cast<FloorRung>(rung))
   {
     case FloorRung::Registers:
-      return FloorLoop<FloorRung::Registers>(vectors, rgba, depth);
+      return FloorInRegisters(vectors);
     case FloorRung::Memory:
-      return FloorLoop<FloorRung::Memory>(vectors, rgba, depth);
+      return FloorOverTile<FloorRung::Memory>(vectors, rgba, depth);
     case FloorRung::Planes:
-      return FloorLoop<FloorRung::Planes>(vectors, rgba, depth);
+      return FloorOverTile<FloorRung::Planes>(vectors, rgba, depth);
     case FloorRung::Lookups:
-      return FloorLoop<FloorRung::Lookups>(vectors, rgba, depth);
+      return FloorOverTile<FloorRung::Lookups>(vectors, rgba, depth);
     case FloorRung::Coverage:
-      return FloorLoop<FloorRung::Coverage>(vectors, rgba, depth);
+      return FloorOverTile<FloorRung::Coverage>(vectors, rgba, depth);
   }
 #else
   (void)rung;
