@@ -7,6 +7,7 @@
 #include "vtkDoubleArray.h"
 #include "vtkFloatArray.h"
 #include "vtkImageData.h"
+#include "vtkMath.h"
 #include "vtkPNGReader.h"
 #include "vtkPNGWriter.h"
 #include "vtkPiecewiseFunction.h"
@@ -49,6 +50,35 @@ namespace mtpt
 {
 namespace rendering_test
 {
+
+namespace
+{
+/**
+ * VTK's PT picks its depth sort's pivots with vtkMath::Random (vtkCellCenterDepthSort): where
+ * cells lie at equal depths, its image depends on where the process's random sequence stands,
+ * that is on the tests that ran before (run after others, the fly-through's count of the
+ * pixels VTK's PT leaves empty went from 1548 to 0). Every test of these programs starts the
+ * sequence from one seed, and the seed in place before is put back after it.
+ */
+class FixedRandomSequence : public ::testing::EmptyTestEventListener
+{
+  void OnTestStart(const ::testing::TestInfo&) override
+  {
+    this->Saved = vtkMath::GetSeed();
+    vtkMath::RandomSeed(Seed);
+  }
+  void OnTestEnd(const ::testing::TestInfo&) override { vtkMath::RandomSeed(this->Saved); }
+
+  static constexpr int Seed = 7;
+  int Saved = 0;
+};
+
+const bool FixedRandomSequenceRegistered = []
+{
+  ::testing::UnitTest::GetInstance()->listeners().Append(new FixedRandomSequence);
+  return true;
+}();
+} // namespace
 
 const double Background[3] = { 0.1, 0.1, 0.2 };
 

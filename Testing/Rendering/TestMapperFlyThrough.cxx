@@ -2,8 +2,8 @@
 // The camera flies into and through a mesh (Documentation/algorithm.md, "Near-plane
 // clipping"): cells crossing the near plane are cut and their visible parts drawn, so no
 // frame has holes, and each frame matches the exact reference (vtkMTPTReferenceRenderer).
-// VTK's vtkProjectedTetrahedraMapper drops such cells whole; its holes are counted beside
-// ours.
+// VTK's vtkProjectedTetrahedraMapper drops such cells whole; its errors and holes are
+// reported beside ours.
 #include "RenderingTestUtilities.h"
 
 #include "vtkMTPTReferenceRenderer.h"
@@ -92,6 +92,7 @@ TEST(MapperFlyThrough, NoHolesAndTheReferenceImageAllTheWayThrough)
   for (double eyeZ : { 2.5, 0.9, -0.4, -0.95 })
   {
     vtkNew<vtkDoubleArray> exact;
+    double preIntegrated = 1;
     for (int shading : { Mapper::VTK_COMPATIBLE_SHADING, Mapper::PRE_INTEGRATED_SHADING })
     {
       vtkNew<Mapper> mapper;
@@ -114,16 +115,25 @@ TEST(MapperFlyThrough, NoHolesAndTheReferenceImageAllTheWayThrough)
       const bool exact = shading == Mapper::PRE_INTEGRATED_SHADING;
       EXPECT_LT(ours.rmse, exact ? 0.006 : 0.04) << eyeZ;
       EXPECT_LT(ours.worst, exact ? 0.02 : 0.12) << eyeZ;
+      preIntegrated = exact ? ours.rmse : preIntegrated;
     }
     vtkNew<vtkProjectedTetrahedraMapper> pt;
     const FrameError theirs = Frame(pt, grid, property, eyeZ, 0.01, exact);
     std::printf(
       "eye z %5.2f VTK PT        : RMSE %.4f, holes %d\n", eyeZ, theirs.rmse, theirs.holes);
     vtkHoles += theirs.holes;
+    // VTK's PT drops the cells the near plane cuts (what is fixed): inside the box its error
+    // is several times ours. How many pixels that leaves empty depends on the blending order
+    // of the cells around, which its depth sort's random pivots decide (0, or 1548 to 1799,
+    // over the flight with the test's seed or others; RenderingTestUtilities.cxx): reported.
+    // Measured over the orders and seeds tried: 0.024-0.036 at z 0.9, 0.060-0.164 at z -0.4,
+    // 0.0097 at z -0.95, against ours pre-integrated 0.0012, 0.0016 and 0.0019.
+    if (eyeZ < 1.0)
+    {
+      EXPECT_GT(theirs.rmse, 3 * preIntegrated) << eyeZ;
+    }
   }
-  // VTK's PT leaves holes once the camera is inside (reported, and shows what is fixed).
   std::printf("VTK PT holes over the flight: %d\n", vtkHoles);
-  EXPECT_GT(vtkHoles, 0);
 }
 
 } // namespace
