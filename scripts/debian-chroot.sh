@@ -64,7 +64,7 @@ chroot_run() {
       REQUESTS_CA_BUNDLE=/etc/ssl/mtpt-host-ca.crt)
   fi
   local v
-  for v in CI OMP_NUM_THREADS MTPT_SKIP_PLUGIN MTPT_UPDATE_SCREENSHOT http_proxy https_proxy no_proxy \
+  for v in CI OMP_NUM_THREADS MTPT_SKIP_PLUGIN MTPT_UPDATE_SCREENSHOT MTPT_REQUIRE_PYPI http_proxy https_proxy no_proxy \
     HTTP_PROXY HTTPS_PROXY NO_PROXY PIP_INDEX_URL TERM "${chroot_env[@]}"; do
     [ -n "${!v:-}" ] && env_args+=("$v=${!v}")
   done

@@ -8,8 +8,10 @@ source="$(cd "${1:?usage: $0 SOURCE-DIR WORK-DIR}" && pwd)"
 work="$(mkdir -p "${2:?usage: $0 SOURCE-DIR WORK-DIR}" && cd "$2" && pwd)"
 venv="$work/venv"
 rm -rf "$venv"
-# Debian's interpreter: the one whose site packages hold the system's VTK.
+# Debian's interpreter: the one whose site packages hold the system's VTK. pip fetches the
+# build backend from PyPI: skipped (exit 77) where PyPI cannot be reached (pypi-reachable.sh).
 /usr/bin/python3 -m venv --system-site-packages "$venv"
+"$source/Testing/pypi-reachable.sh" "$venv/bin/python" scikit-build-core || exit $?
 started=$(date +%s)
 "$venv/bin/python" -m pip install --no-cache-dir "$source"
 echo "pip_install: built and installed in $(($(date +%s) - started)) s"
