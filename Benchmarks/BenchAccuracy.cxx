@@ -850,6 +850,7 @@ void WriteOutputs(const std::vector<Row>& rows, const Options& o)
 } // namespace
 
 int main(int argc, char** argv)
+try
 {
   Options o;
   CLI::App app{ "Speed against error: every mapper's image against the exact ray integral, "
@@ -983,4 +984,8 @@ int main(int argc, char** argv)
   PlotSummary(rows, o.out + "/accuracy.png");
   std::printf("%s", Markdown(rows, o).c_str());
   return 0;
+}
+catch (const mtpt::bench::MapperError& error)
+{
+  return mtpt::bench::ReportMapperError("mtpt_bench_accuracy", error);
 }

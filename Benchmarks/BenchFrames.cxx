@@ -198,6 +198,7 @@ void PrintScene(const Scene& scene, int width, int height, const std::vector<std
 } // namespace
 
 int main(int argc, char* argv[])
+try
 {
   Options o;
   CLI::App app{ "Whole frames of MTPT's backends against VTK's unstructured-grid mappers, "
@@ -294,4 +295,8 @@ int main(int argc, char* argv[])
     }
   }
   return 0;
+}
+catch (const mtpt::bench::MapperError& error)
+{
+  return mtpt::bench::ReportMapperError("mtpt_bench_frames", error);
 }

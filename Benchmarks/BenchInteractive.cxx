@@ -217,6 +217,7 @@ Result Run(const Scene& scene, vtkVolumeProperty* property, const std::string& n
 } // namespace
 
 int main(int argc, char* argv[])
+try
 {
   Options o;
   CLI::App app{ "Moving frames at the rate the window asks for: time against the allotted "
@@ -364,4 +365,8 @@ int main(int argc, char* argv[])
     std::printf("plot: %s\n", o.plot.c_str());
   }
   return 0;
+}
+catch (const mtpt::bench::MapperError& error)
+{
+  return mtpt::bench::ReportMapperError("mtpt_bench_interactive", error);
 }

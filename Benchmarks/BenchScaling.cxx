@@ -80,6 +80,7 @@ std::string Ratios(const Point& p)
 } // namespace
 
 int main(int argc, char* argv[])
+try
 {
   Options o;
   CLI::App app{ "Frame time against mesh size or window size, for MTPT and VTK's mappers, "
@@ -229,4 +230,8 @@ int main(int argc, char* argv[])
   }
   std::printf("\nWritten: %s.csv, %s.png\n", stem.c_str(), stem.c_str());
   return 0;
+}
+catch (const mtpt::bench::MapperError& error)
+{
+  return mtpt::bench::ReportMapperError("mtpt_bench_scaling", error);
 }

@@ -175,6 +175,7 @@ bool Plot(const Scene& scene, const std::vector<Series>& series, const Options& 
 } // namespace
 
 int main(int argc, char* argv[])
+try
 {
   Options o;
   o.common.windows = { true };
@@ -233,4 +234,8 @@ int main(int argc, char* argv[])
   }
   std::printf("Written: %s\n", path.c_str());
   return 0;
+}
+catch (const mtpt::bench::MapperError& error)
+{
+  return mtpt::bench::ReportMapperError("mtpt_bench_threads", error);
 }

@@ -274,6 +274,7 @@ void Memory(const Options& o)
 } // namespace
 
 int main(int argc, char** argv)
+try
 {
   Options o;
   o.self = argv[0];
@@ -315,4 +316,8 @@ int main(int argc, char** argv)
     Memory(o);
   }
   return 0;
+}
+catch (const mtpt::bench::MapperError& error)
+{
+  return mtpt::bench::ReportMapperError("mtpt_bench_work", error);
 }

@@ -6,6 +6,7 @@
 
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
 
+#include "vtkCallbackCommand.h"
 #include "vtkCamera.h"
 #include "vtkXMLMultiBlockDataReader.h"
 #include "vtkMultiBlockUnstructuredGridVolumeMapper.h"
@@ -491,11 +492,35 @@ OpenGLInfo QueryOpenGL()
   return info;
 }
 
+namespace
+{
+/// The ErrorEvent observer of a Stage's mapper: prints the message (VTK's, formatted as its
+/// output window prints it) and keeps it (client data: the stage's list).
+void CollectError(vtkObject*, unsigned long, void* clientData, void* callData)
+{
+  const std::string message = callData ? static_cast<const char*>(callData) : "(no message)";
+  std::fprintf(stderr, "%s", message.c_str());
+  static_cast<std::vector<std::string>*>(clientData)->push_back(message);
+}
+} // namespace
+
+int ReportMapperError(const char* program, const MapperError& error)
+{
+  std::fprintf(stderr,
+    "%s: %s for a frame (above), so nothing was written. A smaller window, the other backend "
+    "or fewer cells may avoid it.\n",
+    program, error.what());
+  return 1;
+}
+
 Stage::Stage(const Scene& scene, vtkVolumeProperty* property, vtkAbstractVolumeMapper* mapper,
   int width, int height, const StageOptions& options)
   : Mapper(mapper)
   , StartCamera(options.view)
 {
+  this->ErrorWatch->SetCallback(CollectError);
+  this->ErrorWatch->SetClientData(&this->Errors);
+  this->ErrorObserver = mapper->AddObserver(vtkCommand::ErrorEvent, this->ErrorWatch);
   mapper->SetInputDataObject(InputOf(scene, mapper));
   this->Volume->SetMapper(mapper);
   this->Volume->SetProperty(property);
@@ -518,14 +543,17 @@ Stage::Stage(const Scene& scene, vtkVolumeProperty* property, vtkAbstractVolumeM
 
 Stage::~Stage()
 {
+  this->Mapper->RemoveObserver(this->ErrorObserver);
   this->Mapper->ReleaseGraphicsResources(this->Window);
 }
 
 void Stage::SetMapper(vtkAbstractVolumeMapper* mapper, vtkDataObject* input)
 {
+  this->Mapper->RemoveObserver(this->ErrorObserver);
   this->Mapper->ReleaseGraphicsResources(this->Window);
   mapper->SetInputDataObject(input ? input : this->Mapper->GetInputDataObject(0, 0));
   this->Mapper = mapper;
+  this->ErrorObserver = mapper->AddObserver(vtkCommand::ErrorEvent, this->ErrorWatch);
   this->Volume->SetMapper(mapper);
 }
 
@@ -553,10 +581,18 @@ void Stage::Turn(double degrees)
 
 double Stage::Frame()
 {
+  this->Errors.clear();
   const auto start = Clock::now();
   this->Window->Render();
   this->Window->WaitForCompletion();
-  return 1e3 * SecondsSince(start);
+  const double ms = 1e3 * SecondsSince(start);
+  if (!this->Errors.empty())
+  {
+    const std::size_t n = this->Errors.size();
+    throw MapperError(std::string("the mapper (") + this->Mapper->GetClassName() + ") reported " +
+      (n == 1 ? "an error" : std::to_string(n) + " errors"));
+  }
+  return ms;
 }
 
 vtkSmartPointer<vtkImageData> Stage::Image()

@@ -40,6 +40,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -50,6 +51,7 @@ class App;
 
 VTK_ABI_NAMESPACE_BEGIN
 class vtkAbstractVolumeMapper;
+class vtkCallbackCommand;
 class vtkDataObject;
 class vtkRenderWindow;
 class vtkRenderer;
@@ -183,21 +185,38 @@ struct StageOptions
 /// "single-sampled".
 const char* WindowName(bool multisampling);
 
+/**
+ * The errors a mapper reported during a frame (vtkErrorMacro, VTK's ErrorEvent), thrown by
+ * Stage::Frame once the frame is done, so that a program stops, writing nothing, instead of
+ * going on with the frame's image. Programs catch it in main (ReportMapperError).
+ */
+struct MapperError : std::runtime_error
+{
+  using std::runtime_error::runtime_error;
+};
+
+/// Prints `error` as `program: ...`, with what may avoid it, and returns the exit status (1).
+int ReportMapperError(const char* program, const MapperError& error);
+
 /// A volume in a renderer in a window as VTK makes it by default. Its input is the scene's
 /// blocks for the mappers that take a composite data set, its image data for those that draw
-/// image data, else its grid.
+/// image data, else its grid. The mapper's errors are printed as they come and fail the
+/// frame (MapperError).
 class Stage
 {
 public:
   Stage(const Scene& scene, vtkVolumeProperty* property, vtkAbstractVolumeMapper* mapper, int width,
     int height, const StageOptions& options = {});
   ~Stage();
+  Stage(const Stage&) = delete; // its mapper's observer holds the address of Errors
+  Stage& operator=(const Stage&) = delete;
 
   /// The starting view (StageOptions::view).
   void StartView();
   /// Turns the camera by `degrees` of azimuth about the volume.
   void Turn(double degrees);
-  /// One frame: Render and WaitForCompletion; milliseconds.
+  /// One frame: Render and WaitForCompletion; milliseconds. Throws MapperError when the mapper
+  /// reported an error during it.
   double Frame();
   /// The window's RGB image as drawn by the last frame.
   vtkSmartPointer<vtkImageData> Image();
@@ -214,6 +233,9 @@ private:
   vtkNew<vtkRenderWindow> Window;
   vtkAbstractVolumeMapper* Mapper;
   View StartCamera;
+  vtkNew<vtkCallbackCommand> ErrorWatch;    ///< observes the mapper's ErrorEvent
+  unsigned long ErrorObserver = 0;          ///< its tag on the mapper
+  std::vector<std::string> Errors;          ///< what the mapper reported since the last frame
 };
 
 /// The frames of one measurement.

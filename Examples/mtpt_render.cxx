@@ -397,6 +397,7 @@ void CompareWithVTK(Stage& stage, const Scene& scene, vtkVolumeProperty* propert
 } // namespace
 
 int main(int argc, char** argv)
+try
 {
   Options o;
   CLI::App app{ "Renders an unstructured grid with vtkMultiThreadedProjectedTetrahedraMapper "
@@ -578,4 +579,8 @@ int main(int argc, char** argv)
     Interact(stage, Mapper::SafeDownCast(mapper), o.common.mapper.autoAdjust ? o.updateRate : 0);
   }
   return 0;
+}
+catch (const mtpt::bench::MapperError& error)
+{
+  return mtpt::bench::ReportMapperError("mtpt_render", error);
 }
