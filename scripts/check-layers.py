@@ -6,7 +6,8 @@
 The core (Source/Core), from the lowest layer:
   0  vocabulary: mtpt/MeshView.h, Records.h, SegmentShared.h, Shading.h, Stage.h, Threads.h,
      Timing.h, TransferFunctionTable.h, Lighting.h
-  1  helpers: detail/*.h; a fragment of a source file (FanRaster-inl.h) lies beside it
+  1  helpers: detail/*.h; fragments of a source file (FanRaster-inl.h, FragmentFloor-inl.h)
+     lie beside it
   2  stages, in the order a frame runs them; a stage includes only earlier ones:
      mtpt/Transform.h, Culling.h, LevelOfDetail.h, DepthKeys.h, NearPlane.h,
      VisibilityOrder.h, Decompose.h
@@ -51,6 +52,7 @@ CORE = {
 # Core sources whose header is not named after them, and fragments of a source (beside it).
 CORE_SOURCES = {"TileRaster.cxx": "detail/TileRaster.h",
                 "FanRaster-inl.h": "detail/TileRaster.h",
+                "FragmentFloor-inl.h": "detail/TileRaster.h",
                 "DecomposeBatch.cxx": "detail/DecomposeBatch.h",
                 "KeyBatch.cxx": "detail/KeyBatch.h"}
 
