@@ -584,14 +584,13 @@ HWY_INLINE void ReduceFanLanes(D d, const RasterFrame& f, const TileTarget& tile
 /**
  * Pre-integrated shading of the lanes `keep` of the vector at tile column x of tile row y
  * (image), `offset` columns right of the row's first vector: each lane's segment from its
- * triangle's planes (ScalarFanValues), shaded as SegmentOfLanes (the tables read through
- * `reader`) and blended under what the tile holds where it is inside the depth range.
- * Returns the lanes' alpha after it.
+ * triangle's planes (ScalarFanValues), shaded as SegmentOfLanes and blended under what the
+ * tile holds where it is inside the depth range. Returns the lanes' alpha after it.
  */
-template <class D, class Reader>
+template <class D>
 HWY_INLINE hn::Vec<D> IntegrateFanLanes(D d, const RasterFrame& f, const TileTarget& tile,
-  Mode mode, const SegmentTable& table, const Reader& reader, const TileRow& row,
-  const FanPlanes& p, const EdgeLanes<D>* spokes, int x, int y, int offset, hn::Mask<D> keep)
+  Mode mode, const SegmentTable& table, const TileRow& row, const FanPlanes& p,
+  const EdgeLanes<D>* spokes, int x, int y, int offset, hn::Mask<D> keep)
 {
   hn::Vec<D> value[6];
   FanLaneValues(d, p, spokes, x, offset, value);
@@ -608,7 +607,7 @@ HWY_INLINE hn::Vec<D> IntegrateFanLanes(D d, const RasterFrame& f, const TileTar
   }
   hn::Vec<D> front, back, length, colour[3];
   LaneSegments(d, f, tile, mode, value, x, y, false, front, back, length);
-  const auto opacity = SegmentOfLanes(d, table, reader, front, back, length, colour);
+  const auto opacity = SegmentOfLanes(d, table, front, back, length, colour);
   keep = hn::And(keep, hn::Gt(opacity, hn::Zero(d)));
   return BlendUnder(d, row, x, opacity, colour, keep);
 }
@@ -746,8 +745,8 @@ private:
           continue;
         }
         this->MarkOpaque(y - tile.y0, x,
-          IntegrateFanLanes(d, this->Frame, tile, this->FanMode, this->Segments,
-            TableRows(this->Segments), row, this->Planes, spokes, x, y, x - start, keep));
+          IntegrateFanLanes(d, this->Frame, tile, this->FanMode, this->Segments, row,
+            this->Planes, spokes, x, y, x - start, keep));
       }
       for (int k = 0; k < g.triangles; ++k)
       {

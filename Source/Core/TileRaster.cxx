@@ -766,14 +766,6 @@ HWY_INLINE void LoadRows8(D d, const float* base, const std::int32_t* offset, hn
 struct TableRows
 {
   const SegmentTable& t;
-  float firstInterval = 0; ///< the intervals this reader reaches: [firstInterval, lastInterval]
-  float lastInterval;
-
-  explicit TableRows(const SegmentTable& table)
-    : t(table)
-    , lastInterval(table.lastInterval)
-  {
-  }
 
   template <class D, class VI>
   HWY_INLINE IntervalLanes<D> Intervals(D d, VI index) const
@@ -810,15 +802,14 @@ struct TableRows
   }
 };
 
-/// An entry coordinate as its interval's first entry (clamped to the intervals the reader
-/// reaches, as Split clamps to the table's, so that lanes past the end of their segment read
-/// inside) and the fraction past it.
-template <class D, class Reader, class V = hn::Vec<D>>
+/// An entry coordinate as its interval's first entry (clamped to the table's last interval
+/// and to 0, as Split does, so that lanes past the end of their segment read inside the table
+/// too) and the fraction past it.
+template <class D, class V = hn::Vec<D>>
 HWY_INLINE void SplitLanes(
-  D d, const Reader& r, V u, hn::Vec<hn::RebindToSigned<D>>& index, V& fraction)
+  D d, const SegmentTable& t, V u, hn::Vec<hn::RebindToSigned<D>>& index, V& fraction)
 {
-  const V whole =
-    hn::Max(hn::Set(d, r.firstInterval), hn::Min(hn::Floor(u), hn::Set(d, r.lastInterval)));
+  const V whole = hn::Max(hn::Zero(d), hn::Min(hn::Floor(u), hn::Set(d, t.lastInterval)));
   index = hn::ConvertTo(hn::RebindToSigned<D>(), whole);
   fraction = hn::Sub(u, whole);
 }
@@ -848,13 +839,13 @@ struct StepLanes
   V colour[3]; ///< the attenuation-weighted colour, moved towards the front (see Segment)
 };
 
-template <class D, class Reader, class V = hn::Vec<D>>
-HWY_INLINE StepLanes<D> StepOfLanes(D d, const Reader& r, V u0, V u1, V depth)
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE StepLanes<D> StepOfLanes(D d, const TableRows& r, V u0, V u1, V depth)
 {
   hn::Vec<hn::RebindToSigned<D>> i0, i1;
   V f0, f1;
-  SplitLanes(d, r, u0, i0, f0);
-  SplitLanes(d, r, u1, i1, f1);
+  SplitLanes(d, r.t, u0, i0, f0);
+  SplitLanes(d, r.t, u1, i1, f1);
   const auto same = hn::RebindMask(d, hn::Eq(i0, i1));
   const IntervalLanes<D> v0 = r.Intervals(d, i0);
   const bool oneInterval = hn::AllTrue(d, same);
@@ -930,13 +921,13 @@ HWY_INLINE StepLanes<D> StepOfLanes(D d, const Reader& r, V u0, V u1, V depth)
 
 /**
  * PreIntegrationTable::Segment per lane for the segments from scalar front to back of eye
- * length `length`: opacity and colour (not premultiplied; 0 where nothing is seen), reading
- * the tables through `r` (TableRows). The caller checks PreIntegrationTable::Covers.
+ * length `length`: opacity and colour (not premultiplied; 0 where nothing is seen). The
+ * caller checks PreIntegrationTable::Covers.
  */
-template <class D, class Reader, class V = hn::Vec<D>>
-HWY_INLINE V SegmentOfLanes(
-  D d, const SegmentTable& t, const Reader& r, V front, V back, V length, V colour[3])
+template <class D, class V = hn::Vec<D>>
+HWY_INLINE V SegmentOfLanes(D d, const SegmentTable& t, V front, V back, V length, V colour[3])
 {
+  const TableRows r{ t };
   const V zero = hn::Zero(d), one = hn::Set(d, 1.0f);
   const V ua = ClampedEntryLanes(d, t, front), ub = ClampedEntryLanes(d, t, back);
   const auto drawn = hn::Gt(length, zero);
@@ -1008,8 +999,8 @@ void ShadeWaiting(const RasterFrame& f, const TileTarget& tile, WaitingFragments
   std::fill(w.length + w.count, w.length + MaxLanes, 0.0f); // unused lanes: no segment
   hn::Vec<FragmentTag> colour[3];
   const SegmentTable table(f);
-  const auto opacity = SegmentOfLanes(d, table, TableRows(table), hn::Load(d, w.front),
-    hn::Load(d, w.back), hn::Load(d, w.length), colour);
+  const auto opacity = SegmentOfLanes(
+    d, table, hn::Load(d, w.front), hn::Load(d, w.back), hn::Load(d, w.length), colour);
   HWY_ALIGN float rgba[4][MaxLanes];
   for (int k = 0; k < 3; ++k)
   {
@@ -1747,8 +1738,8 @@ void PreIntegratedSegmentsImpl(const TransferFunctionTable& tf, const PreIntegra
     std::copy(back + i, back + i + n, in[1]);
     std::copy(length + i, length + i + n, in[2]);
     hn::Vec<FragmentTag> colour[3];
-    hn::Store(SegmentOfLanes(d, t, TableRows(t), hn::Load(d, in[0]), hn::Load(d, in[1]),
-                hn::Load(d, in[2]), colour),
+    hn::Store(
+      SegmentOfLanes(d, t, hn::Load(d, in[0]), hn::Load(d, in[1]), hn::Load(d, in[2]), colour),
       d, out[3]);
     for (int c = 0; c < 3; ++c)
     {
