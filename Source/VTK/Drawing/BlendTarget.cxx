@@ -14,8 +14,25 @@
 #include "vtkTextureObject.h"
 #include "Basics/OpenGLHeader.h"
 
+#include <cstdlib>
+#include <cstring>
+
 namespace mtpt
 {
+
+namespace
+{
+
+/// Testing only: MTPT_TESTING_FAULT=cpu-read-back makes the CPU backend's read-back fail
+/// with a real OpenGL error, to exercise the path a failing driver takes (see the robustness
+/// and install tests).
+bool ReadBackFaultInjected()
+{
+  const char* fault = std::getenv("MTPT_TESTING_FAULT");
+  return fault && std::strcmp(fault, "cpu-read-back") == 0;
+}
+
+} // namespace
 
 BlendTarget::BlendTarget(int colourType)
   : ColourType(colourType)
@@ -247,6 +264,12 @@ bool BlendTarget::Read(vtkOpenGLRenderWindow* window, int x, int y, int width, i
   // Through VTK's state cache: VTK sets the alignment it needs only when its cached value
   // differs, so a change behind its back makes its next read overflow.
   window->GetState()->vtkglPixelStorei(GL_PACK_ALIGNMENT, 4);
+  // After the state call: VTK's state cache checks for and clears OpenGL errors when it
+  // changes a setting, so the injected error is raised where a failing read would raise it.
+  if (ReadBackFaultInjected())
+  {
+    glReadPixels(0, 0, 1, 1, GL_RGBA, GL_DEPTH_COMPONENT, nullptr); // an invalid read
+  }
   if (depth)
   {
     glReadPixels(x, y, width, height, GL_DEPTH_COMPONENT, GL_FLOAT, depth);

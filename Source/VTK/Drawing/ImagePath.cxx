@@ -13,24 +13,8 @@
 #include "vtkVolume.h"
 #include "Basics/OpenGLHeader.h"
 
-#include <cstdlib>
-#include <cstring>
-
 namespace mtpt
 {
-
-namespace
-{
-
-/// Testing only: MTPT_TESTING_FAULT=cpu-read-back makes the read-back fail with a real
-/// OpenGL error, to exercise the path a failing driver takes (see the robustness tests).
-bool ReadBackFaultInjected()
-{
-  const char* fault = std::getenv("MTPT_TESTING_FAULT");
-  return fault && std::strcmp(fault, "cpu-read-back") == 0;
-}
-
-} // namespace
 
 ImagePath::ImagePath()
   : Target(VTK_UNSIGNED_CHAR)
@@ -81,10 +65,6 @@ bool ImagePath::MayHaveOpaqueGeometry(vtkRenderer* renderer)
 
 bool ImagePath::ReadDepth(const BackendFrame& frame, std::string& error)
 {
-  if (ReadBackFaultInjected())
-  {
-    glReadPixels(0, 0, 1, 1, GL_RGBA, GL_DEPTH_COMPONENT, nullptr); // an invalid read
-  }
   if (!MayHaveOpaqueGeometry(frame.renderer))
   {
     this->Depth.clear(); // no occlusion; Read still reports the errors of the capture
