@@ -329,7 +329,8 @@ void CoverSpans(const Edges& edges, int x0, int x1, int y0, int y1, Span&& span)
 
 /**
  * Clips the triangle (X, Y) to the box [lo, hiX] x [lo, hiY] (Sutherland-Hodgman), writing
- * the polygon's vertices to px, py (at most 7) and returning their number.
+ * the polygon's vertices to px, py (at most 7, inside the box) and returning their number;
+ * 0 where a crossing overflows (coordinates near the largest double).
  */
 int ClipToBox(const double X[3], const double Y[3], double lo, double hiX, double hiY, double px[9],
   double py[9])
@@ -354,9 +355,27 @@ int ClipToBox(const double X[3], const double Y[3], double lo, double hiX, doubl
       }
       if ((di >= 0) != (dj >= 0))
       {
-        const double t = di / (di - dj);
-        ax[m] = px[i] + t * (px[j] - px[i]);
-        ay[m++] = py[i] + t * (py[j] - py[i]);
+        // The crossing, stepped from the end inside: from the far end (a corner of a near
+        // plane's piece may lie 1e15 pixels off) the step would round it far off the plane.
+        // Its coordinate across the plane is the plane's.
+        const int in = di >= 0 ? i : j, out = di >= 0 ? j : i;
+        const double dIn = di >= 0 ? di : dj, dOut = di >= 0 ? dj : di;
+        const double t = dIn / (dIn - dOut);
+        double x = px[in] + t * (px[out] - px[in]), y = py[in] + t * (py[out] - py[in]);
+        if (!std::isfinite(x) || !std::isfinite(y))
+        {
+          return 0;
+        }
+        if (plane < 2)
+        {
+          x = plane == 0 ? lo : hiX;
+        }
+        else
+        {
+          y = plane == 2 ? lo : hiY;
+        }
+        ax[m] = x;
+        ay[m++] = y;
       }
     }
     n = m;

@@ -669,17 +669,11 @@ void TriangleSlot(const double (&x)[3], const double (&y)[3], const float (&fron
   std::copy(local, local + 12, indices);
 }
 
-} // namespace
-
-TEST_P(CompositorSimd, TrianglesBeyondTheFixedPointRangeAreClippedNotDropped)
+/// TrianglesBeyondTheFixedPointRangeAreClippedNotDropped with one vertex `far` pixels off.
+void ExpectClippedAsTheNearerDescription(double far)
 {
-  // A triangle with one vertex 10^8 pixels off screen (a near-plane piece seen from inside
-  // the mesh): the fixed-point rasterizer cannot hold it, so it is clipped to a guard band.
-  // The same plane given by a nearer vertex on the same two edges (attributes interpolated
-  // there) must draw the same pixels with the same colours.
   const int w = 40, h = 30;
   std::vector<float> table = { 0.2f, 0.4f, 1.0f, 0.5f, 1.0f, 0.6f, 0.1f, 3.0f };
-  const double far = 1e8;
   const double x[3] = { 5, 35, far }, y[3] = { 4, 8, 0.6 * far };
   const float front[3] = { 0.0f, 1.0f, 0.5f }, back[3] = { 0.2f, 0.9f, 0.7f },
               length[3] = { 0.0f, 0.5f, 3.0f };
@@ -729,6 +723,22 @@ TEST_P(CompositorSimd, TrianglesBeyondTheFixedPointRangeAreClippedNotDropped)
     }
     EXPECT_GT(covered, 200) << "the triangle covers a good part of the window";
     EXPECT_LT(worst, 1e-5) << (preIntegrated ? "pre-integrated" : "VTK-compatible");
+  }
+}
+
+} // namespace
+
+TEST_P(CompositorSimd, TrianglesBeyondTheFixedPointRangeAreClippedNotDropped)
+{
+  // A triangle with one vertex 10^8 or 10^24 pixels off screen (a near-plane piece seen from
+  // inside the mesh): the fixed-point rasterizer cannot hold it, so it is clipped to a guard
+  // band. The same plane given by a nearer vertex on the same two edges (attributes
+  // interpolated there) must draw the same pixels with the same colours. At 10^24 a crossing
+  // computed from the far vertex would land 10^8 pixels off the guard band.
+  for (const double far : { 1e8, 1e24 })
+  {
+    SCOPED_TRACE(far);
+    ExpectClippedAsTheNearerDescription(far);
   }
 }
 
