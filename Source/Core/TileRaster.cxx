@@ -984,7 +984,9 @@ HWY_INLINE V SegmentOfLanes(D d, const SegmentTable& t, V front, V back, V lengt
     }
     alpha = hn::Add(alpha, weight);
   }
-  const auto seen = hn::Gt(alpha, zero);
+  // Below the smallest normal float the reciprocal overflows: such a lane deposits nothing
+  // a pixel can show, and its colour is taken as zero.
+  const auto seen = hn::Gt(alpha, hn::Set(d, std::numeric_limits<float>::min()));
   const V inverse = hn::Div(one, hn::IfThenElse(seen, alpha, one));
   for (int k = 0; k < 3; ++k)
   {

@@ -140,7 +140,8 @@ vec4 PreIntegrated(float ua, float ub, float len)
     colour += (1.0 - alpha) * a * stepColour;
     alpha += (1.0 - alpha) * a;
   }
-  return alpha > 0.0 ? vec4(colour / alpha, alpha) : vec4(0.0);
+  // As the CPU compositor: below the smallest normal float the reciprocal would overflow.
+  return alpha > 1.17549435e-38 ? vec4(colour / alpha, alpha) : vec4(0.0);
 }
 
 // Depth peeling (mtpt::VolumetricPeel): the volume's parts between the window depths each
