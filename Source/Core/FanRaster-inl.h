@@ -369,6 +369,11 @@ struct FanPlanes
   HWY_ALIGN float dy[6][MaxLanes];
   HWY_ALIGN float start[6][MaxLanes];
   int triangles = 0;
+  /// Whether every value and gradient lies within PlaneLimit: a fan's values evaluated
+  /// over the tile then stay finite in float. Scalars near the largest float (1e38) or
+  /// corners of 1e30 can give planes beyond it; such fans are drawn as triangles.
+  bool representable = true;
+  static constexpr double PlaneLimit = 1e30;
 
   /// Every lane 0, before the first SetUp (which writes the first 4 lanes).
   void Clear()
@@ -404,6 +409,7 @@ struct FanPlanes
     }
     const PlaneTag dd;
     const int lanes = static_cast<int>(hn::Lanes(dd));
+    this->representable = true;
     for (int k = 0; k < g.triangles; k += lanes)
     {
       this->SetUpLanes(dd, tile, g, k, here, there, own);
@@ -428,6 +434,8 @@ struct FanPlanes
       hn::Set(dd, 256.0), hn::IfThenElse(hn::Eq(cross, hn::Zero(dd)), hn::Set(dd, 1.0), cross));
     const auto ox = hn::Set(dd, (tile.x0 * 256.0 + 128 - static_cast<double>(g.cx)) / 256);
     const auto oy = hn::Set(dd, (tile.y0 * 256.0 + 128 - static_cast<double>(g.cy)) / 256);
+    const auto limit = hn::Set(dd, PlaneLimit);
+    auto within = hn::Eq(limit, limit); // NaN compares false below, so it is not within
     for (int a = 0; a < 6; ++a)
     {
       const auto v2 = hn::PromoteTo(dd, hn::LoadU(df, own[a] + k));
@@ -435,11 +443,16 @@ struct FanPlanes
       const auto d2 = hn::Sub(hn::PromoteTo(dd, hn::LoadU(df, there[a] + k)), v2);
       const auto gx = hn::Mul(hn::Sub(hn::Mul(d1, e2y), hn::Mul(d2, e1y)), perPixel);
       const auto gy = hn::Mul(hn::Sub(hn::Mul(d2, e1x), hn::Mul(d1, e2x)), perPixel);
-      hn::StoreU(
-        hn::DemoteTo(df, hn::MulAdd(gy, oy, hn::MulAdd(gx, ox, v2))), df, this->base[a] + k);
+      const auto base = hn::MulAdd(gy, oy, hn::MulAdd(gx, ox, v2));
+      within = hn::And(within,
+        hn::And(hn::Le(hn::Abs(base), limit),
+          hn::And(hn::Le(hn::Abs(gx), limit), hn::Le(hn::Abs(gy), limit))));
+      hn::StoreU(hn::DemoteTo(df, base), df, this->base[a] + k);
       hn::StoreU(hn::DemoteTo(df, gx), df, this->dx[a] + k);
       hn::StoreU(hn::DemoteTo(df, gy), df, this->dy[a] + k);
     }
+    // Lanes past the fan's triangles hold zero vectors: their planes are 0.
+    this->representable = this->representable && hn::AllTrue(dd, within);
   }
 
   /// Each triangle's values at column 0 of tile row j (RowStart's).
@@ -648,7 +661,8 @@ public:
   /**
    * VTK-compatible or pre-integrated shading of `fan` into the tile, or its reduction in a
    * blend mode other than Composite, as its triangles would be drawn. Returns false, having
-   * drawn nothing, when the fan path does not apply: the caller draws the triangles instead.
+   * drawn nothing, when the fan path does not apply or the fan's planes are not
+   * representable in float: the caller draws the triangles instead.
    */
   bool Draw(const Fan& fan, RasterCounts& counts)
   {
@@ -671,14 +685,15 @@ public:
     {
       return false;
     }
-    this->Rows(fan, g, counts);
-    return true;
+    return this->Rows(fan, g, counts);
   }
 
 private:
-  /// The rows of the fan's box in the tile, vector by vector.
-  void Rows(const Fan& fan, const FanGeometry& g, RasterCounts& counts)
+  /// The rows of the fan's box in the tile, vector by vector; false, having drawn and
+  /// counted nothing, if its planes are not representable.
+  bool Rows(const Fan& fan, const FanGeometry& g, RasterCounts& counts)
   {
+    const RasterCounts before = counts;
     const FragmentTag d;
     const int lanes = static_cast<int>(hn::Lanes(d));
     const TileTarget& tile = this->Target;
@@ -723,7 +738,11 @@ private:
         if (!ready)
         {
           ShadeWaiting(this->Frame, tile, this->Waiting); // what came before, first
-          this->SetUp(fan, g);
+          if (!this->SetUp(fan, g))
+          {
+            counts = before;
+            return false;
+          }
           ready = true;
           counts.triangles += static_cast<std::size_t>(g.triangles);
         }
@@ -754,6 +773,7 @@ private:
         spokes[k].NextRow();
       }
     }
+    return true;
   }
 
   /// Marks the opaque pixels among the vector's at tile row j, column x, whose alpha is `alpha`.
@@ -786,8 +806,9 @@ private:
     return true;
   }
 
-  /// The corners' values and the triangles' planes, once the fan covers a pixel.
-  void SetUp(const Fan& fan, const FanGeometry& g)
+  /// The corners' values and the triangles' planes, once the fan covers a pixel; false if
+  /// the planes are not representable (FanPlanes::representable).
+  bool SetUp(const Fan& fan, const FanGeometry& g)
   {
     hn::Vec<CornerTag> value[6], centre[6];
     if (this->FanMode != Mode::Compatible)
@@ -799,6 +820,7 @@ private:
       FanValues(this->Lookup, fan, value, centre);
     }
     this->Planes.SetUp(this->Target, g, value, centre);
+    return this->Planes.representable;
   }
 
   const RasterFrame& Frame;
