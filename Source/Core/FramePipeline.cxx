@@ -136,6 +136,35 @@ std::size_t FramePipeline::MemoryBytes() const
   return bytes;
 }
 
+std::size_t FramePipeline::BytesNeeded(const MemoryNeed& need)
+{
+  // Each stage's buffers at their largest (their MemoryBytes). Per point: the projected
+  // points.
+  const std::size_t perPoint = sizeof(ProjectedPoint);
+  // Per cell: the culling's scalar ranges (2 floats) and its two lists; the depth keys; the
+  // near plane's verdict (a byte per key); the order, its scratch and the radix order's
+  // scratch (3 keys); the ranks; with the level of detail, the importance and its list.
+  const std::size_t perCell = 2 * sizeof(float) + 2 * sizeof(std::uint32_t) + sizeof(SortKey) + 1 +
+    3 * sizeof(SortKey) + sizeof(std::uint32_t) +
+    (need.levelOfDetail ? 2 * sizeof(std::uint32_t) : 0);
+  // Per piece: the pieces and their keys (grown one at a time, so up to twice their number),
+  // their places in the order and its scratch, and their ranks.
+  const std::size_t perPiece =
+    2 * sizeof(NearPiece) + 2 * sizeof(SortKey) + 2 * sizeof(SortKey) + sizeof(std::uint32_t);
+  // Per cell of a window: 5 vertices and 12 indices (slots), a fan; each with its
+  // projection class (a byte).
+  const std::size_t perWindowCell = (need.slots ? VerticesPerTetrahedron * sizeof(TetVertex) +
+                                          IndicesPerTetrahedron * sizeof(std::uint32_t) + 1
+                                                : 0) +
+    (need.fans ? sizeof(Fan) + 1 : 0);
+  // The radix order's per-thread bucket counts (256 per pass and thread).
+  const std::size_t counts =
+    static_cast<std::size_t>(detail::ResolveThreads(need.threads)) * 256 * sizeof(std::size_t);
+  const std::size_t window = std::min(need.batch, need.cells + need.pieces);
+  return need.points * perPoint + need.cells * perCell + need.pieces * perPiece +
+    window * perWindowCell + counts;
+}
+
 void FramePipeline::ForgetFrom(std::size_t first)
 {
   const auto stages = StagesOf(*this);

@@ -563,3 +563,64 @@ TEST(FramePipeline, BatchesReproduceTheWholeFrame)
 }
 
 } // namespace
+
+TEST(FramePipelineMemory, BytesNeededBoundsTheBuffersOfEveryFrame)
+{
+  // The bound a caller checks before a frame allocates (FramePipeline::BytesNeeded) must
+  // hold the buffers the frames leave (MemoryBytes), whatever the view (the eye inside the
+  // mesh: near-plane pieces), the window, the level of detail and the decompositions; and it
+  // must stay near them, or it would refuse meshes that fit.
+  const TetMesh mesh = JitteredGrid(9, 5);
+  const std::vector<float> opacity = { 0, 0, 0, 0, 1, 1, 1, 0.5f, 1, 1, 1, 2 };
+  for (const bool inside : { false, true })
+  {
+    for (const std::size_t batch : { std::size_t{ 1 }, std::size_t{ 37 }, std::size_t{ 1 } << 20 })
+    {
+      for (const double fraction : { 1.0, 0.5 })
+      {
+        mtpt::FrameInput input;
+        input.points = mesh.Points();
+        input.cells = mesh.Cells();
+        input.scalars = { mesh.scalars.data(), mtpt::ScalarsView::Association::Points };
+        input.modelView = inside ? LookAt({ 0.1, -0.05, 0.3 }, { 0.18, 0.0, -0.7 }, { 0, 1, 0 })
+                                 : LookAt({ 0.7, 1.1, 2.6 }, { 0.1, 0, 0 }, { 0, 1, 0 });
+        input.projection = mtpt::test::Perspective(70, 1.0, inside ? 0.05 : 0.5, 10);
+        input.perspective = true;
+        input.imageSize = { 64, 64 };
+        input.opacity = { opacity.data(), 3, -1.0, 1.0 };
+        input.cellFraction = fraction;
+        mtpt::FramePipeline pipeline;
+        pipeline.PrepareLevelOfDetail(input, 2);
+        ASSERT_TRUE(pipeline.Prepare(input, 2));
+        for (std::size_t first = 0; first < pipeline.SortedCount(); first += batch)
+        {
+          pipeline.DecomposeBatch(first, batch, 2);
+          pipeline.DecomposeFans(first, batch, 2);
+        }
+        mtpt::MemoryNeed need;
+        need.points = mesh.Points().count;
+        need.cells = mesh.Cells().cellCount;
+        need.batch = batch;
+        need.slots = need.fans = true;
+        need.levelOfDetail = fraction < 1;
+        need.threads = 2;
+        need.pieces = pipeline.Stats().nearPieces;
+        const std::size_t held = pipeline.MemoryBytes(),
+                          bound = mtpt::FramePipeline::BytesNeeded(need);
+        SCOPED_TRACE(::testing::Message()
+          << (inside ? "inside" : "outside") << ", batches of " << batch << ", fraction "
+          << fraction << ", " << need.pieces << " pieces");
+        std::printf("%s, batches of %zu, fraction %g: %zu bytes held, %zu bound (%zu pieces)\n",
+          inside ? "inside" : "outside", batch, fraction, held, bound, need.pieces);
+        EXPECT_EQ(inside, need.pieces > 0);
+        EXPECT_LE(held, bound);
+        if (!inside && fraction == 1)
+        {
+          // Every cell in view and drawn: only the culling's lists and the last window may be
+          // shorter than the bound takes them.
+          EXPECT_GE(static_cast<double>(held), 0.75 * static_cast<double>(bound));
+        }
+      }
+    }
+  }
+}

@@ -126,6 +126,23 @@ struct FrameInput
  */
 using StageCallback = std::function<bool(Stage)>;
 
+/// What FramePipeline::BytesNeeded bounds the buffers of.
+struct MemoryNeed
+{
+  std::size_t points = 0; ///< the mesh's points
+  std::size_t cells = 0;  ///< its tetrahedra
+  /// The largest window decomposed at once (DecomposeBatch, DecomposeFans); clamped to the
+  /// cells and pieces.
+  std::size_t batch = 0;
+  bool slots = false;         ///< windows decomposed into slots (the OpenGL backend)
+  bool fans = false;          ///< windows decomposed into fans (the CPU compositor)
+  bool levelOfDetail = false; ///< frames with a cell fraction below 1
+  int threads = 1;            ///< OpenMP threads (0: all; the radix order's counts)
+  /// Near-plane pieces: at most 3 per cell the near plane cuts, so they grow with the cut's
+  /// area, not with the mesh. 0 leaves them out.
+  std::size_t pieces = 0;
+};
+
 /**
  * Runs the CPU stages and keeps their results until the next frame. Buffers grow to the
  * largest mesh (or batch) seen and are reused, so steady-state frames allocate nothing.
@@ -234,6 +251,11 @@ public:
 
   /// Bytes held by the pipeline's buffers (capacity, not size).
   std::size_t MemoryBytes() const;
+  /**
+   * An upper bound of MemoryBytes() over frames of one mesh (`need`), computed before any of
+   * them: what a caller compares with the memory it has before the buffers are allocated.
+   */
+  static std::size_t BytesNeeded(const MemoryNeed& need);
   /// Frees every buffer and forgets what could be reused.
   void Release();
 
