@@ -422,6 +422,8 @@ vtkSmartPointer<vtkUnstructuredGridVolumeMapper> MakeMapper(
     mapper->SetAutoAdjustSampleDistances(settings.autoAdjust ? 1 : 0);
     mapper->SetAutoAdjustCellFraction(settings.autoAdjust ? 1 : 0);
     mapper->SetImageSampleDistance(settings.imageSampleDistance);
+    mapper->SetBatchSize(static_cast<vtkIdType>(settings.batchSize));
+    mapper->SetMemoryLimit(static_cast<vtkIdType>(settings.memoryLimitMiB) << 20);
     return mapper;
   }
   if (name == "vtk-pt")
@@ -840,6 +842,19 @@ ImageError CompareImages(vtkImageData* a, vtkImageData* b)
   return e;
 }
 
+void AddMemoryOptions(CLI::App& app, MapperSettings& settings)
+{
+  app
+    .add_option("--batch-size", settings.batchSize,
+      "MTPT's tetrahedra decomposed and drawn at a time (0: the whole mesh at once)")
+    ->check(CLI::NonNegativeNumber);
+  app
+    .add_option("--memory-limit", settings.memoryLimitMiB,
+      "MiB MTPT's buffers may take; a frame that needs more is refused with an error (0: the "
+      "memory available)")
+    ->check(CLI::NonNegativeNumber);
+}
+
 void AddCommonOptions(CLI::App& app, CommonOptions& options)
 {
   app.add_option("--repeat", options.timing.repeat, "timed frames per measurement (median)")
@@ -890,6 +905,7 @@ void AddCommonOptions(CLI::App& app, CommonOptions& options)
     ->check(CLI::IsMember({ "radix", "partition" }));
   app.add_option("--blend-mode", options.mapper.blend, "MTPT's blend mode")
     ->check(CLI::IsMember(BlendModeNames()));
+  AddMemoryOptions(app, options.mapper);
   app
     .add_option_function<std::string>(
       "--instruction-set",

@@ -123,6 +123,8 @@ struct MapperSettings
   float imageSampleDistance = 1; ///< fixed, unless autoAdjust
   /// AutoAdjustSampleDistances and AutoAdjustCellFraction (off: every pixel and cell drawn)
   bool autoAdjust = false;
+  long long batchSize = 1 << 20; ///< SetBatchSize (0: one batch)
+  long long memoryLimitMiB = 0;  ///< SetMemoryLimit in MiB (0: the memory available)
 };
 
 /**
@@ -352,8 +354,11 @@ struct ImageError
 };
 ImageError CompareImages(vtkImageData* a, vtkImageData* b);
 
+/// Adds --batch-size and --memory-limit (MTPT's SetBatchSize and SetMemoryLimit) to `app`.
+void AddMemoryOptions(CLI::App& app, MapperSettings& settings);
 /// Adds --repeat, --rounds, --step, --slow-limit, --threads, --shading, --order,
-/// --instruction-set, --data and --multisampling to `app`.
+/// --blend-mode, --batch-size, --memory-limit, --instruction-set, --data and
+/// --multisampling to `app`.
 void AddCommonOptions(CLI::App& app, CommonOptions& options);
 
 /// Adds --image-sample-distance, --desired-update-rate and --warm-up to `app` (the frame

@@ -440,6 +440,7 @@ try
     "composite; maximum or minimum intensity; average intensity; additive (VTK's blend modes; "
     "VTK's PT composites in --compare-vtk)")
     ->check(CLI::IsMember(BlendModeNames()));
+  AddMemoryOptions(app, o.common.mapper);
   app.add_flag("--shade", o.shade,
     "light the volume by the renderer's headlight, as VTK's GPU ray caster lights image data "
     "(VTK's PT ignores it in --compare-vtk)");

@@ -32,6 +32,7 @@
 #include "vtkVolume.h"
 #include "vtkVolumeProperty.h"
 #include "vtkWeakPointer.h"
+#include "vtksys/SystemInformation.hxx"
 #include "Basics/OpenGLHeader.h"
 
 #include <algorithm>
@@ -217,6 +218,58 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetBatchSize(vtkIdType size)
     this->BatchSize = size;
     this->Modified();
   }
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::SetMemoryLimit(vtkIdType bytes)
+{
+  if (bytes < 0)
+  {
+    vtkWarningMacro(<< "SetMemoryLimit(" << bytes
+                    << "): the limit must be 0 (the memory available) or positive; keeping "
+                    << this->MemoryLimit);
+    return;
+  }
+  if (bytes != this->MemoryLimit)
+  {
+    this->MemoryLimit = bytes;
+    this->Modified();
+  }
+}
+
+bool vtkMultiThreadedProjectedTetrahedraMapper::FitsInMemory(const mtpt::FrameInput& frame)
+{
+  Internals& in = *this->Internal;
+  mtpt::MemoryNeed need;
+  need.points = frame.points.count;
+  need.cells = frame.cells.cellCount;
+  need.batch = this->BatchSize > 0 ? static_cast<std::size_t>(this->BatchSize) : need.cells;
+  need.slots = in.LastBackend == OPENGL_BACKEND;
+  need.fans = !need.slots;
+  need.levelOfDetail = frame.cellFraction < 1 || this->AutoAdjustCellFraction;
+  need.threads = this->NumberOfThreads;
+  const std::size_t bytes = mtpt::FramePipeline::BytesNeeded(need);
+  const std::size_t held = in.Pipeline.MemoryBytes();
+  std::size_t limit = static_cast<std::size_t>(this->MemoryLimit);
+  if (limit == 0)
+  {
+    vtksys::SystemInformation system;
+    system.RunMemoryCheck();
+    limit = held + (static_cast<std::size_t>(system.GetAvailablePhysicalMemory()) << 20);
+  }
+  if (bytes <= limit)
+  {
+    return true;
+  }
+  const auto mib = [](std::size_t b) { return (b + (1u << 20) - 1) >> 20; };
+  std::ostringstream text;
+  text << "drawing " << need.cells << " tetrahedra (" << need.points << " points) needs up to "
+       << mib(bytes) << " MiB of buffers, over "
+       << (this->MemoryLimit > 0 ? "the memory limit of " : "the memory available, ") << mib(limit)
+       << " MiB" << (this->MemoryLimit > 0 ? " (SetMemoryLimit)" : "")
+       << "; nothing was drawn. A smaller batch size (SetBatchSize, now " << this->BatchSize
+       << "), a larger limit or fewer cells may fit";
+  vtkErrorMacro(<< text.str()); // every frame: each draws nothing
+  return false;
 }
 
 void vtkMultiThreadedProjectedTetrahedraMapper::SetDistance(
@@ -747,6 +800,10 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::DrawPrepared(
   mtpt::RenderBackend* backend = this->ChooseBackend();
   this->SetUpFrame(renderer, volume, window, backend, frame, draw);
   this->ReportProgress(window, 0.0);
+  if (!this->FitsInMemory(frame))
+  {
+    return false;
+  }
   if (!in.Pipeline.Prepare(frame, this->NumberOfThreads))
   {
     in.Stopped = in.Pipeline.Stopped();
@@ -1069,6 +1126,8 @@ void vtkMultiThreadedProjectedTetrahedraMapper::PrintSelf(ostream& os, vtkIndent
   os << indent << "SynchronizedTiming: " << this->SynchronizedTiming << "\n";
   os << indent << "BatchSize: " << this->BatchSize << (this->BatchSize == 0 ? " (one batch)" : "")
      << "\n";
+  os << indent << "MemoryLimit: " << this->MemoryLimit
+     << (this->MemoryLimit == 0 ? " (the memory available)" : "") << "\n";
   os << indent << "ReuseResults: " << this->ReuseResults << "\n";
   os << indent << "CullInvisibleCells: " << this->CullInvisibleCells << "\n";
   os << indent << "ImageSampleDistance: " << this->ImageSampleDistance << "\n";

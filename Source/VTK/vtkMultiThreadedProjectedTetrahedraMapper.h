@@ -229,6 +229,19 @@ public:
 
   ///@{
   /**
+   * The most bytes the mapper's CPU buffers may hold (GetMemoryBytes). Before a frame
+   * allocates them, an upper bound for the input's points and tetrahedra and the batch size
+   * (mtpt::FramePipeline::BytesNeeded) is compared with it: a frame that would exceed it is
+   * not drawn, and an error says what it needs and what to change. 0 (default): the physical
+   * memory available when the frame starts, plus what the buffers hold already. Negative
+   * values are rejected with a warning.
+   */
+  void SetMemoryLimit(vtkIdType bytes);
+  vtkGetMacro(MemoryLimit, vtkIdType);
+  ///@}
+
+  ///@{
+  /**
    * Cull cells that cannot change the image (default on): fully transparent, outside the
    * view volume, covering no pixel centre. Off draws every cell, for verification and
    * for measuring what culling saves; the image is the same.
@@ -428,6 +441,7 @@ protected:
   bool UseFloatingPointFrameBuffer = true;
   bool SynchronizedTiming = false;
   vtkIdType BatchSize = 1 << 20;
+  vtkIdType MemoryLimit = 0;
   bool ReuseResults = true;
   bool CullInvisibleCells = true;
   float ImageSampleDistance = 1.0f;
@@ -495,6 +509,8 @@ private:
   /// The pipeline's settings for the frame, and its progress and abort callback.
   void ConfigurePipeline(vtkOpenGLRenderWindow* window);
   void DrawFrame(mtpt::RenderBackend* backend, mtpt::BackendFrame& draw);
+  /// Whether the frame's buffers fit MemoryLimit (or the memory available); reports when not.
+  bool FitsInMemory(const mtpt::FrameInput& frame);
   void ReportProgress(vtkOpenGLRenderWindow* window, double fraction);
 
   class Internals;

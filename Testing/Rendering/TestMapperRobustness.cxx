@@ -186,6 +186,37 @@ TEST_F(MapperRobustness, EmptyGridIsReported)
   this->ExpectRecovers();
 }
 
+TEST_F(MapperRobustness, AMeshOverTheMemoryLimitIsReportedAndNotDrawn)
+{
+  // A limit below what the box's buffers need (mtpt::FramePipeline::BytesNeeded): every
+  // frame is refused before a buffer is allocated, with an error saying what it needs and
+  // what to change, and the background shows. A limit the frame fits, or the default (the
+  // memory available), draws the box as a fresh mapper does.
+  this->MapperUnderTest->SetMemoryLimit(1024);
+  const auto image = Render(SceneOf(this->Box), this->MapperUnderTest, 2);
+  // Two frames and the render of the read-back: an error for each.
+  ASSERT_EQ(this->Observer->errors.size(), 3u);
+  for (const std::string& error : this->Observer->errors)
+  {
+    EXPECT_NE(error.find("needs up to 1 MiB of buffers, over the memory limit of 1 MiB "
+                         "(SetMemoryLimit); nothing was drawn. A smaller batch size "
+                         "(SetBatchSize, now 1048576), a larger limit or fewer cells may fit"),
+      std::string::npos)
+      << error;
+  }
+  EXPECT_LT(CoveredFraction(image, Background), 0.001);
+  EXPECT_EQ(this->MapperUnderTest->GetMemoryBytes(), 0);
+  this->Observer->Clear();
+  this->MapperUnderTest->SetMemoryLimit(-5);
+  EXPECT_TRUE(AnyContains(this->Observer->warnings, "keeping 1024"));
+  this->MapperUnderTest->SetMemoryLimit(64 << 20);
+  this->ExpectRecovers();
+  this->MapperUnderTest->SetMemoryLimit(0);
+  this->ExpectRecovers();
+  EXPECT_TRUE(this->Observer->errors.empty());
+  EXPECT_GT(this->MapperUnderTest->GetMemoryBytes(), 0);
+}
+
 TEST_F(MapperRobustness, NaNScalarsAreReportedAndTheirCellsSkipped)
 {
   vtkNew<vtkUnstructuredGrid> grid;
