@@ -40,6 +40,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <map>
+#include <new>
 #include <set>
 #include <sstream>
 #include <string>
@@ -64,6 +65,15 @@ mtpt::OrderMutation OrderMutationFromEnvironment()
     return mtpt::OrderMutation::Storage;
   }
   return mtpt::OrderMutation::None;
+}
+
+/// Testing only: MTPT_TESTING_FAULT=allocation makes the frame's first allocation after the
+/// memory check fail (std::bad_alloc), as one the check did not foresee would (see the
+/// robustness tests).
+bool AllocationFaultInjected()
+{
+  const char* fault = std::getenv("MTPT_TESTING_FAULT");
+  return fault && std::strcmp(fault, "allocation") == 0;
 }
 
 /// Samples per pixel side at most, for image sample distances below 1: the image and its
@@ -712,7 +722,22 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
     : mtpt::CellFractionLevel(this->CellFraction, 0.0);
   in.Pipeline.PrepareLevelOfDetail(frame, this->NumberOfThreads);
   const auto start = mtpt::Clock::now();
-  if (!this->DrawPrepared(renderer, volume, window, frame))
+  bool drawn = false;
+  try
+  {
+    drawn = this->DrawPrepared(renderer, volume, window, frame);
+  }
+  catch (const std::bad_alloc&)
+  {
+    // An allocation the memory check did not foresee (other programs took the memory since):
+    // no frame, no buffers kept, and the next frame starts afresh.
+    in.Pipeline.Release();
+    vtkErrorMacro(<< "ran out of memory drawing " << frame.cells.cellCount
+                  << " tetrahedra; nothing was drawn and the buffers were freed. A smaller "
+                     "batch size (SetBatchSize), a memory limit (SetMemoryLimit) or fewer "
+                     "cells may fit");
+  }
+  if (!drawn)
   {
     // No frame, or a stopped one: nothing to learn the next detail from (VTK's ray caster
     // restores the distance of an aborted frame too).
@@ -803,6 +828,10 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::DrawPrepared(
   if (!this->FitsInMemory(frame))
   {
     return false;
+  }
+  if (AllocationFaultInjected())
+  {
+    throw std::bad_alloc();
   }
   if (!in.Pipeline.Prepare(frame, this->NumberOfThreads))
   {

@@ -217,6 +217,27 @@ TEST_F(MapperRobustness, AMeshOverTheMemoryLimitIsReportedAndNotDrawn)
   EXPECT_GT(this->MapperUnderTest->GetMemoryBytes(), 0);
 }
 
+TEST_F(MapperRobustness, AFailedAllocationIsReportedAndTheNextFrameIsWhole)
+{
+  // MTPT_TESTING_FAULT=allocation throws std::bad_alloc where the frame's buffers are first
+  // allocated: the mapper reports it, draws nothing, frees its buffers, and draws the next
+  // frame as a fresh mapper does.
+  setenv("MTPT_TESTING_FAULT", "allocation", 1);
+  const Stage stage = RenderStage(SceneOf(this->Box), this->MapperUnderTest);
+  const auto image = Grab(stage.window, false);
+  unsetenv("MTPT_TESTING_FAULT");
+  this->MapperUnderTest->ReleaseGraphicsResources(stage.window);
+  ASSERT_EQ(this->Observer->errors.size(), 1u);
+  EXPECT_TRUE(AnyContains(this->Observer->errors,
+    "ran out of memory drawing 2560 tetrahedra; nothing was drawn and the buffers were freed"))
+    << this->Observer->errors[0];
+  EXPECT_LT(CoveredFraction(image, Background), 0.001);
+  EXPECT_EQ(this->MapperUnderTest->GetMemoryBytes(), 0);
+  this->Observer->Clear();
+  this->ExpectRecovers();
+  EXPECT_TRUE(this->Observer->errors.empty());
+}
+
 TEST_F(MapperRobustness, NaNScalarsAreReportedAndTheirCellsSkipped)
 {
   vtkNew<vtkUnstructuredGrid> grid;
