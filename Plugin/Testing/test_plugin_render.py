@@ -89,6 +89,24 @@ def check_image_sample_distance(display, view):
     return ok
 
 
+def check_memory_limit(display, view):
+    """The memory limit through its property: 1 MiB is below what the mesh's buffers need,
+    so the render draws nothing (the mapper reports what it needs); 0, the memory
+    available, draws the image of out("mtpt_cpu") again."""
+    ok = True
+    display.MTPTMemoryLimit = 1
+    testing.save(view, out("mtpt_memory_limit"))
+    figures = testing.compare(out("mtpt_cpu"), out("mtpt_memory_limit"))
+    ok &= testing.check(figures["covered_b"] < 0.001,
+                        "Memory Limit 1 MiB: nothing drawn (covered %.4f)" % figures["covered_b"])
+    display.MTPTMemoryLimit = 0
+    testing.save(view, out("mtpt_memory_available"))
+    rmse = testing.compare(out("mtpt_cpu"), out("mtpt_memory_available"))["rmse"]
+    ok &= testing.check(rmse <= MAX_RMSE_ORDER_METHODS,
+                        "Memory Limit 0: the full image again (RMSE %.2g)" % rmse)
+    return ok
+
+
 def check_level_of_detail(display, view):
     """While the view moves, ParaView replaces a volume above its LOD threshold by the grid's
     outline or surface. With the cell level of detail on (the default) the representation
@@ -266,6 +284,7 @@ def main():
     display.MTPTShadingMode = "VTK-compatible"
 
     ok &= check_image_sample_distance(display, view)
+    ok &= check_memory_limit(display, view)
     ok &= check_level_of_detail(display, view)
     ok &= check_clipping_plane(display, view, reader)
     ok &= check_blend_modes(display, view)

@@ -49,6 +49,16 @@ int vtkMTPTUnstructuredGridVolumeRepresentation::GetNumberOfThreads()
   return this->MTPTMapper->GetNumberOfThreads();
 }
 
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetMemoryLimitMiB(int mebibytes)
+{
+  this->MTPTMapper->SetMemoryLimit(static_cast<vtkIdType>(mebibytes) << 20);
+}
+
+int vtkMTPTUnstructuredGridVolumeRepresentation::GetMemoryLimitMiB()
+{
+  return static_cast<int>(this->MTPTMapper->GetMemoryLimit() >> 20);
+}
+
 void vtkMTPTUnstructuredGridVolumeRepresentation::SetOrderMethod(int method)
 {
   this->MTPTMapper->SetOrderMethod(method);

@@ -52,6 +52,9 @@ public:
   int GetBackend();
   void SetShadingMode(int mode);
   int GetShadingMode();
+  /// The mapper's memory limit in MiB (SetMemoryLimit; 0: the memory available).
+  void SetMemoryLimitMiB(int mebibytes);
+  int GetMemoryLimitMiB();
   /// vtkMultiThreadedProjectedTetrahedraMapper's blend mode (0 to 4) and the average's range.
   void SetBlendMode(int mode);
   int GetBlendMode();
