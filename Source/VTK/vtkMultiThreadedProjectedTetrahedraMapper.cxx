@@ -193,20 +193,27 @@ vtkMultiThreadedProjectedTetrahedraMapper::~vtkMultiThreadedProjectedTetrahedraM
   this->ReleaseGraphicsResources(nullptr);
 }
 
-void vtkMultiThreadedProjectedTetrahedraMapper::SetNumberOfThreads(int threads)
+template <typename T>
+void vtkMultiThreadedProjectedTetrahedraMapper::SetNonNegative(
+  const char* setter, const char* what, const char* zero, T value, T& setting)
 {
-  if (threads < 0)
+  if (value < 0)
   {
-    vtkWarningMacro(<< "SetNumberOfThreads(" << threads
-                    << "): the thread count must be 0 (the default) or positive; keeping "
-                    << this->NumberOfThreads);
+    vtkWarningMacro(<< setter << "(" << value << "): " << what << " must be 0 (" << zero
+                    << ") or positive; keeping " << setting);
     return;
   }
-  if (threads != this->NumberOfThreads)
+  if (value != setting)
   {
-    this->NumberOfThreads = threads;
+    setting = value;
     this->Modified();
   }
+}
+
+void vtkMultiThreadedProjectedTetrahedraMapper::SetNumberOfThreads(int threads)
+{
+  this->SetNonNegative(
+    "SetNumberOfThreads", "the thread count", "the default", threads, this->NumberOfThreads);
 }
 
 int vtkMultiThreadedProjectedTetrahedraMapper::GetEffectiveNumberOfThreads()
@@ -216,34 +223,13 @@ int vtkMultiThreadedProjectedTetrahedraMapper::GetEffectiveNumberOfThreads()
 
 void vtkMultiThreadedProjectedTetrahedraMapper::SetBatchSize(vtkIdType size)
 {
-  if (size < 0)
-  {
-    vtkWarningMacro(<< "SetBatchSize(" << size
-                    << "): the batch size must be 0 (one batch) or positive; keeping "
-                    << this->BatchSize);
-    return;
-  }
-  if (size != this->BatchSize)
-  {
-    this->BatchSize = size;
-    this->Modified();
-  }
+  this->SetNonNegative("SetBatchSize", "the batch size", "one batch", size, this->BatchSize);
 }
 
 void vtkMultiThreadedProjectedTetrahedraMapper::SetMemoryLimit(vtkIdType bytes)
 {
-  if (bytes < 0)
-  {
-    vtkWarningMacro(<< "SetMemoryLimit(" << bytes
-                    << "): the limit must be 0 (the memory available) or positive; keeping "
-                    << this->MemoryLimit);
-    return;
-  }
-  if (bytes != this->MemoryLimit)
-  {
-    this->MemoryLimit = bytes;
-    this->Modified();
-  }
+  this->SetNonNegative(
+    "SetMemoryLimit", "the limit", "the memory available", bytes, this->MemoryLimit);
 }
 
 bool vtkMultiThreadedProjectedTetrahedraMapper::FitsInMemory(const mtpt::FrameInput& frame)

@@ -495,6 +495,10 @@ private:
     mtpt::RenderBackend* backend, vtkOpenGLRenderWindow* window, mtpt::BackendFrame& draw);
   /// Sets an image sample distance setting, clamped to VTK's range; NaN is rejected.
   void SetDistance(const char* name, float distance, float& setting);
+  /// Sets a count or size that must not be negative (Modified on a change); a negative
+  /// `value` is rejected with a warning naming `setter`, `what` it is and `zero`'s meaning.
+  template <typename T>
+  void SetNonNegative(const char* setter, const char* what, const char* zero, T value, T& setting);
   /// Sets ImageSampleDistance and CellFraction for the next frame from the time allotted.
   void AdjustDetail(vtkRenderer* renderer, vtkVolume* volume);
   void SetUpFrame(vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window,
