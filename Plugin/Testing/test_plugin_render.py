@@ -49,6 +49,14 @@ args = testing.arguments(["PLUGIN", "DATA", "OUTPUT_DIR", "NAME"])
 out = functools.partial(testing.output_path, args)
 
 
+def check_cpu_image_again(view, name, what):
+    """Saves the view as out(name) and checks that it is the image out("mtpt_cpu") again:
+    `what` says which setting, set back or left at its default, gives it."""
+    testing.save(view, out(name))
+    rmse = testing.compare(out("mtpt_cpu"), out(name))["rmse"]
+    return testing.check(rmse <= MAX_RMSE_ORDER_METHODS, "%s (RMSE %.2g)" % (what, rmse))
+
+
 def check_image_sample_distance(display, view):
     """The image sample distance through its properties: with automatic adjustment on (the
     default) a still render (ParaView asks for 0.002 frames a second) is drawn in full,
@@ -60,11 +68,9 @@ def check_image_sample_distance(display, view):
     Expects the CPU backend and the settings of the image out("mtpt_cpu")."""
     ok = True
     display.MTPTImageSampleDistance = 2.0
-    testing.save(view, out("mtpt_still"))
-    rmse = testing.compare(out("mtpt_cpu"), out("mtpt_still"))["rmse"]
-    ok &= testing.check(rmse <= MAX_RMSE_ORDER_METHODS,
-                        "a still render with automatic adjustment (default) is the full image "
-                        "(RMSE %.2g)" % rmse)
+    ok &= check_cpu_image_again(
+        view, "mtpt_still",
+        "a still render with automatic adjustment (default) is the full image")
 
     display.MTPTAutoAdjustSampleDistances = 0
     testing.save(view, out("mtpt_distance_2"))
@@ -79,11 +85,9 @@ def check_image_sample_distance(display, view):
 
     display.MTPTMaximumImageSampleDistance = 8.0
     display.MTPTAutoAdjustSampleDistances = 1
-    testing.save(view, out("mtpt_auto_adjusted"))
-    rmse = testing.compare(out("mtpt_cpu"), out("mtpt_auto_adjusted"))["rmse"]
-    ok &= testing.check(rmse <= MAX_RMSE_ORDER_METHODS,
-                        "automatic adjustment on again: a still render is the full image again "
-                        "(RMSE %.2g)" % rmse)
+    ok &= check_cpu_image_again(
+        view, "mtpt_auto_adjusted",
+        "automatic adjustment on again: a still render is the full image again")
     display.MTPTMaximumImageSampleDistance = 10.0
     display.MTPTImageSampleDistance = 1.0
     return ok
@@ -100,10 +104,9 @@ def check_memory_limit(display, view):
     ok &= testing.check(figures["covered_b"] < 0.001,
                         "Memory Limit 1 MiB: nothing drawn (covered %.4f)" % figures["covered_b"])
     display.MTPTMemoryLimit = 0
-    testing.save(view, out("mtpt_memory_available"))
-    rmse = testing.compare(out("mtpt_cpu"), out("mtpt_memory_available"))["rmse"]
-    ok &= testing.check(rmse <= MAX_RMSE_ORDER_METHODS,
-                        "Memory Limit 0: the full image again (RMSE %.2g)" % rmse)
+    ok &= check_cpu_image_again(
+        view, "mtpt_memory_available",
+        "Memory Limit 0: the full image again")
     return ok
 
 
@@ -160,10 +163,7 @@ def check_clipping_plane(display, view, reader):
                         sides["left"] < whole - MIN_CLIP_SHIFT,
                         "Clipping Plane keeps the side its normal points to")
     display.MTPTClippingPlane = 0
-    testing.save(view, out("mtpt_unclipped"))
-    rmse = testing.compare(out("mtpt_cpu"), out("mtpt_unclipped"))["rmse"]
-    ok &= testing.check(rmse <= MAX_RMSE_ORDER_METHODS,
-                        "Clipping Plane off: the full image again (RMSE %.2g)" % rmse)
+    ok &= check_cpu_image_again(view, "mtpt_unclipped", "Clipping Plane off: the full image again")
     return ok
 
 
@@ -189,10 +189,9 @@ def check_blend_modes(display, view):
     ok &= testing.check(covered.mean() >= MIN_COVERED and spread <= 1.5 / 255.0,
                         "Blend Mode Additive draws grey (largest channel spread %.4f)" % spread)
     display.MTPTBlendMode = 0
-    testing.save(view, out("mtpt_composite_again"))
-    rmse = testing.compare(out("mtpt_cpu"), out("mtpt_composite_again"))["rmse"]
-    ok &= testing.check(rmse <= MAX_RMSE_ORDER_METHODS,
-                        "Blend Mode Composite: the first image again (RMSE %.2g)" % rmse)
+    ok &= check_cpu_image_again(
+        view, "mtpt_composite_again",
+        "Blend Mode Composite: the first image again")
     return ok
 
 
@@ -217,10 +216,7 @@ def check_shading(display, view):
                         (float(shiny.mean()), float(dull.mean())))
     display.MTPTSpecular = 0.2
     display.MTPTShade = 0
-    testing.save(view, out("mtpt_unshaded_again"))
-    rmse = testing.compare(out("mtpt_cpu"), out("mtpt_unshaded_again"))["rmse"]
-    ok &= testing.check(rmse <= MAX_RMSE_ORDER_METHODS,
-                        "Shade off: the first image again (RMSE %.2g)" % rmse)
+    ok &= check_cpu_image_again(view, "mtpt_unshaded_again", "Shade off: the first image again")
     return ok
 
 

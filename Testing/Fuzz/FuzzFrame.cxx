@@ -593,9 +593,9 @@ bool WellConditioned(
     }
   }
   const double width = table.high - table.low;
+  const double low = table.low - 1e4 * width, high = table.high + 1e4 * width;
   for (const float v : mesh.scalars)
   {
-    const double low = table.low - 1e4 * width, high = table.high + 1e4 * width;
     if (std::isfinite(v) && !(v >= low && v <= high))
     {
       return false;
