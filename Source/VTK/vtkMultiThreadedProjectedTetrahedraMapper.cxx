@@ -149,6 +149,9 @@ public:
   int LastBackend = OPENGL_BACKEND;
   vtkIdType Tetrahedra = 0;
   bool Stopped = false;
+  /// The seconds the level of detail's analysis of the input took in the last frame: not
+  /// part of its time.
+  double AnalysisSeconds = 0;
 
   /**
    * Whether `message` about `cause` is new: each message is reported once per modification
@@ -698,7 +701,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
     return;
   }
   // Timed from here, as VTK's ray caster times its frames: the update of the input, and its
-  // analysis for the level of detail, are not part of the frame.
+  // analysis for the level of detail (DrawPrepared), are not part of the frame.
   const float distance = this->ImageSampleDistance, fraction = this->CellFraction;
   this->AdjustDetail(renderer, volume);
   // Inside a depth-peeling pass every cell is drawn, as every pixel is: the several volume
@@ -706,8 +709,8 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
   frame.cellFraction = mtpt::VolumetricPeel::ActivePass(volume, this)
     ? 1.0
     : mtpt::CellFractionLevel(this->CellFraction, 0.0);
-  in.Pipeline.PrepareLevelOfDetail(frame, this->NumberOfThreads);
   const auto start = mtpt::Clock::now();
+  in.AnalysisSeconds = 0;
   bool drawn = false;
   try
   {
@@ -735,7 +738,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
   {
     glFinish(); // the time of the drawing, not of its submission
   }
-  this->TimeToDraw = mtpt::SecondsSince(start);
+  this->TimeToDraw = std::max(mtpt::SecondsSince(start) - in.AnalysisSeconds, 0.0);
   this->StoreRenderTime(renderer, volume, this->TimeToDraw);
   in.LastDetail = { frame.cellFraction, this->ImageSampleDistance };
 }
@@ -819,6 +822,11 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::DrawPrepared(
   {
     throw std::bad_alloc();
   }
+  // The level of detail's importance order (once per mesh), after the memory check, which
+  // counts it.
+  const auto analysis = mtpt::Clock::now();
+  in.Pipeline.PrepareLevelOfDetail(frame, this->NumberOfThreads);
+  in.AnalysisSeconds = mtpt::SecondsSince(analysis);
   if (!in.Pipeline.Prepare(frame, this->NumberOfThreads))
   {
     in.Stopped = in.Pipeline.Stopped();

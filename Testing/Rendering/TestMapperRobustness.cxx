@@ -191,8 +191,11 @@ TEST_F(MapperRobustness, AMeshOverTheMemoryLimitIsReportedAndNotDrawn)
   // A limit below what the box's buffers need (mtpt::FramePipeline::BytesNeeded): every
   // frame is refused before a buffer is allocated, with an error saying what it needs and
   // what to change, and the background shows. A limit the frame fits, or the default (the
-  // memory available), draws the box as a fresh mapper does.
+  // memory available), draws the box as a fresh mapper does. The frames draw a fraction of
+  // the cells, so that the level of detail's importance order would be built too.
   this->MapperUnderTest->SetMemoryLimit(1024);
+  this->MapperUnderTest->AutoAdjustCellFractionOff();
+  this->MapperUnderTest->SetCellFraction(0.5f);
   const auto image = Render(SceneOf(this->Box), this->MapperUnderTest, 2);
   // Two frames and the render of the read-back: an error for each.
   ASSERT_EQ(this->Observer->errors.size(), 3u);
@@ -206,6 +209,8 @@ TEST_F(MapperRobustness, AMeshOverTheMemoryLimitIsReportedAndNotDrawn)
   }
   EXPECT_LT(CoveredFraction(image, Background), 0.001);
   EXPECT_EQ(this->MapperUnderTest->GetMemoryBytes(), 0);
+  this->MapperUnderTest->SetCellFraction(1.0f);
+  this->MapperUnderTest->AutoAdjustCellFractionOn();
   this->Observer->Clear();
   this->MapperUnderTest->SetMemoryLimit(-5);
   EXPECT_TRUE(AnyContains(this->Observer->warnings, "keeping 1024"));
@@ -233,6 +238,8 @@ TEST_F(MapperRobustness, AFailedAllocationIsReportedAndTheNextFrameIsWhole)
     << this->Observer->errors[0];
   EXPECT_LT(CoveredFraction(image, Background), 0.001);
   EXPECT_EQ(this->MapperUnderTest->GetMemoryBytes(), 0);
+  this->MapperUnderTest->SetCellFraction(1.0f);
+  this->MapperUnderTest->AutoAdjustCellFractionOn();
   this->Observer->Clear();
   this->ExpectRecovers();
   EXPECT_TRUE(this->Observer->errors.empty());
