@@ -10,6 +10,7 @@ and is replaced whole. The CSVs (Documentation/results/README.md has the command
   Documentation/results/frames.csv       mtpt_bench_frames --csv: MTPT and VTK's PT, full frames
   Documentation/accuracy.csv             mtpt_bench_accuracy: every mapper against the exact one
   Documentation/results/interactive.csv  mtpt_bench_interactive --csv: moving frames
+  Documentation/results/large_meshes.csv mtpt_bench_large: 1M to 100M tetrahedra
 
 usage: scripts/results-table.py [--check] [REPOSITORY]   (default: the one holding this script)
 --check changes nothing: exit status 1, naming each table that differs from its CSVs.
@@ -212,6 +213,60 @@ def readme_table(frames, accuracy, runs):
     return lines
 
 
+# Large meshes (large_meshes.csv): one row per mesh, MTPT's frames and memory, VTK's PT's.
+
+def read_large(path):
+    """The rows of large_meshes.csv, smallest mesh first, numbers as floats ('' as None)."""
+    rows = []
+    with open(path, newline="") as f:
+        for row in csv.DictReader(row for row in f if not row.startswith("#")):
+            rows.append({k: (v if k in ("scene", "multisampling") else
+                             float(v) if v != "" else None) for k, v in row.items()})
+    return sorted(rows, key=lambda r: r["tetrahedra"])
+
+
+def slow(row, key):
+    """A frame time, '*' marking a single frame (slower than the slow limit)."""
+    return ms(row[key + "_ms"]) + ("*" if row[key + "_slow"] else "")
+
+
+def large_table(rows):
+    lines = ["| tetrahedra | full frame, ms | CPU stages, ms (tetrahedra a second) | "
+             "rasterization, ms (ns per fragment and core) | fragments | moving at "
+             f"{rows[0]['moving_rate']:g} fps asked: ms, cells drawn, sample distance | "
+             "grid, MiB | MTPT's buffers, MiB (bytes per tetrahedron) | peak resident, MiB | "
+             "VTK's PT, ms (peak MiB) | VTK's PT / MTPT |",
+             "|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|"]
+    for r in rows:
+        tets = r["tetrahedra"]
+        ns = 1e6 * r["raster_ms"] * r["threads"] / r["fragments"] if r["fragments"] else 0
+        pt = (f"{slow(r, 'vtk_pt')} ({r['vtk_pt_peak_mib']:.0f})"
+              if r["vtk_pt_ms"] is not None else "not run")
+        ratio = f"{r['vtk_pt_ms'] / r['mtpt_ms']:.1f}x" if r["vtk_pt_ms"] is not None else "-"
+        lines.append(
+            f"| {tetrahedra(tets)} | {slow(r, 'mtpt')} | {ms(r['cpu_stages_ms'])} "
+            f"({tets / r['cpu_stages_ms'] / 1e3:.1f}M) | {ms(r['raster_ms'])} ({ns:.1f}) | "
+            f"{r['fragments'] / 1e6:.0f}M | {ms(r['moving_ms'])}, "
+            f"{100 * r['moving_cell_fraction']:.2g}%, {r['moving_sample_distance']:.2f} | "
+            f"{r['grid_mib']:.0f} | {r['mtpt_mib']:.0f} ({r['mtpt_mib'] * 2**20 / tets:.0f}) | "
+            f"{r['mtpt_peak_mib']:.0f} | {pt} | {ratio} |")
+    return lines
+
+
+def readme_large_table(rows):
+    lines = ["| tetrahedra | full frame | CPU stages | MTPT's buffers | peak resident "
+             "(the grid included) | VTK's PT |", "|---:|---:|---:|---:|---:|---:|"]
+    for r in rows:
+        tets = r["tetrahedra"]
+        pt = (f"{slow(r, 'vtk_pt')} ms ({r['vtk_pt_ms'] / r['mtpt_ms']:.1f}x)"
+              if r["vtk_pt_ms"] is not None else "not run")
+        lines.append(
+            f"| {tetrahedra(tets)} | {slow(r, 'mtpt')} ms | {ms(r['cpu_stages_ms'])} ms | "
+            f"{r['mtpt_mib'] / 1024:.2f} GiB ({r['mtpt_mib'] * 2**20 / tets:.0f} B/tet) | "
+            f"{r['mtpt_peak_mib'] / 1024:.2f} GiB | {pt} |")
+    return lines
+
+
 def replace_tables(text, tables, path):
     """`text` with each generated table replaced; every table must appear once."""
     found = set()
@@ -239,8 +294,11 @@ def main():
     frames = read_frames(os.path.join(results, "frames.csv"))
     accuracy = read_accuracy(os.path.join(root, "Documentation", "accuracy.csv"))
     runs = read_interactive(os.path.join(results, "interactive.csv"))
+    large = read_large(os.path.join(results, "large_meshes.csv"))
     documents = {
-        "README.md": {"readme": readme_table(frames, accuracy, runs)},
+        "README.md": {"readme": readme_table(frames, accuracy, runs),
+                      "readme-large": readme_large_table(large)},
+        os.path.join("Documentation", "large-meshes.md"): {"large": large_table(large)},
         os.path.join("Documentation", "benchmarks.md"): {
             "frames": frames_table(frames), "accuracy": accuracy_table(accuracy),
             "interactive": interactive_table(runs)},
