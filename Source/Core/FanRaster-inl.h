@@ -31,8 +31,8 @@
 //   holds (BlendUnder; fans come front to back) where it is not yet opaque.
 // Pre-integrated shading and the blend modes other than Composite take the same path with
 // the corners' scalars instead of their colours (ScalarFanValues): each lane's segment is
-// shaded by SegmentOfLanes (TileRaster.cxx), as the triangle path's queued fragments are,
-// the covered lanes of a fan's vectors packed into full vectors first (PackedSegments).
+// shaded by SegmentOfLanes (TileRaster.cxx) as the triangle path's are, the drawn lanes of
+// the fan's vectors packed into full vectors first (WaitingFragments).
 // Fans that are not convex, whose centre is not strictly inside (a triangle without area or
 // folded over), that reach beyond the fixed-point range or are large (FanExtentLimit), single
 // triangles (the slot entry point's), and fans with dependent components' colours take the
@@ -596,69 +596,15 @@ HWY_INLINE void ReduceFanLanes(D d, const RasterFrame& f, const TileTarget& tile
 }
 
 /**
- * The lane permutations that pack the covered lanes of a vector into its first lanes and
- * back (PackedSegments), for each set of covered lanes `bits`: pack[bits][j] is the lane of
- * the j-th covered one, unpack[bits][l] the packed position of lane l (the number of covered
- * lanes below it). A table lookup of lanes each way: Highway's Compress on AVX2 copies its
- * own table onto the stack at every call, which cost more than the packing saved.
- */
-struct PackingIndices
-{
-  std::int32_t pack[1 << MaxLanes][MaxLanes];
-  std::int32_t unpack[1 << MaxLanes][MaxLanes];
-  constexpr PackingIndices()
-    : pack()
-    , unpack()
-  {
-    for (int bits = 0; bits < (1 << MaxLanes); ++bits)
-    {
-      int below = 0;
-      for (int l = 0; l < static_cast<int>(MaxLanes); ++l)
-      {
-        this->unpack[bits][l] = below;
-        if ((bits >> l) & 1)
-        {
-          this->pack[bits][below++] = l;
-        }
-      }
-    }
-  }
-};
-alignas(64) constexpr PackingIndices Packing;
-
-/**
- * Pre-integrated fragments of one fan, packed: a fan's vectors cover a third to a half of
- * their lanes, and a segment costs several times what finding it does, so the covered
- * lanes' segments are packed into full vectors (PackingIndices), shaded a full vector at a
- * time (SegmentOfLanes), and unpacked into the vectors they came from to be blended there.
- * A fan covers each pixel once, so the blends of one fan commute; the packed fragments are
- * blended before anything else is drawn (FanPath::Rows).
- */
-struct PackedSegments
-{
-  /// Packed lanes at most; shaded when fewer than a vector's worth are left.
-  static constexpr int Capacity = 16 * static_cast<int>(MaxLanes);
-  /// The lanes' segments, then their opacity and colour; a vector's worth past Capacity
-  /// for the packing's whole-vector stores and the last vector's loads.
-  HWY_ALIGN float front[Capacity + MaxLanes], back[Capacity + MaxLanes],
-    length[Capacity + MaxLanes];
-  HWY_ALIGN float opacity[Capacity + MaxLanes], colour[3][Capacity + MaxLanes];
-  /// The vectors the lanes came from, in order: tile column, image row, covered lanes and
-  /// the packed position of the first.
-  int x[Capacity], y[Capacity], first[Capacity];
-  std::uint8_t bits[Capacity];
-  int vectors = 0, lanes = 0;
-};
-
-/**
  * The segments of the lanes `keep` of the vector at tile column x of tile row y (image),
  * `offset` columns right of the row's first vector, from their triangles' planes
- * (ScalarFanValues), packed into `packed` where they are inside the depth range.
+ * (ScalarFanValues), waiting to be shaded (WaitingFragments) where they are inside the depth
+ * range.
  */
 template <class D>
-HWY_INLINE void PackFanLanes(D d, const RasterFrame& f, const TileTarget& tile, Mode mode,
+HWY_INLINE void WaitFanLanes(D d, const RasterFrame& f, const TileTarget& tile, Mode mode,
   const TileRow& row, const FanPlanes& p, const EdgeLanes<D>* spokes, int x, int y, int offset,
-  hn::Mask<D> keep, PackedSegments& packed)
+  hn::Mask<D> keep, WaitingFragments& waiting)
 {
   hn::Vec<D> value[6];
   FanLaneValues(d, p, spokes, x, offset, value);
@@ -675,22 +621,7 @@ HWY_INLINE void PackFanLanes(D d, const RasterFrame& f, const TileTarget& tile, 
   }
   hn::Vec<D> front, back, length;
   LaneSegments(d, f, tile, mode, value, x, y, false, front, back, length);
-  // Whole-vector stores of the packed lanes (a compressing store to memory is microcoded
-  // on some processors, AMD's Zen 4 among them, many times slower).
-  std::uint8_t bits[8] = {};
-  hn::StoreMaskBits(d, keep, bits);
-  const hn::RebindToSigned<D> di;
-  const auto pack = hn::IndicesFromVec(d, hn::Load(di, Packing.pack[bits[0]]));
-  const int at = packed.lanes, v = packed.vectors;
-  hn::StoreU(hn::TableLookupLanes(front, pack), d, packed.front + at);
-  hn::StoreU(hn::TableLookupLanes(back, pack), d, packed.back + at);
-  hn::StoreU(hn::TableLookupLanes(length, pack), d, packed.length + at);
-  packed.lanes += static_cast<int>(hn::CountTrue(d, keep));
-  packed.bits[v] = bits[0];
-  packed.x[v] = x;
-  packed.y[v] = y;
-  packed.first[v] = at;
-  ++packed.vectors;
+  waiting.Wait(d, tile, x, y, front, back, length, keep);
 }
 
 /**
@@ -700,8 +631,8 @@ HWY_INLINE void PackFanLanes(D d, const RasterFrame& f, const TileTarget& tile, 
 class FanPath
 {
 public:
-  /// `waiting`: the triangle path's pre-integrated fragments, shaded before a fan is drawn
-  /// so that the tile's fragments are blended in the fans' order.
+  /// `waiting`: the tile's pre-integrated fragments, the fan path's and the triangle
+  /// path's, shaded in the order they came (WaitingFragments).
   FanPath(const RasterFrame& f, const TileTarget& tile, Mode mode, WaitingFragments& waiting)
     : Frame(f)
     , Target(tile)
@@ -713,9 +644,12 @@ public:
     , Applies(f.fanPath && !f.vertexColours && !f.clipToRange &&
         hn::Lanes(FragmentTag()) >= MaxFanTriangles &&
         (!this->Integrates || f.preIntegration->Covers(f.transferFunction)))
-    , Segments(this->Applies && this->Integrates ? SegmentTable(f) : SegmentTable())
   {
     this->Planes.Clear();
+    if (this->Applies)
+    {
+      this->Waiting.opaque = this->Opaque; // pre-integrated fragments mark what they make opaque
+    }
     for (int j = 0; j < T && this->Applies; ++j)
     {
       this->Opaque[j] = 0;
@@ -831,11 +765,11 @@ private:
             ShadeFanLanes(d, this->Frame, row, this->Planes, spokes, x, x - start, keep));
           continue;
         }
-        PackFanLanes(d, this->Frame, tile, this->FanMode, row, this->Planes, spokes, x, y,
-          x - start, keep, this->Packed);
-        if (this->Packed.lanes > PackedSegments::Capacity - lanes)
+        WaitFanLanes(d, this->Frame, tile, this->FanMode, row, this->Planes, spokes, x, y,
+          x - start, keep, this->Waiting);
+        if (this->Waiting.Full())
         {
-          this->BlendPacked();
+          ShadeWaiting(this->Frame, tile, this->Waiting);
         }
       }
       for (int k = 0; k < g.triangles; ++k)
@@ -844,55 +778,8 @@ private:
         spokes[k].NextRow();
       }
     }
-    this->BlendPacked();
+    ShadeWaiting(this->Frame, tile, this->Waiting); // before the next fan is drawn
     return true;
-  }
-
-  /// Shades the packed segments (PackedSegments) a full vector at a time, and blends each
-  /// under the pixel it came from.
-  void BlendPacked()
-  {
-    PackedSegments& packed = this->Packed;
-    if (packed.vectors == 0)
-    {
-      return;
-    }
-    const FragmentTag d;
-    const int lanes = static_cast<int>(hn::Lanes(d));
-    const int n = packed.lanes;
-    for (int l = n; l % lanes != 0; ++l)
-    {
-      packed.front[l] = packed.back[l] = packed.length[l] = 0.0f; // no segment
-    }
-    for (int at = 0; at < n; at += lanes)
-    {
-      hn::Vec<FragmentTag> colour[3];
-      const auto opacity = SegmentOfLanes(d, this->Segments, hn::Load(d, packed.front + at),
-        hn::Load(d, packed.back + at), hn::Load(d, packed.length + at), colour);
-      hn::Store(opacity, d, packed.opacity + at);
-      for (int k = 0; k < 3; ++k)
-      {
-        hn::Store(colour[k], d, packed.colour[k] + at);
-      }
-    }
-    const hn::RebindToSigned<FragmentTag> di;
-    for (int v = 0; v < packed.vectors; ++v)
-    {
-      const int at = packed.first[v], x = packed.x[v];
-      const auto index = hn::IndicesFromVec(d, hn::Load(di, Packing.unpack[packed.bits[v]]));
-      const auto opacity = hn::TableLookupLanes(hn::LoadU(d, packed.opacity + at), index);
-      hn::Vec<FragmentTag> colour[3];
-      for (int k = 0; k < 3; ++k)
-      {
-        colour[k] = hn::TableLookupLanes(hn::LoadU(d, packed.colour[k] + at), index);
-      }
-      const auto keep = hn::And(hn::LoadMaskBits(d, &packed.bits[v]), hn::Gt(opacity, hn::Zero(d)));
-      const TileRow row = RowOf(this->Target, packed.y[v]);
-      this->MarkOpaque(
-        packed.y[v] - this->Target.y0, x, BlendUnder(d, row, x, opacity, colour, keep));
-    }
-    packed.vectors = 0;
-    packed.lanes = 0;
   }
 
   /// Marks the opaque pixels among the vector's at tile row j, column x, whose alpha is `alpha`.
@@ -950,9 +837,7 @@ private:
   const bool Reduces;    ///< a blend mode other than Composite
   const bool Integrates; ///< pre-integrated shading (else, composite: VTK-compatible)
   const bool Applies;
-  const SegmentTable Segments; ///< pre-integrated shading's tables
   FanPlanes Planes;
-  PackedSegments Packed{}; ///< pre-integrated fragments, shaded a full vector at a time
   std::uint64_t Opaque[T]; ///< per tile row, bit i: column i opaque (OpaqueAlpha)
 };
 

@@ -996,101 +996,162 @@ HWY_INLINE V SegmentOfLanes(D d, const SegmentTable& t, V front, V back, V lengt
 }
 
 /**
- * Pre-integrated fragments waiting to be shaded, a vector's worth at a time. They may come
- * from any rows and triangles of the tile: a segment's colour does not depend on the image,
- * and ShadeWaiting blends them one after another in the order they came, so a pixel covered
- * twice is blended as it would be one fragment at a time. The rasterizer shades what is
- * left at the end of the tile.
+ * The lane permutations that pack the lanes `bits` of a vector into its first lanes and back
+ * (WaitingFragments): pack[bits][j] is the lane of the j-th lane of `bits`, unpack[bits][l]
+ * the packed position of lane l (the number of lanes of `bits` below it). A table lookup of
+ * lanes each way: Highway's Compress on AVX2 copies its own table onto the stack at every
+ * call, which cost more than packing saved, and a compressing store to memory is microcoded
+ * on some processors (AMD's Zen 4).
+ */
+struct PackingIndices
+{
+  std::int32_t pack[1 << MaxLanes][MaxLanes];
+  std::int32_t unpack[1 << MaxLanes][MaxLanes];
+  constexpr PackingIndices()
+    : pack()
+    , unpack()
+  {
+    for (int bits = 0; bits < (1 << MaxLanes); ++bits)
+    {
+      int below = 0;
+      for (int l = 0; l < static_cast<int>(MaxLanes); ++l)
+      {
+        this->unpack[bits][l] = below;
+        if ((bits >> l) & 1)
+        {
+          this->pack[bits][below++] = l;
+        }
+      }
+    }
+  }
+};
+alignas(64) constexpr PackingIndices Packing;
+
+/**
+ * Pre-integrated fragments waiting to be shaded, packed. The vectors of a span or a fan's
+ * row cover a third to a half of their lanes, and a segment costs several times what finding
+ * it does, so the drawn lanes' segments are packed into full vectors (Wait), shaded a full
+ * vector at a time and unpacked into the vectors they came from to be blended there, one
+ * vector after another in the order they came (ShadeWaiting): a pixel covered twice is
+ * blended as it would be one fragment at a time. The rasterizer shades what waits at the end
+ * of each fan, before the next is drawn, so that its opaque pixels hide what lies behind.
  */
 struct WaitingFragments
 {
-  HWY_ALIGN float front[MaxLanes] = {}, back[MaxLanes] = {}, length[MaxLanes] = {};
-  int x[MaxLanes] = {}, y[MaxLanes] = {};   ///< tile column, image row
-  const LightFactors* light[MaxLanes] = {}; ///< the lighting of each one's fan
-  std::size_t count = 0;
+  /// Packed lanes at most; shaded when fewer than a vector's worth are left (Full).
+  static constexpr int Capacity = 16 * static_cast<int>(MaxLanes);
+  /// The lanes' segments, then their opacity and colour; a vector's worth past Capacity for
+  /// the whole-vector stores of the packing and the loads of the last vector.
+  HWY_ALIGN float front[Capacity + MaxLanes] = {}, back[Capacity + MaxLanes] = {},
+                                   length[Capacity + MaxLanes] = {};
+  HWY_ALIGN float opacity[Capacity + MaxLanes] = {}, colour[3][Capacity + MaxLanes] = {};
+  /// The vectors the lanes came from, in order: tile column, image row, drawn lanes, the
+  /// packed position of the first and the lighting of its fan.
+  int x[Capacity] = {}, y[Capacity] = {}, first[Capacity] = {};
+  std::uint8_t bits[Capacity] = {};
+  const LightFactors* light[Capacity] = {};
+  int vectors = 0, lanes = 0;
+  /// Per tile row, bit i: column i opaque (FanPath's); marked as fragments are blended.
+  std::uint64_t* opaque = nullptr;
+
+  bool Full() const { return this->lanes > Capacity - static_cast<int>(MaxLanes); }
+
+  /// Records the vector at tile column x of image row y of `tile` (lit by tile.light) and
+  /// packs the segments of its lanes `keep` (some lane set).
+  template <class D, class V = hn::Vec<D>>
+  HWY_INLINE void Wait(
+    D d, const TileTarget& tile, int x, int y, V front, V back, V length, hn::Mask<D> keep)
+  {
+    std::uint8_t drawn[8] = {};
+    hn::StoreMaskBits(d, keep, drawn);
+    const hn::RebindToSigned<D> di;
+    const auto pack = hn::IndicesFromVec(d, hn::Load(di, Packing.pack[drawn[0]]));
+    const int at = this->lanes, v = this->vectors;
+    hn::StoreU(hn::TableLookupLanes(front, pack), d, this->front + at);
+    hn::StoreU(hn::TableLookupLanes(back, pack), d, this->back + at);
+    hn::StoreU(hn::TableLookupLanes(length, pack), d, this->length + at);
+    this->lanes += static_cast<int>(hn::CountTrue(d, keep));
+    this->Record(v, x, y, drawn[0], at, tile.light);
+  }
+
+  /// Wait for one fragment, at tile column x of image row y.
+  void WaitOne(const TileTarget& tile, int x, int y, float front, float back, float length)
+  {
+    const int lanes = static_cast<int>(hn::Lanes(FragmentTag()));
+    const int start = std::min(x, T - lanes);
+    const int at = this->lanes;
+    this->front[at] = front;
+    this->back[at] = back;
+    this->length[at] = length;
+    ++this->lanes;
+    this->Record(
+      this->vectors, start, y, static_cast<std::uint8_t>(1u << (x - start)), at, tile.light);
+  }
+
+private:
+  void Record(int v, int x, int y, std::uint8_t drawn, int at, const LightFactors* light)
+  {
+    this->x[v] = x;
+    this->y[v] = y;
+    this->bits[v] = drawn;
+    this->first[v] = at;
+    this->light[v] = light;
+    ++this->vectors;
+  }
 };
 
+/// Shades what waits (WaitingFragments), a full vector at a time, and blends each fragment
+/// under the pixel it came from.
 void ShadeWaiting(const RasterFrame& f, const TileTarget& tile, WaitingFragments& w)
 {
-  if (w.count == 0)
+  if (w.vectors == 0)
   {
     return;
   }
   const FragmentTag d;
-  std::fill(w.length + w.count, w.length + MaxLanes, 0.0f); // unused lanes: no segment
-  hn::Vec<FragmentTag> colour[3];
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  const int n = w.lanes;
+  for (int l = n; l % lanes != 0; ++l)
+  {
+    w.front[l] = w.back[l] = w.length[l] = 0.0f; // no segment
+  }
   const SegmentTable table(f);
-  const auto opacity = SegmentOfLanes(
-    d, table, hn::Load(d, w.front), hn::Load(d, w.back), hn::Load(d, w.length), colour);
-  HWY_ALIGN float rgba[4][MaxLanes];
-  for (int k = 0; k < 3; ++k)
+  for (int at = 0; at < n; at += lanes)
   {
-    hn::Store(colour[k], d, rgba[k]);
-  }
-  hn::Store(opacity, d, rgba[3]);
-  for (std::size_t l = 0; l < w.count; ++l)
-  {
-    if (!(rgba[3][l] > 0.0f))
+    hn::Vec<FragmentTag> colour[3];
+    const auto opacity = SegmentOfLanes(d, table, hn::Load(d, w.front + at),
+      hn::Load(d, w.back + at), hn::Load(d, w.length + at), colour);
+    hn::Store(opacity, d, w.opacity + at);
+    for (int k = 0; k < 3; ++k)
     {
-      continue;
-    }
-    TileRow row = RowOf(tile, w.y[l]);
-    row.light = w.light[l];
-    BlendUnderPixel(row, w.x[l], rgba[3][l], rgba[0][l], rgba[1][l], rgba[2][l]);
-  }
-  w.count = 0;
-}
-
-/// Pre-integrated shading of the pixels [lo, hi] of row y: each fragment's scalars and
-/// length from the planes, queued in `waiting` (shaded whenever a vector's worth waits).
-void ShadeIntegrated(const RasterFrame& f, const TileTarget& tile, Mode mode, const Planes& p,
-  int y, int lo, int hi, WaitingFragments& waiting)
-{
-  if (!f.preIntegration->Covers(f.transferFunction))
-  {
-    return; // every segment transparent
-  }
-  const TileRow row = RowOf(tile, y);
-  const float j = static_cast<float>(y - tile.y0);
-  const std::size_t lanes = hn::Lanes(FragmentTag());
-  for (int x = lo - tile.x0; x <= hi - tile.x0; ++x)
-  {
-    if (!(row.a[x] < OpaqueAlpha))
-    {
-      continue; // as the fan path: nothing behind can show (what waits may add to it)
-    }
-    const float i = static_cast<float>(x);
-    auto value = [&](int k) { return p.base[k] + p.dx[k] * i + p.dy[k] * j; };
-    const std::size_t n = waiting.count;
-    float z;
-    if (mode == Mode::Integrated)
-    {
-      waiting.front[n] = value(0);
-      waiting.back[n] = value(1);
-      waiting.length[n] = value(2);
-      z = value(3);
-    }
-    else
-    {
-      const double frontW = value(1), backW = value(3), rayX = value(4), rayY = value(5);
-      waiting.front[n] = static_cast<float>(value(0) / frontW);
-      waiting.back[n] = static_cast<float>(value(2) / backW);
-      waiting.length[n] = static_cast<float>(
-        std::max(0.0, 1.0 / backW - 1.0 / frontW) * std::sqrt(1.0 + rayX * rayX + rayY * rayY));
-      z = value(6);
-    }
-    if (z < -1.0f || z > 1.0f || (row.depth && 0.5f * (z + 1.0f) > row.depth[x]))
-    {
-      continue; // clipped by the near or far plane, or behind opaque geometry
-    }
-    waiting.x[n] = x;
-    waiting.y[n] = y;
-    waiting.light[n] = tile.light;
-    if (++waiting.count == lanes)
-    {
-      ShadeWaiting(f, tile, waiting);
+      hn::Store(colour[k], d, w.colour[k] + at);
     }
   }
+  const hn::RebindToSigned<FragmentTag> di;
+  for (int v = 0; v < w.vectors; ++v)
+  {
+    const int at = w.first[v], x = w.x[v];
+    const auto index = hn::IndicesFromVec(d, hn::Load(di, Packing.unpack[w.bits[v]]));
+    const auto opacity = hn::TableLookupLanes(hn::LoadU(d, w.opacity + at), index);
+    hn::Vec<FragmentTag> colour[3];
+    for (int k = 0; k < 3; ++k)
+    {
+      colour[k] = hn::TableLookupLanes(hn::LoadU(d, w.colour[k] + at), index);
+    }
+    const auto keep = hn::And(hn::LoadMaskBits(d, &w.bits[v]), hn::Gt(opacity, hn::Zero(d)));
+    TileRow row = RowOf(tile, w.y[v]);
+    row.light = w.light[v];
+    const auto alpha = BlendUnder(d, row, x, opacity, colour, keep);
+    const auto opaque = hn::Ge(alpha, hn::Set(d, OpaqueAlpha));
+    if (w.opaque && !hn::AllFalse(d, opaque))
+    {
+      std::uint8_t bits[8] = {};
+      hn::StoreMaskBits(d, opaque, bits);
+      w.opaque[w.y[v] - tile.y0] |= static_cast<std::uint64_t>(bits[0]) << x;
+    }
+  }
+  w.vectors = 0;
+  w.lanes = 0;
 }
 
 /// A fragment's ray segment: eye depths of its ends, eye length, and the scalars at its ends
@@ -1185,7 +1246,6 @@ void ShadeClipped(const RasterFrame& f, const TileTarget& tile, Mode mode, const
     return; // every segment transparent
   }
   const TileRow row = RowOf(tile, y);
-  const std::size_t lanes = hn::Lanes(FragmentTag());
   for (int x = lo - tile.x0; x <= hi - tile.x0; ++x)
   {
     if (!(row.a[x] < OpaqueAlpha))
@@ -1201,14 +1261,11 @@ void ShadeClipped(const RasterFrame& f, const TileTarget& tile, Mode mode, const
     const double part = (t1 - t0) * s.length;
     if (mode != Mode::Compatible)
     {
-      const std::size_t n = waiting.count;
-      waiting.front[n] = static_cast<float>(s.scalarFront + t0 * (s.scalarBack - s.scalarFront));
-      waiting.back[n] = static_cast<float>(s.scalarFront + t1 * (s.scalarBack - s.scalarFront));
-      waiting.length[n] = static_cast<float>(part);
-      waiting.x[n] = x;
-      waiting.y[n] = y;
-      waiting.light[n] = tile.light;
-      if (++waiting.count == lanes)
+      waiting.WaitOne(tile, x, y,
+        static_cast<float>(s.scalarFront + t0 * (s.scalarBack - s.scalarFront)),
+        static_cast<float>(s.scalarFront + t1 * (s.scalarBack - s.scalarFront)),
+        static_cast<float>(part));
+      if (waiting.Full())
       {
         ShadeWaiting(f, tile, waiting);
       }
@@ -1517,6 +1574,48 @@ void ReduceSpan(const RasterFrame& f, const TileTarget& tile, Mode mode, const P
   }
 }
 
+/// Pre-integrated shading of the pixels [lo, hi] of row y: each fragment's scalars and
+/// length from the planes, a vector at a time, waiting in `waiting` to be shaded.
+void ShadeIntegrated(const RasterFrame& f, const TileTarget& tile, Mode mode, const Planes& p,
+  int y, int lo, int hi, WaitingFragments& waiting)
+{
+  if (!f.preIntegration->Covers(f.transferFunction))
+  {
+    return; // every segment transparent
+  }
+  const FragmentTag d;
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  const TileRow row = RowOf(tile, y);
+  const float j = static_cast<float>(y - tile.y0);
+  const int first = lo - tile.x0, last = hi - tile.x0;
+  const auto lastLane = hn::Set(d, static_cast<float>(last));
+  for (int from = first; from <= last; from += lanes) // see ShadeCompatible
+  {
+    const int x = std::min(from, T - lanes);
+    const auto i = hn::Iota(d, static_cast<float>(x));
+    // As the fan path: nothing behind an opaque pixel can show.
+    auto keep =
+      hn::And(hn::And(hn::Ge(i, hn::Set(d, static_cast<float>(from))), hn::Le(i, lastLane)),
+        Transparent(d, row, x));
+    if (hn::AllFalse(d, keep))
+    {
+      continue;
+    }
+    hn::Vec<FragmentTag> front, back, length, z;
+    WholeFragments(d, mode, p, i, j, front, back, length, z);
+    keep = DrawnLanes(d, row, x, z, keep); // clipped, or behind opaque geometry
+    if (hn::AllFalse(d, keep))
+    {
+      continue;
+    }
+    waiting.Wait(d, tile, x, y, front, back, length, keep);
+    if (waiting.Full())
+    {
+      ShadeWaiting(f, tile, waiting);
+    }
+  }
+}
+
 /// Shades the covered pixels lo..hi of row y by the mode's path, or cut by the depth range
 /// or (`cut`) the clipping planes; or reduces them (a blend mode other than Composite).
 void ShadeSpan(const RasterFrame& f, const TileTarget& tile, Mode mode, const Planes& p, int y,
@@ -1711,8 +1810,8 @@ void RasterizeTileImpl(const RasterFrame& f, const TileTarget& target, const Fan
       Corner* v[3] = { &corners[k], &corners[(k + 1) % n], &corners[n] };
       DrawTriangle(f, tile, mode, v, waiting, counts, cut);
     }
+    ShadeWaiting(f, tile, waiting); // the fan's fragments, before the next fan is drawn
   }
-  ShadeWaiting(f, tile, waiting);
 }
 
 const char* TargetName()
