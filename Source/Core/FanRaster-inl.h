@@ -796,7 +796,8 @@ private:
   }
 
   /// Whether every pixel of the fan's box in the tile is opaque (Opaque is conservative: only
-  /// the fan path marks what it makes opaque, besides what was opaque when it started).
+  /// the fan path and the pre-integrated fragments (WaitingFragments) mark what they make
+  /// opaque, besides what was opaque when the tile started).
   bool Hidden(const FanGeometry& g) const
   {
     const int first = g.x0 - this->Target.x0, width = g.x1 - g.x0 + 1;
