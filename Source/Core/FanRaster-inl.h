@@ -785,14 +785,7 @@ private:
   /// Marks the opaque pixels among the vector's at tile row j, column x, whose alpha is `alpha`.
   HWY_INLINE void MarkOpaque(int j, int x, hn::Vec<FragmentTag> alpha)
   {
-    const FragmentTag d;
-    const auto opaque = hn::Ge(alpha, hn::Set(d, OpaqueAlpha));
-    if (!hn::AllFalse(d, opaque)) // mostly none, in a scene that is not opaque anywhere
-    {
-      std::uint8_t bits[(MaxLanes + 7) / 8] = {};
-      hn::StoreMaskBits(d, opaque, bits);
-      this->Opaque[j] |= static_cast<std::uint64_t>(bits[0]) << x;
-    }
+    MarkOpaqueLanes(this->Opaque, j, x, alpha);
   }
 
   /// Whether every pixel of the fan's box in the tile is opaque (Opaque is conservative: only

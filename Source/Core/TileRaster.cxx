@@ -1100,6 +1100,20 @@ private:
   }
 };
 
+/// Marks in `opaque` (per tile row, bit i: column i opaque) the pixels of the vector at tile
+/// row j, column x whose alpha is `alpha` that are opaque (OpaqueAlpha).
+HWY_INLINE void MarkOpaqueLanes(std::uint64_t* opaque, int j, int x, hn::Vec<FragmentTag> alpha)
+{
+  const FragmentTag d;
+  const auto lanes = hn::Ge(alpha, hn::Set(d, OpaqueAlpha));
+  if (!hn::AllFalse(d, lanes)) // mostly none, in a scene that is not opaque anywhere
+  {
+    std::uint8_t bits[(MaxLanes + 7) / 8] = {};
+    hn::StoreMaskBits(d, lanes, bits);
+    opaque[j] |= static_cast<std::uint64_t>(bits[0]) << x;
+  }
+}
+
 /// Shades what waits (WaitingFragments), a full vector at a time, and blends each fragment
 /// under the pixel it came from.
 void ShadeWaiting(const RasterFrame& f, const TileTarget& tile, WaitingFragments& w)
@@ -1142,12 +1156,9 @@ void ShadeWaiting(const RasterFrame& f, const TileTarget& tile, WaitingFragments
     TileRow row = RowOf(tile, w.y[v]);
     row.light = w.light[v];
     const auto alpha = BlendUnder(d, row, x, opacity, colour, keep);
-    const auto opaque = hn::Ge(alpha, hn::Set(d, OpaqueAlpha));
-    if (w.opaque && !hn::AllFalse(d, opaque))
+    if (w.opaque)
     {
-      std::uint8_t bits[8] = {};
-      hn::StoreMaskBits(d, opaque, bits);
-      w.opaque[w.y[v] - tile.y0] |= static_cast<std::uint64_t>(bits[0]) << x;
+      MarkOpaqueLanes(w.opaque, w.y[v] - tile.y0, x, alpha);
     }
   }
   w.vectors = 0;
