@@ -102,7 +102,7 @@ void PrintRow(const Scene& scene, int width, int height, const std::string& name
     pt != all.end() ? pt->second.Fastest().moving.median / m.Fastest().moving.median : 0;
   const ImageError e = reference ? CompareImages(r.image, reference->image) : ImageError{};
   const StageFigures& f = r.mtpt;
-  const double nsPerFragment = f.fragments > 0 ? 1e6 * f.raster * threads / f.fragments : 0;
+  const double nsPerFragment = NsPerFragmentCore(f, threads);
   std::printf(
     "| %s | %s | %s |%s %.2fx | %.4f | %.1f | %.1f (%.1f + %.1f) | %.1f | %.0f | %.1f |\n",
     name.c_str(), WindowName(m.windows[w]), FormatMs(r.moving).c_str(),

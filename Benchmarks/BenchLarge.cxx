@@ -58,7 +58,7 @@ struct Run
 Run Timed(const Scene& scene, vtkVolumeProperty* property, const std::string& name, int width,
   int height, const CommonOptions& options)
 {
-  std::ofstream("/proc/self/clear_refs") << "5"; // the peak (VmHWM) from the current RSS
+  ResetPeakMemory();
   Run r;
   r.m = Measure(scene, property, name, width, height, options);
   r.peakMiB = StatusKiB("VmHWM") / 1024.0;
@@ -117,14 +117,16 @@ try
   const int threads = probe->GetEffectiveNumberOfThreads();
   const std::string stem = o.out + "/large_meshes";
   std::ofstream csv(stem + ".csv");
-  csv << "scene,tetrahedra,width,height,multisampling,threads,grid_mib,mtpt_ms,mtpt_slow,"
-         "cpu_stages_ms,composite_ms,raster_ms,fragments,mtpt_mib,mtpt_peak_mib,moving_rate,moving_"
-         "ms,"
-         "moving_cell_fraction,moving_sample_distance,vtk_pt_ms,vtk_pt_slow,vtk_pt_peak_mib\n";
+  const char* instructionSet =
+    vtkMultiThreadedProjectedTetrahedraMapper::GetCompositorInstructionSet();
+  csv << "scene,tetrahedra,width,height,multisampling,threads,instruction_set,grid_mib,mtpt_ms,"
+         "mtpt_slow,cpu_stages_ms,composite_ms,raster_ms,fragments,mtpt_mib,mtpt_peak_mib,"
+         "moving_rate,moving_ms,moving_cell_fraction,moving_sample_distance,vtk_pt_ms,"
+         "vtk_pt_slow,vtk_pt_peak_mib\n";
   std::printf("%dx%d, %s, %d threads, camera turning %.2f degrees per frame, median of %d (* one "
-              "frame, slower than %.0f s); MTPT shading %s\n\n",
+              "frame, slower than %.0f s); MTPT shading %s, its CPU compositor %s\n\n",
     width, height, WindowName(multisampling), threads, o.common.timing.step, o.common.timing.repeat,
-    o.common.timing.slowLimit, o.common.mapper.shading.c_str());
+    o.common.timing.slowLimit, o.common.mapper.shading.c_str(), instructionSet);
   std::printf("| tetrahedra | MTPT frame ms | CPU stages ms | tetrahedra a second | "
               "rasterization ms | fragments | ns per fragment x core | moving at %g fps asked: "
               "ms, cells, distance | grid MiB | MTPT MiB | MTPT bytes per tet | peak MiB, "
@@ -156,7 +158,7 @@ try
       vtk = Timed(scene, property, "vtk-pt", width, height, o.common);
     }
     const double cellFraction = tets > 0 ? static_cast<double>(lod.m.mtpt.sorted) / tets : 0;
-    const double rasterNs = f.fragments > 0 ? 1e6 * f.raster * threads / f.fragments : 0;
+    const double rasterNs = NsPerFragmentCore(f, threads);
     std::printf("| %lld | %s | %.0f | %.1fM | %.0f | %.0fM | %.1f | %s, %.0f%%, %.2f | %.0f | "
                 "%.0f | %.1f | %.0f | %s | %s | %s |\n",
       tets, Ms(ours).c_str(), f.cpuStages, f.cpuStages > 0 ? tets / f.cpuStages / 1e3 : 0.0,
@@ -167,11 +169,11 @@ try
       vtk.measured ? (Fixed(vtk.m.moving.median / ours.m.moving.median, 2) + "x").c_str() : "-");
     std::fflush(stdout);
     csv << scene.name << ',' << tets << ',' << width << ',' << height << ','
-        << (multisampling ? "on" : "off") << ',' << threads << ',' << gridMiB << ','
-        << ours.m.moving.median << ',' << (ours.m.moving.slow ? 1 : 0) << ',' << f.cpuStages << ','
-        << f.composite << ',' << f.raster << ',' << f.fragments << ',' << mtptMiB << ','
-        << ours.peakMiB << ',' << o.rate << ',' << lod.m.moving.median << ',' << cellFraction << ','
-        << lod.m.mtpt.imageSampleDistance << ','
+        << (multisampling ? "on" : "off") << ',' << threads << ',' << instructionSet << ','
+        << gridMiB << ',' << ours.m.moving.median << ',' << (ours.m.moving.slow ? 1 : 0) << ','
+        << f.cpuStages << ',' << f.composite << ',' << f.raster << ',' << f.fragments << ','
+        << mtptMiB << ',' << ours.peakMiB << ',' << o.rate << ',' << lod.m.moving.median << ','
+        << cellFraction << ',' << lod.m.mtpt.imageSampleDistance << ','
         << (vtk.measured ? std::to_string(vtk.m.moving.median) : "") << ','
         << (vtk.measured ? (vtk.m.moving.slow ? "1" : "0") : "") << ','
         << (vtk.measured ? std::to_string(vtk.peakMiB) : "") << '\n';

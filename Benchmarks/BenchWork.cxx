@@ -215,7 +215,7 @@ int MemoryChild(const Options& o)
   s.GetRenderer()->RemoveVolume(s.GetVolume());
   s.Frame(); // the context and the window's buffers: not the mapper's memory
   const long before = StatusKiB("VmRSS");
-  std::ofstream("/proc/self/clear_refs") << "5"; // reset the peak (VmHWM) to the current RSS
+  ResetPeakMemory();
   s.GetRenderer()->AddVolume(s.GetVolume());
   const double ms = s.Frame();
   const long peak = StatusKiB("VmHWM");

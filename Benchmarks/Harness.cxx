@@ -699,6 +699,11 @@ StageFigures FiguresOf(vtkAbstractVolumeMapper* mapper)
   return f;
 }
 
+double NsPerFragmentCore(const StageFigures& f, int threads)
+{
+  return f.fragments > 0 ? 1e6 * f.raster * threads / f.fragments : 0;
+}
+
 Measurement Measure(const Scene& scene, vtkVolumeProperty* property, const std::string& name,
   int width, int height, const CommonOptions& options, bool unchanged,
   const StageOptions& stageOptions)
@@ -975,6 +980,11 @@ long StatusKiB(const char* field)
     }
   }
   return -1;
+}
+
+void ResetPeakMemory()
+{
+  std::ofstream("/proc/self/clear_refs") << "5";
 }
 
 } // namespace bench

@@ -295,6 +295,10 @@ struct StageFigures
 /// The figures of the last frame `mapper` drew.
 StageFigures FiguresOf(vtkAbstractVolumeMapper* mapper);
 
+/// The rasterization's nanoseconds per fragment drawn and core of `f` on `threads` threads;
+/// 0 without fragments.
+double NsPerFragmentCore(const StageFigures& f, int threads);
+
 /// What one contender measured on one scene and window size.
 struct Measurement
 {
@@ -375,6 +379,9 @@ std::vector<std::string> SplitList(const std::string& list);
 
 /// Kilobytes from a /proc/self/status line ("VmRSS", "VmHWM"); -1 when it has none.
 long StatusKiB(const char* field);
+
+/// Resets the process's peak resident memory (VmHWM) to its current resident memory.
+void ResetPeakMemory();
 
 } // namespace bench
 } // namespace mtpt

@@ -220,7 +220,7 @@ def read_large(path):
     rows = []
     with open(path, newline="") as f:
         for row in csv.DictReader(row for row in f if not row.startswith("#")):
-            rows.append({k: (v if k in ("scene", "multisampling") else
+            rows.append({k: (v if k in ("scene", "multisampling", "instruction_set") else
                              float(v) if v != "" else None) for k, v in row.items()})
     return sorted(rows, key=lambda r: r["tetrahedra"])
 
@@ -231,7 +231,8 @@ def slow(row, key):
 
 
 def large_table(rows):
-    lines = ["| tetrahedra | full frame, ms | CPU stages, ms (tetrahedra a second) | "
+    sets = "/".join(sorted({r["instruction_set"] for r in rows}))
+    lines = [f"| tetrahedra (compositor: {sets}) | full frame, ms | CPU stages, ms (tetrahedra a second) | "
              "rasterization, ms (ns per fragment and core) | fragments | moving at "
              f"{rows[0]['moving_rate']:g} fps asked: ms, cells drawn, sample distance | "
              "grid, MiB | MTPT's buffers, MiB (bytes per tetrahedron) | peak resident, MiB | "
