@@ -11,54 +11,122 @@
 namespace mtpt
 {
 
+namespace
+{
+
+/// The scalar range of `cell` by ComputeCellScalarRanges' rule.
+template <typename Access>
+void RangeOfCell(
+  const Access& access, const ScalarsView& scalars, std::size_t cell, float& low, float& high)
+{
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  low = high = nan;
+  std::int64_t ids[4];
+  if (!access.TetrahedronPoints(cell, ids))
+  {
+    return;
+  }
+  if (!scalars.values)
+  {
+    low = high = 0.0f;
+    return;
+  }
+  if (scalars.association == ScalarsView::Association::Cells)
+  {
+    low = high = scalars.values[cell];
+  }
+  else
+  {
+    low = high = scalars.values[ids[0]];
+    for (int i = 1; i < 4; ++i)
+    {
+      low = std::min(low, scalars.values[ids[i]]);
+      high = std::max(high, scalars.values[ids[i]]);
+    }
+    for (int i = 0; i < 4; ++i) // min/max drop a NaN in some positions
+    {
+      if (!std::isfinite(scalars.values[ids[i]]))
+      {
+        low = high = nan;
+      }
+    }
+  }
+  if (!std::isfinite(low) || !std::isfinite(high))
+  {
+    low = high = nan;
+  }
+}
+
+/// The ids of the cells with a visible range (rangeOf(c, low, high) gives cell c's),
+/// ascending, into `cells`; returns their number.
+template <typename RangeOf>
+std::size_t SelectVisible(const OpacityCulling& culling, std::size_t cellCount,
+  std::uint32_t* cells, int threads, const RangeOf& rangeOf)
+{
+  return detail::CompactInOrder(cellCount, detail::ResolveThreads(threads), cells,
+    [&](std::size_t begin, std::size_t end, std::uint32_t* out)
+    {
+      std::size_t kept = 0;
+      for (std::size_t c = begin; c < end; ++c)
+      {
+        float low, high;
+        rangeOf(c, low, high);
+        if (culling.Visible(low, high))
+        {
+          out[kept++] = static_cast<std::uint32_t>(c);
+        }
+      }
+      return kept;
+    });
+}
+
+/// Whether SelectVisible would write exactly the `count` ascending ids of `cells`.
+template <typename RangeOf>
+bool SelectsExactlyThese(const OpacityCulling& culling, std::size_t cellCount,
+  const std::uint32_t* cells, std::size_t count, int threads, const RangeOf& rangeOf)
+{
+  if (count > 0 && cells[count - 1] >= cellCount)
+  {
+    return false;
+  }
+  const int nthreads = detail::ResolveThreads(threads);
+  int same = 1;
+#pragma omp parallel for num_threads(nthreads) schedule(static, 1) reduction(&& : same)
+  for (int b = 0; b < nthreads; ++b)
+  {
+    // This block's cells and the part of the list that can name them.
+    const std::size_t begin = cellCount * static_cast<std::size_t>(b) / nthreads;
+    const std::size_t end = cellCount * static_cast<std::size_t>(b + 1) / nthreads;
+    const std::uint32_t* next = std::lower_bound(cells, cells + count, begin);
+    const std::uint32_t* const stop = std::lower_bound(next, cells + count, end);
+    bool match = true;
+    for (std::size_t c = begin; c < end && match; ++c)
+    {
+      float low, high;
+      rangeOf(c, low, high);
+      const bool listed = next != stop && *next == c;
+      match = culling.Visible(low, high) == listed;
+      next += listed ? 1 : 0;
+    }
+    same = same && match && next == stop;
+  }
+  return same != 0;
+}
+
+} // namespace
+
 void ComputeCellScalarRanges(const CellsView& cells, std::size_t pointCount,
   const ScalarsView& scalars, float* ranges, int threads)
 {
   const int nthreads = detail::ResolveThreads(threads);
   const auto n = static_cast<std::int64_t>(cells.cellCount);
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  const bool perCell = scalars.association == ScalarsView::Association::Cells;
   detail::DispatchCells(cells, pointCount,
     [&](const auto& access)
     {
 #pragma omp parallel for num_threads(nthreads) schedule(static)
       for (std::int64_t c = 0; c < n; ++c)
       {
-        std::int64_t ids[4];
-        float low = nan, high = nan;
-        if (access.TetrahedronPoints(static_cast<std::size_t>(c), ids))
-        {
-          if (!scalars.values)
-          {
-            low = high = 0.0f;
-          }
-          else if (perCell)
-          {
-            low = high = scalars.values[c];
-          }
-          else
-          {
-            low = high = scalars.values[ids[0]];
-            for (int i = 1; i < 4; ++i)
-            {
-              low = std::min(low, scalars.values[ids[i]]);
-              high = std::max(high, scalars.values[ids[i]]);
-            }
-            for (int i = 0; i < 4; ++i) // min/max drop a NaN in some positions
-            {
-              if (!std::isfinite(scalars.values[ids[i]]))
-              {
-                low = high = nan;
-              }
-            }
-          }
-          if (!std::isfinite(low) || !std::isfinite(high))
-          {
-            low = high = nan;
-          }
-        }
-        ranges[2 * c] = low;
-        ranges[2 * c + 1] = high;
+        RangeOfCell(access, scalars, static_cast<std::size_t>(c), ranges[2 * c], ranges[2 * c + 1]);
       }
     });
 }
@@ -111,19 +179,40 @@ bool OpacityCulling::Visible(float low, float high) const
 std::size_t OpacityCulling::SelectVisibleCells(
   const float* ranges, std::size_t cellCount, std::uint32_t* cells, int threads) const
 {
-  return detail::CompactInOrder(cellCount, detail::ResolveThreads(threads), cells,
-    [&](std::size_t begin, std::size_t end, std::uint32_t* out)
+  return SelectVisible(*this, cellCount, cells, threads,
+    [&](std::size_t c, float& low, float& high)
     {
-      std::size_t kept = 0;
-      for (std::size_t c = begin; c < end; ++c)
-      {
-        if (this->Visible(ranges[2 * c], ranges[2 * c + 1]))
-        {
-          out[kept++] = static_cast<std::uint32_t>(c);
-        }
-      }
-      return kept;
+      low = ranges[2 * c];
+      high = ranges[2 * c + 1];
     });
+}
+
+std::size_t OpacityCulling::SelectVisibleCells(const CellsView& cells, std::size_t pointCount,
+  const ScalarsView& scalars, std::uint32_t* list, int threads) const
+{
+  std::size_t count = 0;
+  detail::DispatchCells(cells, pointCount,
+    [&](const auto& access)
+    {
+      count = SelectVisible(*this, cells.cellCount, list, threads,
+        [&](std::size_t c, float& low, float& high)
+        { RangeOfCell(access, scalars, c, low, high); });
+    });
+  return count;
+}
+
+bool OpacityCulling::SelectsExactly(const CellsView& cells, std::size_t pointCount,
+  const ScalarsView& scalars, const std::uint32_t* list, std::size_t count, int threads) const
+{
+  bool same = cells.cellCount == 0 && count == 0;
+  detail::DispatchCells(cells, pointCount,
+    [&](const auto& access)
+    {
+      same = SelectsExactlyThese(*this, cells.cellCount, list, count, threads,
+        [&](std::size_t c, float& low, float& high)
+        { RangeOfCell(access, scalars, c, low, high); });
+    });
+  return same;
 }
 
 bool CullingStage::Update(const Key& key, const CellsView& cells, std::size_t pointCount,
@@ -141,15 +230,6 @@ bool CullingStage::Update(const Key& key, const CellsView& cells, std::size_t po
     return false;
   }
   const std::size_t n = cells.cellCount;
-  if (!this->RangesRecord.Holds(key.mesh))
-  {
-    if (this->Ranges.size() < 2 * n)
-    {
-      this->Ranges.resize(2 * n);
-    }
-    ComputeCellScalarRanges(cells, pointCount, scalars, this->Ranges.data(), threads);
-    this->RangesRecord.Store(key.mesh);
-  }
   if (key.mode == CullingMode::Attenuations)
   {
     this->Opacity.SetAttenuations();
@@ -158,15 +238,18 @@ bool CullingStage::Update(const Key& key, const CellsView& cells, std::size_t po
   {
     this->Opacity.SetTable(table);
   }
-  this->NewList.resize(n);
-  this->NewList.resize(
-    this->Opacity.SelectVisibleCells(this->Ranges.data(), n, this->NewList.data(), threads));
-  // The same cells as before (a colour change): the same result.
+  // The same cells as before (a colour change): the same result. The list is compared
+  // before it is rewritten, so that the stage never holds a second one. The cells' scalar
+  // ranges are found on the way each time (a gather of their scalars), not kept: 8 bytes a
+  // cell spared for a pass that runs only when the data or the transfer function change.
   const bool same = this->Record.Valid() && wasCulling && this->Record.Inputs().mesh == key.mesh &&
-    this->NewList == this->List;
+    this->Opacity.SelectsExactly(
+      cells, pointCount, scalars, this->List.data(), this->List.size(), threads);
   if (!same)
   {
-    this->List.swap(this->NewList);
+    this->List.resize(n);
+    this->List.resize(
+      this->Opacity.SelectVisibleCells(cells, pointCount, scalars, this->List.data(), threads));
   }
   this->Record.Store(key, !same);
   return true;
@@ -178,24 +261,15 @@ std::size_t CullingStage::VisibleCount() const
                                                   : this->List.size();
 }
 
-void CullingStage::Forget()
-{
-  this->Record.Forget();
-  this->RangesRecord.Forget();
-}
-
 void CullingStage::Release()
 {
-  std::vector<float>().swap(this->Ranges);
   std::vector<std::uint32_t>().swap(this->List);
-  std::vector<std::uint32_t>().swap(this->NewList);
   this->Forget();
 }
 
 std::size_t CullingStage::MemoryBytes() const
 {
-  return this->Ranges.capacity() * sizeof(float) +
-    (this->List.capacity() + this->NewList.capacity()) * sizeof(std::uint32_t);
+  return this->List.capacity() * sizeof(std::uint32_t);
 }
 
 } // namespace mtpt

@@ -158,6 +158,74 @@ TEST(Culling, OpacityCullingNeverHidesAVisibleScalar)
   EXPECT_FALSE(culling.Visible(std::numeric_limits<float>::quiet_NaN(), 1.0f));
 }
 
+TEST(Culling, TheMeshesCellsAreSelectedAsTheirRangesSelectThem)
+{
+  // The culling stage finds each cell's range on the way (no ranges stored): its list must
+  // be the one the stored ranges select, for every thread count, with cells that are not
+  // drawable (a NaN scalar); and the list it holds must be recognised, and no list with an
+  // id more, less or twice.
+  TetMesh mesh = JitteredGrid(9, 11);
+  for (std::size_t p = 0; p < mesh.scalars.size(); ++p)
+  {
+    mesh.scalars[p] = 0.5f + 0.4f * mesh.points[3 * p] + 0.05f * mesh.points[3 * p + 1];
+  }
+  mesh.scalars[17] = std::numeric_limits<float>::quiet_NaN();
+  std::vector<float> table(4 * 64, 0.0f);
+  for (int i = 0; i < 64; ++i)
+  {
+    table[4 * i + 3] = (i / 6) % 4 == 1 ? 0.5f : 0.0f;
+  }
+  mtpt::OpacityCulling culling;
+  culling.SetTable({ table.data(), 64, 0.0, 1.0 });
+  const mtpt::CellsView cells = mesh.Cells();
+  const std::size_t n = cells.cellCount, points = mesh.points.size() / 3;
+  const mtpt::ScalarsView scalars{ mesh.scalars.data(), mtpt::ScalarsView::Association::Points };
+  std::vector<float> ranges(2 * n);
+  mtpt::ComputeCellScalarRanges(cells, points, scalars, ranges.data(), 2);
+  std::vector<std::uint32_t> list(n);
+  list.resize(culling.SelectVisibleCells(ranges.data(), n, list.data(), 3));
+  std::vector<std::uint32_t> hidden;
+  for (std::size_t c = 0; c < n; ++c)
+  {
+    if (!std::binary_search(list.begin(), list.end(), c))
+    {
+      hidden.push_back(static_cast<std::uint32_t>(c));
+    }
+  }
+  ASSERT_GT(list.size(), n / 10);
+  ASSERT_GT(hidden.size(), n / 10);
+  for (int threads : { 1, 2, 3, 8 })
+  {
+    SCOPED_TRACE(::testing::Message() << "threads=" << threads);
+    std::vector<std::uint32_t> found(n);
+    found.resize(culling.SelectVisibleCells(cells, points, scalars, found.data(), threads));
+    EXPECT_EQ(found, list);
+    EXPECT_TRUE(culling.SelectsExactly(cells, points, scalars, list.data(), list.size(), threads));
+    for (std::size_t k = 0; k < list.size(); k += 1 + list.size() / 7)
+    {
+      std::vector<std::uint32_t> fewer = list;
+      fewer.erase(fewer.begin() + static_cast<std::ptrdiff_t>(k));
+      EXPECT_FALSE(
+        culling.SelectsExactly(cells, points, scalars, fewer.data(), fewer.size(), threads));
+    }
+    for (std::size_t k = 0; k < hidden.size(); k += 1 + hidden.size() / 7)
+    {
+      std::vector<std::uint32_t> more = list;
+      more.insert(std::upper_bound(more.begin(), more.end(), hidden[k]), hidden[k]);
+      EXPECT_FALSE(
+        culling.SelectsExactly(cells, points, scalars, more.data(), more.size(), threads));
+    }
+    std::vector<std::uint32_t> twice = list; // the last: no visible cell after it
+    twice.push_back(list.back());
+    EXPECT_FALSE(
+      culling.SelectsExactly(cells, points, scalars, twice.data(), twice.size(), threads));
+    std::vector<std::uint32_t> beyond = list;
+    beyond.push_back(static_cast<std::uint32_t>(n));
+    EXPECT_FALSE(
+      culling.SelectsExactly(cells, points, scalars, beyond.data(), beyond.size(), threads));
+  }
+}
+
 TEST(FramePipeline, OpacityAndFrustumCullingLeaveTheImageUnchanged)
 {
   const TetMesh mesh = JitteredGrid(12, 3);               // 10,368 tetrahedra

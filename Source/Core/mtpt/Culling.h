@@ -64,6 +64,17 @@ public:
   std::size_t SelectVisibleCells(
     const float* ranges, std::size_t cellCount, std::uint32_t* cells, int threads) const;
 
+  /// The same, from the mesh's scalars: each cell's range found on the way, none stored.
+  std::size_t SelectVisibleCells(const CellsView& cells, std::size_t pointCount,
+    const ScalarsView& scalars, std::uint32_t* list, int threads) const;
+
+  /**
+   * Whether SelectVisibleCells would write exactly the `count` ascending ids of `list`,
+   * found by reading them, not by writing a second list.
+   */
+  bool SelectsExactly(const CellsView& cells, std::size_t pointCount, const ScalarsView& scalars,
+    const std::uint32_t* list, std::size_t count, int threads) const;
+
 private:
   std::vector<std::uint32_t> NonZeroBefore; ///< entries before i with opacity != 0
   int Size = 0;
@@ -106,10 +117,9 @@ struct CullingKey
 };
 
 /**
- * Stage 2 as a stage of FramePipeline (Stage.h): the cells left after opacity culling.
- * The cells' scalar ranges are kept until the data change; the visible list until the data,
- * the culling mode or the opacity table change. A new table that leaves the same cells
- * visible (a colour change) keeps the version, so the later stages keep their results.
+ * Stage 2 as a stage of FramePipeline (Stage.h): the cells left after opacity culling,
+ * kept until the data, the culling mode or the opacity table change. A new table that leaves the
+ * same cells visible (a colour change) keeps the version, so the later stages keep their results.
  */
 class CullingStage : public StageOf<CullingKey>
 {
@@ -127,14 +137,11 @@ public:
   std::size_t VisibleCount() const;
   /// Cells culled as transparent.
   std::size_t Culled() const { return this->Record.Inputs().mesh.cellCount - this->VisibleCount(); }
-  void Forget() override;
   void Release() override;
   std::size_t MemoryBytes() const override;
 
 private:
-  StageRecord<MeshKey> RangesRecord;
-  std::vector<float> Ranges; ///< 2 per cell: the cell's scalar range
-  std::vector<std::uint32_t> List, NewList;
+  std::vector<std::uint32_t> List;
   OpacityCulling Opacity;
 };
 
