@@ -904,20 +904,43 @@ private:
   int Count = 0;
 };
 
-/// The cells of entries [begin, end) (of input.cellList, or cell ids without one) whose
-/// ranks fall in [firstRank, firstRank + count), in batches.
+/// Entry i of the cells the by-rank decompositions visit: its cell and rank.
+inline void VisitedCell(const DecomposeInput& input, const std::uint32_t* rank, std::int64_t i,
+  std::int64_t& cell, std::uint32_t& cellRank)
+{
+  if (input.rankedCells)
+  {
+    cell = static_cast<std::int64_t>(input.rankedCells[i] >> 32);
+    cellRank = static_cast<std::uint32_t>(input.rankedCells[i]);
+    return;
+  }
+  cell = input.cellList ? static_cast<std::int64_t>(input.cellList[i]) : i;
+  cellRank = rank[cell];
+}
+
+/// How many cells the by-rank decompositions visit (VisitedCell).
+inline std::int64_t VisitedCells(const DecomposeInput& input)
+{
+  return static_cast<std::int64_t>(input.rankedCells ? input.rankedCellCount
+      : input.cellList                               ? input.cellListCount
+                                                     : input.cells.cellCount);
+}
+
+/// The cells of entries [begin, end) of those VisitedCell gives whose ranks fall in
+/// [firstRank, firstRank + count), in batches.
 template <typename Access, typename Writer>
 void DecomposeBlock(const Access& cells, const DecomposeInput& input, const float* cellScalars,
   const std::uint32_t* rank, std::size_t firstRank, std::size_t count, std::int64_t begin,
   std::int64_t end, const Writer& writer, ProjectionClass* classes)
 {
   Batch<Writer> batch(input, writer, classes);
-  const std::uint32_t* list = input.cellList;
   for (std::int64_t i = begin; i < end; ++i)
   {
-    const std::int64_t c = list ? static_cast<std::int64_t>(list[i]) : i;
-    const std::uint64_t k = static_cast<std::uint64_t>(rank[c]) - firstRank;
-    if (rank[c] == NotInOrder || k >= count)
+    std::int64_t c;
+    std::uint32_t r;
+    VisitedCell(input, rank, i, c, r);
+    const std::uint64_t k = static_cast<std::uint64_t>(r) - firstRank;
+    if (r == NotInOrder || k >= count)
     {
       continue;
     }
@@ -949,18 +972,19 @@ void DecomposeAllByRank(const Access& cells, const DecomposeInput& input, const 
   {
     cellInput.imageSize = {};
   }
-  const std::uint32_t* list = input.cellList;
-  const auto n = static_cast<std::int64_t>(list ? input.cellListCount : input.cells.cellCount);
+  const std::int64_t n = VisitedCells(input);
   if (input.colours)
   {
     // Dependent colours mix the corners' colours with the scalar code's weights.
     ParallelSlots(n, threads,
       [&](std::int64_t i)
       {
-        const std::int64_t c = list ? static_cast<std::int64_t>(list[i]) : i;
+        std::int64_t c;
+        std::uint32_t r;
+        VisitedCell(input, rank, i, c, r);
         // One unsigned comparison: NotInOrder and ranks outside the window both fail.
-        const std::uint64_t k = static_cast<std::uint64_t>(rank[c]) - firstRank;
-        if (rank[c] != NotInOrder && k < count)
+        const std::uint64_t k = static_cast<std::uint64_t>(r) - firstRank;
+        if (r != NotInOrder && k < count)
         {
           DecomposeCell(cells, cellInput, cellScalars, static_cast<std::uint32_t>(c),
             static_cast<std::int64_t>(k), writer, classes);

@@ -169,6 +169,7 @@ bool DepthKeyStage::Update(const Key& key, const ProjectedPoint* points, std::si
   this->Count = ComputeVisibleDepthKeys(points, pointCount, cells, list, listCount, key.perspective,
     key.culling, this->Kept.data(), threads);
   this->Kept.resize(this->Count.kept);
+  this->Used = false;
   this->Record.Store(key);
   return true;
 }
@@ -176,6 +177,7 @@ bool DepthKeyStage::Update(const Key& key, const ProjectedPoint* points, std::si
 void DepthKeyStage::Release()
 {
   std::vector<SortKey>().swap(this->Kept);
+  this->Used = false;
   this->Record.Forget();
 }
 

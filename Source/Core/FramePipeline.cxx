@@ -141,12 +141,11 @@ std::size_t FramePipeline::BytesNeeded(const MemoryNeed& need)
   // Each stage's buffers at their largest (their MemoryBytes). Per point: the projected
   // points.
   const std::size_t perPoint = sizeof(ProjectedPoint);
-  // Per cell: the culling's scalar ranges (2 floats) and its two lists; the depth keys; the
-  // near plane's verdict (a byte per key); the order, its scratch and the radix order's
-  // scratch (3 keys); the ranks; with the level of detail, the importance and its list.
-  const std::size_t perCell = 2 * sizeof(float) + 2 * sizeof(std::uint32_t) + sizeof(SortKey) + 1 +
-    3 * sizeof(SortKey) + sizeof(std::uint32_t) +
-    (need.levelOfDetail ? 2 * sizeof(std::uint32_t) : 0);
+  // Per cell: the culling's list; the depth keys (the order's scratch once it took them);
+  // the near plane's verdict (a byte per key); the order; the ranks; with the level of
+  // detail, the importance and its list.
+  const std::size_t perCell = sizeof(std::uint32_t) + sizeof(SortKey) + 1 + sizeof(SortKey) +
+    sizeof(std::uint32_t) + (need.levelOfDetail ? 2 * sizeof(std::uint32_t) : 0);
   // Per piece: the pieces and their keys (grown one at a time, so up to twice their number),
   // their places in the order and its scratch, and their ranks.
   const std::size_t perPiece =
@@ -161,8 +160,13 @@ std::size_t FramePipeline::BytesNeeded(const MemoryNeed& need)
   const std::size_t counts =
     static_cast<std::size_t>(detail::ResolveThreads(need.threads)) * 256 * sizeof(std::size_t);
   const std::size_t window = std::min(need.batch, need.cells + need.pieces);
+  // Batches smaller than the order: the groups' starts and the counts that place them (the
+  // grouped cells take the depth keys' buffer).
+  const std::size_t groups = window < need.cells + need.pieces ? (OrderStage::MaxGroups + 2) *
+      sizeof(std::size_t) * (1 + static_cast<std::size_t>(detail::ResolveThreads(need.threads)))
+                                                               : 0;
   return need.points * perPoint + need.cells * perCell + need.pieces * perPiece +
-    window * perWindowCell + counts;
+    window * perWindowCell + counts + groups;
 }
 
 void FramePipeline::ForgetFrom(std::size_t first)
@@ -278,8 +282,17 @@ bool FramePipeline::Prepare(const FrameInput& input, int threads)
 
 bool FramePipeline::UpdateOrder(const FrameInput& input, const MeshKey& mesh, int threads)
 {
-  // 3. Depth keys, and the near plane's cut.
+  // 3. Depth keys, and the near plane's cut. The order consumed the keys it sorted: when the
+  // near plane or the order must read them again (the order's method changed, say), they are
+  // computed again, and the stages after them with them.
   const ProjectedPoint* points = this->Transform.Points().data();
+  if (this->DepthKeys.Consumed() &&
+    (!this->NearPlaneCut.Holds(NearPlaneKeyOf(this->DepthKeys.Version())) ||
+      !this->Order.Holds(OrderKeyOf(this->DepthKeys.Version(), this->NearPlaneCut.Version(),
+        this->Method, this->MaxSubArraySize, this->Mutation, input.ordered))))
+  {
+    this->DepthKeys.Forget();
+  }
   const bool keyed = Timed(this->LastTimes.keys,
     [&]
     {
@@ -358,18 +371,33 @@ DecompositionKey FramePipeline::WindowKey(std::size_t& first, std::size_t& count
   return DecompositionKeyOf(this->Order.Version(), first, count, this->DecomposeState.imageSize);
 }
 
+DecomposeInput FramePipeline::WindowInput(std::size_t first, std::size_t count, int threads)
+{
+  DecomposeInput in = this->DecomposeState;
+  if (count < this->SortedSize)
+  {
+    // A batch: the cells of the rank groups it overlaps, not every candidate.
+    std::vector<SortKey>& storage = this->DepthKeys.Consume();
+    this->Order.Group(count, in.cells.cellCount, in.cellList, in.cellListCount, storage, threads);
+    in.rankedCells = this->Order.CellsOfRanks(first, count, storage, in.rankedCellCount);
+  }
+  return in;
+}
+
 template <typename Buffers>
 void FramePipeline::DecomposeWindow(
   Buffers& buffers, std::size_t first, std::size_t count, int threads, std::size_t& decomposed)
 {
   const DecompositionKey key = this->WindowKey(first, count);
-  // The decomposition by rank visits the candidate cells (DecomposeInput::cellList).
+  // The decomposition by rank visits the candidate cells (DecomposeInput::cellList), or a
+  // batch's rank groups.
   threads = ThreadsForWork(this->LastStats.cells + count, detail::CellsPerThread, threads);
   const bool computed = Timed(this->LastTimes.decompose,
     [&]
     {
-      return buffers.Update(
-        key, this->DecomposeState, this->Order.Rank(), this->NearPlaneCut.Pieces(), threads);
+      return !buffers.Holds(key) &&
+        buffers.Update(key, this->WindowInput(first, count, threads), this->Order.Rank(),
+          this->NearPlaneCut.Pieces(), threads);
     });
   this->LastStats.decompositionReused |= !computed;
   this->LastStats.pixelCulled += buffers.PixelCulled();
@@ -401,47 +429,56 @@ void FramePipeline::LightWindow(std::size_t first, std::size_t count, const Ligh
     this->LastTimes.light += SecondsSince(start);
     return;
   }
-  const DecomposeInput& in = this->DecomposeState;
+  const DecomposeInput in = this->WindowInput(first, count, threads);
   const std::uint32_t* rank = this->Order.Rank();
   const std::vector<NearPiece>& pieces = this->NearPlaneCut.Pieces();
   const std::size_t cellCount = in.cells.cellCount;
-  // By rank, as the decomposition (DecomposeTetrahedraByRank): the cells in storage order,
-  // each lit into its rank's entry, so that their points and normals are read in order.
-  const std::size_t listed = in.cellList ? in.cellListCount : cellCount;
+  // By rank, as the decomposition (DecomposeTetrahedraByRank): the cells in storage order
+  // (of the window's rank groups, for a batch), each lit into its rank's entry, so that
+  // their points and normals are read in order.
+  const std::size_t listed = in.rankedCells ? in.rankedCellCount
+    : in.cellList                           ? in.cellListCount
+                                            : cellCount;
   threads = ThreadsForWork(listed, detail::CellsPerThread, threads);
-  detail::DispatchCells(in.cells, in.pointCount, [&](const auto& access) {
-    auto light = [&](std::size_t id, std::size_t cell)
+  detail::DispatchCells(in.cells, in.pointCount,
+    [&](const auto& access)
     {
-      const std::uint32_t r = rank[id];
-      std::int64_t ids[4];
-      if (r == NotInOrder || r < first || r - first >= count ||
-        !access.TetrahedronPoints(cell, ids))
+      auto light = [&](std::size_t cell, std::uint32_t r)
       {
-        return;
-      }
-      double corners[4][3];
-      for (int i = 0; i < 4; ++i)
-      {
-        const ProjectedPoint& p = in.points[ids[i]];
-        corners[i][0] = p.eyeX;
-        corners[i][1] = p.eyeY;
-        corners[i][2] = p.eyeZ;
-      }
-      factors[r - first] = LightTetrahedron(lighting, normalMatrix, normals + 3 * cell, corners);
-    };
-    const auto n = static_cast<std::int64_t>(listed);
+        std::int64_t ids[4];
+        if (r == NotInOrder || r < first || r - first >= count ||
+          !access.TetrahedronPoints(cell, ids))
+        {
+          return;
+        }
+        double corners[4][3];
+        for (int i = 0; i < 4; ++i)
+        {
+          const ProjectedPoint& p = in.points[ids[i]];
+          corners[i][0] = p.eyeX;
+          corners[i][1] = p.eyeY;
+          corners[i][2] = p.eyeZ;
+        }
+        factors[r - first] = LightTetrahedron(lighting, normalMatrix, normals + 3 * cell, corners);
+      };
+      const auto n = static_cast<std::int64_t>(listed);
 #pragma omp parallel for num_threads(threads) schedule(static)
-    for (std::int64_t i = 0; i < n; ++i)
-    {
-      const std::size_t cell = in.cellList ? in.cellList[i] : static_cast<std::size_t>(i);
-      light(cell, cell);
-    }
-    // A near-plane piece (id cellCount + j) is lit as its cell.
-    for (std::size_t j = 0; j < pieces.size(); ++j)
-    {
-      light(cellCount + j, pieces[j].cell);
-    }
-  });
+      for (std::int64_t i = 0; i < n; ++i)
+      {
+        if (in.rankedCells)
+        {
+          light(in.rankedCells[i] >> 32, static_cast<std::uint32_t>(in.rankedCells[i]));
+          continue;
+        }
+        const std::size_t cell = in.cellList ? in.cellList[i] : static_cast<std::size_t>(i);
+        light(cell, rank[cell]);
+      }
+      // A near-plane piece (id cellCount + j) is lit as its cell.
+      for (std::size_t j = 0; j < pieces.size(); ++j)
+      {
+        light(pieces[j].cell, rank[cellCount + j]);
+      }
+    });
   this->LastTimes.light += SecondsSince(start);
 }
 

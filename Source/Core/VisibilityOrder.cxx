@@ -49,7 +49,8 @@ public:
 
   OrderMethod Method() const override { return OrderMethod::PartitionSort; }
 
-  void Sort(SortKey* keys, std::size_t count, int threads) override
+  using VisibilityOrder::Sort;
+  void Sort(SortKey* keys, std::size_t count, int threads, std::vector<SortKey>&) override
   {
     if (count < SmallInput)
     {
@@ -132,7 +133,8 @@ class RadixSortOrder final : public VisibilityOrder
 public:
   OrderMethod Method() const override { return OrderMethod::RadixSort; }
 
-  void Sort(SortKey* keys, std::size_t count, int threads) override
+  using VisibilityOrder::Sort;
+  void Sort(SortKey* keys, std::size_t count, int threads, std::vector<SortKey>& scratch) override
   {
     if (count < SmallInput)
     {
@@ -140,15 +142,15 @@ public:
       return;
     }
     const int nthreads = detail::ResolveThreads(threads);
-    if (this->Scratch.size() < count)
+    if (scratch.size() < count)
     {
-      this->Scratch.resize(count);
+      scratch.resize(count);
     }
     // ComputeDepthKeys writes keys in ascending cell-id order; a stable sort of the depth
     // bits then completes the order. Any other input also needs its id bits sorted first.
     const bool idsAscending = IdsAscending(keys, count, nthreads);
     SortKey* source = keys;
-    SortKey* target = this->Scratch.data();
+    SortKey* target = scratch.data();
     const int firstShift = idsAscending ? 32 : 0;
     for (int shift = firstShift; shift < 64; shift += 8)
     {
@@ -232,11 +234,9 @@ private:
 
   std::size_t MemoryBytes() const override
   {
-    return this->Scratch.capacity() * sizeof(SortKey) +
-      this->Counts.capacity() * sizeof(std::size_t);
+    return VisibilityOrder::MemoryBytes() + this->Counts.capacity() * sizeof(std::size_t);
   }
 
-  std::vector<SortKey> Scratch;
   std::vector<std::size_t> Counts;
 };
 
@@ -353,8 +353,8 @@ OrderStage::OrderStage()
 {
 }
 
-bool OrderStage::Update(const Key& key, const Cells& cells, bool fromPrevious,
-  const DepthKeyStage& keys, const NearPlaneStage& nearPlane, int threads)
+bool OrderStage::Update(const Key& key, const Cells& cells, bool fromPrevious, DepthKeyStage& keys,
+  const NearPlaneStage& nearPlane, int threads)
 {
   if (this->Record.Holds(key))
   {
@@ -365,21 +365,22 @@ bool OrderStage::Update(const Key& key, const Cells& cells, bool fromPrevious,
     this->Sorter = MakeVisibilityOrder(key.method, key.maxSubArraySize);
     this->SorterMaxSubArraySize = key.maxSubArraySize;
   }
-  // The keys the near plane keeps, in ascending cell id order (the radix sort's fast case).
+  // The keys the near plane keeps, in ascending cell id order (the radix sort's fast case),
+  // taken from the key stage, whose buffer is this update's scratch from here on.
   const std::size_t previousCount = this->Sorted.size();
-  const std::vector<SortKey>& all = keys.Keys();
+  std::vector<SortKey>& scratch = keys.Consume();
   if (!nearPlane.CutsAny())
   {
-    this->Sorted.assign(all.begin(), all.end());
+    this->Sorted.swap(scratch);
   }
   else
   {
     this->Sorted.clear();
-    for (std::size_t k = 0; k < all.size(); ++k)
+    for (std::size_t k = 0; k < scratch.size(); ++k)
     {
       if (nearPlane.Keeps(k))
       {
-        this->Sorted.push_back(all[k]);
+        this->Sorted.push_back(scratch[k]);
       }
     }
   }
@@ -402,18 +403,18 @@ bool OrderStage::Update(const Key& key, const Cells& cells, bool fromPrevious,
     held.mesh == cells.mesh && held.points != cells.points && held.visible == cells.visible &&
     held.perspective == cells.perspective && previousCount == this->Sorted.size() &&
     angle < NearlySortedMaxAngle && key.mutation == OrderMutation::None;
-  this->SortedFromPrevious = sameCells && this->SortFromPrevious(threads);
+  this->SortedFromPrevious = sameCells && this->SortFromPrevious(scratch, threads);
   if (!this->SortedFromPrevious)
   {
-    this->Sorter->Sort(this->Sorted.data(), this->Sorted.size(), threads);
+    this->Sorter->Sort(this->Sorted.data(), this->Sorted.size(), threads, scratch);
   }
   const std::vector<SortKey>& pieces = nearPlane.PieceKeys();
   if (!pieces.empty())
   {
-    this->Scratch.resize(this->Sorted.size() + pieces.size());
-    std::merge(this->Sorted.begin(), this->Sorted.end(), pieces.begin(), pieces.end(),
-      this->Scratch.begin());
-    this->Sorted.swap(this->Scratch);
+    scratch.resize(this->Sorted.size() + pieces.size());
+    std::merge(
+      this->Sorted.begin(), this->Sorted.end(), pieces.begin(), pieces.end(), scratch.begin());
+    this->Sorted.swap(scratch);
   }
   this->Mutate(key.mutation);
   this->Held = cells;
@@ -421,26 +422,23 @@ bool OrderStage::Update(const Key& key, const Cells& cells, bool fromPrevious,
   return true;
 }
 
-bool OrderStage::SortFromPrevious(int threads)
+bool OrderStage::SortFromPrevious(std::vector<SortKey>& scratch, int threads)
 {
   const std::size_t count = this->Sorted.size();
-  if (this->Scratch.size() < count)
-  {
-    this->Scratch.resize(count);
-  }
+  scratch.resize(count);
   const auto m = static_cast<std::int64_t>(count);
 #pragma omp parallel for num_threads(detail::ResolveThreads(threads)) schedule(static)
   for (std::int64_t i = 0; i < m; ++i)
   {
     const SortKey key = this->Sorted[i];
-    this->Scratch[this->Ranks[CellOfKey(key)]] = key;
+    scratch[this->Ranks[CellOfKey(key)]] = key;
   }
   // Budget: about the cost of a full sort; beyond it the keys moved too far.
-  if (!SortNearlySorted(this->Scratch.data(), count, 4 * count, threads))
+  if (!SortNearlySorted(scratch.data(), count, 4 * count, threads))
   {
-    return false;
+    return false; // the keys in Sorted are as they were
   }
-  std::copy(this->Scratch.begin(), this->Scratch.begin() + m, this->Sorted.begin());
+  this->Sorted.swap(scratch);
   return true;
 }
 
@@ -468,10 +466,90 @@ void OrderStage::Invert(std::size_t ranked, int threads, const std::uint32_t* ca
     candidates, candidateCount, meshCells);
 }
 
+void OrderStage::Group(std::size_t ranksPerGroup, std::size_t meshCells,
+  const std::uint32_t* candidates, std::size_t candidateCount, std::vector<SortKey>& storage,
+  int threads)
+{
+  if (this->Record.Valid() && this->GroupedVersion == this->Version())
+  {
+    return;
+  }
+  const std::size_t ranked = this->Sorted.size();
+  this->GroupRanks =
+    std::max<std::size_t>({ std::size_t(1), ranksPerGroup, (ranked + MaxGroups - 1) / MaxGroups });
+  const std::size_t groups = (ranked + this->GroupRanks - 1) / this->GroupRanks;
+  // Ranks and the group size fit 32 bits (MaxFrameTetrahedra): the cheaper division.
+  const auto size = static_cast<std::uint32_t>(this->GroupRanks);
+  const std::size_t n = candidates ? candidateCount : meshCells;
+  const int nthreads = detail::ResolveThreads(threads);
+  this->GroupCounts.assign(static_cast<std::size_t>(nthreads) * groups, 0);
+  this->GroupStarts.assign(groups + 1, 0);
+  const std::uint32_t* rank = this->Ranks.data();
+  // A stable counting sort of the ranked cells by group: each thread counts its block's,
+  // an exclusive prefix in (group, thread) order places them, and each thread scatters.
+#pragma omp parallel num_threads(nthreads)
+  {
+    const auto t = static_cast<std::size_t>(omp_get_thread_num());
+    const auto team = static_cast<std::size_t>(omp_get_num_threads());
+    const std::size_t begin = n * t / team, end = n * (t + 1) / team;
+    std::size_t* mine = this->GroupCounts.data() + t * groups;
+    for (std::size_t i = begin; i < end; ++i)
+    {
+      const std::uint32_t r = rank[candidates ? candidates[i] : i];
+      if (r != NotInOrder)
+      {
+        ++mine[r / size];
+      }
+    }
+#pragma omp barrier
+#pragma omp single
+    {
+      std::size_t running = 0;
+      for (std::size_t g = 0; g < groups; ++g)
+      {
+        this->GroupStarts[g] = running;
+        for (std::size_t u = 0; u < team; ++u)
+        {
+          std::size_t& c = this->GroupCounts[u * groups + g];
+          const std::size_t here = c;
+          c = running;
+          running += here;
+        }
+      }
+      this->GroupStarts[groups] = running;
+      storage.resize(running);
+    } // implicit barrier
+    for (std::size_t i = begin; i < end; ++i)
+    {
+      const std::size_t c = candidates ? candidates[i] : i;
+      const std::uint32_t r = rank[c];
+      if (r != NotInOrder)
+      {
+        storage[mine[r / size]++] = static_cast<SortKey>(c) << 32 | r;
+      }
+    }
+  }
+  this->GroupedVersion = this->Version();
+}
+
+const SortKey* OrderStage::CellsOfRanks(std::size_t first, std::size_t count,
+  const std::vector<SortKey>& storage, std::size_t& cells) const
+{
+  const std::size_t groups = this->GroupStarts.empty() ? 0 : this->GroupStarts.size() - 1;
+  const std::size_t size = this->GroupRanks;
+  const std::size_t g0 = std::min(groups, first / size);
+  const std::size_t g1 = std::min(groups, (first + count + size - 1) / size);
+  const std::size_t begin = groups ? this->GroupStarts[g0] : 0;
+  cells = groups ? this->GroupStarts[g1] - begin : 0;
+  return storage.data() + begin;
+}
+
 void OrderStage::Release()
 {
+  std::vector<std::size_t>().swap(this->GroupStarts);
+  std::vector<std::size_t>().swap(this->GroupCounts);
+  this->GroupedVersion = 0;
   std::vector<SortKey>().swap(this->Sorted);
-  std::vector<SortKey>().swap(this->Scratch);
   std::vector<std::uint32_t>().swap(this->Ranks);
   this->Sorter = MakeVisibilityOrder(this->Sorter->Method(), this->SorterMaxSubArraySize);
   this->Record.Forget();
@@ -479,7 +557,8 @@ void OrderStage::Release()
 
 std::size_t OrderStage::MemoryBytes() const
 {
-  return (this->Sorted.capacity() + this->Scratch.capacity()) * sizeof(SortKey) +
+  return this->Sorted.capacity() * sizeof(SortKey) +
+    (this->GroupStarts.capacity() + this->GroupCounts.capacity()) * sizeof(std::size_t) +
     this->Ranks.capacity() * sizeof(std::uint32_t) + this->Sorter->MemoryBytes();
 }
 

@@ -340,6 +340,55 @@ TEST(FramePipeline, ReuseRecomputesOnlyWhatChanged)
     plain.Stats().decompositionReused);
 }
 
+TEST(FramePipeline, AnOrderChangeInAStillViewSortsThisViewsKeys)
+{
+  // The order sorts in the depth keys' buffer; an order setting changed while the view
+  // stands still must still sort this view's keys, with the eye outside the mesh and
+  // inside it (the near plane cuts cells), after frames from other views.
+  const TetMesh mesh = JitteredGrid(10, 6);
+  for (bool inside : { false, true })
+  {
+    SCOPED_TRACE(inside ? "eye inside" : "eye outside");
+    mtpt::FrameInput input = Frame(mesh, 0.4, true);
+    mtpt::FramePipeline pipeline;
+    pipeline.SetReuse(true);
+    for (double azimuth : { 0.1, 0.9, 1.7 })
+    {
+      input = Frame(mesh, azimuth, true);
+      if (inside)
+      {
+        input.modelView = LookAt(
+          { 0.2 * std::sin(azimuth), 0.1, 0.2 * std::cos(azimuth) }, { 0, 0, 0 }, { 0, 1, 0 });
+      }
+      ASSERT_TRUE(pipeline.Run(input, 2));
+    }
+    EXPECT_EQ(pipeline.Stats().nearClipped > 0, inside);
+    auto expectKeysOf = [&](mtpt::OrderMethod method, mtpt::OrderMutation mutation, bool ordered)
+    {
+      mtpt::FramePipeline fresh;
+      fresh.SetOrderMethod(method);
+      fresh.SetOrderMutationForTesting(mutation);
+      input.ordered = ordered;
+      ASSERT_TRUE(fresh.Run(input, 2));
+      pipeline.SetOrderMethod(method);
+      pipeline.SetOrderMutationForTesting(mutation);
+      ASSERT_TRUE(pipeline.Run(input, 2));
+      EXPECT_TRUE(pipeline.Stats().transformReused);
+      ASSERT_GT(fresh.SortedCount(), 0u);
+      EXPECT_EQ(pipeline.Keys(), fresh.Keys());
+      // Unchanged again: nothing recomputed.
+      ASSERT_TRUE(pipeline.Run(input, 2));
+      EXPECT_TRUE(pipeline.Stats().orderReused);
+      EXPECT_EQ(pipeline.Keys(), fresh.Keys());
+    };
+    expectKeysOf(mtpt::OrderMethod::PartitionSort, mtpt::OrderMutation::None, true);
+    expectKeysOf(mtpt::OrderMethod::PartitionSort, mtpt::OrderMutation::Reversed, true);
+    expectKeysOf(mtpt::OrderMethod::RadixSort, mtpt::OrderMutation::None, false);
+    expectKeysOf(mtpt::OrderMethod::RadixSort, mtpt::OrderMutation::Storage, true);
+    expectKeysOf(mtpt::OrderMethod::RadixSort, mtpt::OrderMutation::None, true);
+  }
+}
+
 TEST(FramePipeline, SmallRotationsSortFromThePreviousOrderWithTheSameResult)
 {
   const TetMesh mesh = JitteredGrid(12, 9);
@@ -626,6 +675,62 @@ TEST(FramePipeline, BatchesReproduceTheWholeFrame)
     if (batch == 1000) // memory follows the batch, not the mesh
     {
       EXPECT_LT(pipeline.MemoryBytes(), whole.MemoryBytes() - 100 * 7 * 168);
+    }
+  }
+}
+
+TEST(FramePipeline, BatchesOverManyRankGroupsReproduceTheWholeFrame)
+{
+  // A batch visits only the cells of the rank groups it overlaps (OrderStage::Group; the
+  // first window's length is the groups'). Windows of that length, windows that start and
+  // end inside groups and span several, and cells culled by opacity (a candidate list):
+  // every window's slots and light factors must be the whole frame's slice.
+  const TetMesh mesh = JitteredGrid(16, 8);
+  const std::vector<float> table = EdgeTable(64, 0.2f);
+  mtpt::FrameInput input = Frame(mesh, 0.4, true);
+  input.opacity = { table.data(), 64, -2.0, 3.0 };
+  std::vector<float> normals(3 * mesh.CellCount());
+  std::mt19937 random(5);
+  std::normal_distribution<float> gauss;
+  for (float& v : normals)
+  {
+    v = gauss(random);
+  }
+  mtpt::Lighting lighting;
+  mtpt::FramePipeline whole;
+  ASSERT_TRUE(whole.Run(input, 2));
+  const std::size_t total = whole.SortedCount();
+  ASSERT_GT(whole.Stats().opacityCulled, 0u);
+  ASSERT_GT(total, 5000u);
+  const std::vector<TetVertex> vertices(
+    whole.Vertices().begin(), whole.Vertices().begin() + 5 * total);
+  std::vector<mtpt::LightFactors> wholeFactors;
+  whole.LightWindow(0, total, lighting, normals.data(), input.modelView, wholeFactors, 2);
+  for (const std::vector<std::size_t>& windows :
+    { std::vector<std::size_t>{ 1001 }, std::vector<std::size_t>{ 1000, 2500, 700, 1 },
+      std::vector<std::size_t>{ 3, 999, 4000, 64 }, std::vector<std::size_t>{ total - 1 } })
+  {
+    SCOPED_TRACE(::testing::Message() << "windows from " << windows[0]);
+    mtpt::FramePipeline pipeline;
+    ASSERT_TRUE(pipeline.Prepare(input, 3));
+    std::vector<mtpt::LightFactors> factors;
+    std::size_t w = 0;
+    for (std::size_t first = 0; first < total; first += windows[w++ % windows.size()])
+    {
+      const std::size_t length = windows[w % windows.size()];
+      pipeline.DecomposeBatch(first, length, 2);
+      const std::size_t count = pipeline.TetrahedronCount();
+      ASSERT_EQ(count, std::min(length, total - first));
+      ASSERT_EQ(0,
+        std::memcmp(
+          pipeline.Vertices().data(), vertices.data() + 5 * first, 5 * count * sizeof(TetVertex)))
+        << "the window from " << first;
+      pipeline.LightWindow(first, length, lighting, normals.data(), input.modelView, factors, 3);
+      ASSERT_EQ(factors.size(), count);
+      ASSERT_EQ(0,
+        std::memcmp(
+          factors.data(), wholeFactors.data() + first, count * sizeof(mtpt::LightFactors)))
+        << "the light of the window from " << first;
     }
   }
 }

@@ -125,6 +125,11 @@ struct DecomposeInput
   /// null: every cell of the mesh.
   const std::uint32_t* cellList = nullptr;
   std::size_t cellListCount = 0;
+  /// Set, the by-rank decompositions visit these cells instead, each with its rank: the
+  /// cell id in the high 32 bits, the rank in the low (a batch's rank groups,
+  /// OrderStage::Group), and read no rank array.
+  const SortKey* rankedCells = nullptr;
+  std::size_t rankedCellCount = 0;
 };
 
 /**

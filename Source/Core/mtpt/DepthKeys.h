@@ -88,6 +88,11 @@ struct DepthKeyStageKey
  * Stage 3 as a stage of FramePipeline (Stage.h): the keys of the cells left by culling and
  * by ComputeVisibleDepthKeys, in ascending cell id order, kept until the projected points,
  * the visible cells or the culling settings change.
+ *
+ * The order stage takes the keys and sorts in their buffer (Consume), so that a frame holds
+ * the mesh's keys twice, not three or four times. The result stays valid for the stages
+ * that hold what they made from it; a stage that must read the keys again while they are
+ * consumed has them computed anew (FramePipeline::UpdateOrder forgets this stage).
  */
 class DepthKeyStage : public StageOf<DepthKeyStageKey>
 {
@@ -97,7 +102,18 @@ public:
   bool Update(const Key& key, const ProjectedPoint* points, std::size_t pointCount,
     const CellsView& cells, const std::uint32_t* list, std::size_t listCount, int threads);
 
+  /// The keys; not to be read while Consumed().
   const std::vector<SortKey>& Keys() const { return this->Kept; }
+  /**
+   * The keys' buffer, to move the keys out of and to use as scratch: it holds no particular
+   * values afterwards, and Consumed() is true until the keys are computed again.
+   */
+  std::vector<SortKey>& Consume()
+  {
+    this->Used = true;
+    return this->Kept;
+  }
+  bool Consumed() const { return this->Used; }
   /// How many cells the keys left out, and why.
   const KeyCounts& Counts() const { return this->Count; }
   void Release() override;
@@ -106,6 +122,7 @@ public:
 private:
   std::vector<SortKey> Kept;
   KeyCounts Count;
+  bool Used = false; ///< Consume was called since the keys were computed
 };
 
 } // namespace mtpt

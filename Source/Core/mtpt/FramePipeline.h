@@ -278,6 +278,9 @@ private:
   DecompositionKey WindowKey(std::size_t& first, std::size_t& count);
   /// DecomposeBatch and DecomposeFans: the window into `buffers` (Slots or FanBuffers), its
   /// size into `decomposed`.
+  /// The decomposition's input for the window [first, first + count) of the order: for a
+  /// window smaller than the order, the cells of its rank groups (OrderStage::Group).
+  DecomposeInput WindowInput(std::size_t first, std::size_t count, int threads);
   template <typename Buffers>
   void DecomposeWindow(
     Buffers& buffers, std::size_t first, std::size_t count, int threads, std::size_t& decomposed);

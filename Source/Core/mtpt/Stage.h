@@ -93,6 +93,8 @@ public:
   using Key = KeyType;
   /// Changes whenever the result changes; 0 before the first.
   std::uint64_t Version() const { return this->Record.Version(); }
+  /// Whether the result was computed from `key`: the next Update with it computes nothing.
+  bool Holds(const Key& key) const { return this->Record.Holds(key); }
   void Forget() override { this->Record.Forget(); }
 
 protected:

@@ -53,9 +53,22 @@ public:
   virtual ~VisibilityOrder() = default;
   virtual OrderMethod Method() const = 0;
   /// Sorts keys[0, count) ascending on `threads` OpenMP threads (<= 0: all available).
-  virtual void Sort(SortKey* keys, std::size_t count, int threads) = 0;
+  void Sort(SortKey* keys, std::size_t count, int threads)
+  {
+    this->Sort(keys, count, threads, this->OwnScratch);
+  }
+  /**
+   * The same with `scratch` as the sort's working memory, grown to `count` keys where the
+   * method needs it (the radix sort) and left holding no particular values: a caller that
+   * has a buffer of keys of its own for other work lends it instead of holding two.
+   */
+  virtual void Sort(
+    SortKey* keys, std::size_t count, int threads, std::vector<SortKey>& scratch) = 0;
   /// Bytes of scratch memory the object holds.
-  virtual std::size_t MemoryBytes() const { return 0; }
+  virtual std::size_t MemoryBytes() const { return this->OwnScratch.capacity() * sizeof(SortKey); }
+
+private:
+  std::vector<SortKey> OwnScratch; ///< the scratch of Sort without one lent
 };
 
 /// Default sub-array threshold MAX of the partition sort.
@@ -153,13 +166,35 @@ public:
   OrderStage();
 
   /// Sorts unless the order was made from `key`; true when it sorted. `fromPrevious`:
-  /// whether sorting from the previous order may be tried (reuse is on).
-  bool Update(const Key& key, const Cells& cells, bool fromPrevious, const DepthKeyStage& keys,
+  /// whether sorting from the previous order may be tried (reuse is on). When it sorts it
+  /// consumes `keys` (DepthKeyStage::Consume), which must not be consumed already: it takes
+  /// the keys and sorts in their buffer.
+  bool Update(const Key& key, const Cells& cells, bool fromPrevious, DepthKeyStage& keys,
     const NearPlaneStage& nearPlane, int threads);
   /// The inverse of the order over `ranked` cell ids (the mesh's cells and the pieces); with
   /// `candidates`, over those and the pieces only (InvertOrder).
   void Invert(std::size_t ranked, int threads, const std::uint32_t* candidates = nullptr,
     std::size_t candidateCount = 0, std::size_t meshCells = 0);
+
+  /**
+   * Groups the ranked cells of the mesh by rank, once per order, into `storage` (the depth
+   * keys' buffer, DepthKeyStage::Consume, which the order no longer needs), each entry a
+   * cell id in the high 32 bits and its rank in the low: group g holds the cells ranked in
+   * [g * size, (g + 1) * size), ascending, where size is `ranksPerGroup` (the first window's
+   * length: the batch size) or, at least, a 256th of the order. A window of the order
+   * smaller than the whole (a batch) then visits the cells of the groups it overlaps
+   * (CellsOfRanks), not every candidate: the frame's batches together read each cell about
+   * once, not once per batch, a batch that is one group reads its cells in one ascending
+   * sweep, and no rank array. `candidates` as for Invert (null: cells [0, meshCells)).
+   */
+  void Group(std::size_t ranksPerGroup, std::size_t meshCells, const std::uint32_t* candidates,
+    std::size_t candidateCount, std::vector<SortKey>& storage, int threads);
+  /// The entries of Group's `storage` for the groups that overlap ranks
+  /// [first, first + count), and their number.
+  const SortKey* CellsOfRanks(std::size_t first, std::size_t count,
+    const std::vector<SortKey>& storage, std::size_t& cells) const;
+  /// The most groups an order is split into.
+  static constexpr std::size_t MaxGroups = 256;
 
   /// The order: Count() keys, back to front.
   const std::vector<SortKey>& Keys() const { return this->Sorted; }
@@ -173,14 +208,19 @@ public:
   std::size_t MemoryBytes() const override;
 
 private:
-  bool SortFromPrevious(int threads);
+  bool SortFromPrevious(std::vector<SortKey>& scratch, int threads);
   void Mutate(OrderMutation mutation);
 
   std::unique_ptr<VisibilityOrder> Sorter;
   std::size_t SorterMaxSubArraySize = DefaultMaxSubArraySize;
   Cells Held; ///< the cells of the held order
-  std::vector<SortKey> Sorted, Scratch;
+  std::vector<SortKey> Sorted;
   std::vector<std::uint32_t> Ranks;
+  /// Group's first entry of each group (and the end), the counts that place them, and the
+  /// order's version they were made for (0: none).
+  std::vector<std::size_t> GroupStarts, GroupCounts;
+  std::size_t GroupRanks = 1; ///< ranks per group
+  std::uint64_t GroupedVersion = 0;
   bool SortedFromPrevious = false;
 };
 
