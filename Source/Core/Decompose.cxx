@@ -904,30 +904,8 @@ private:
   int Count = 0;
 };
 
-/// Entry i of the cells the by-rank decompositions visit: its cell and rank.
-inline void VisitedCell(const DecomposeInput& input, const std::uint32_t* rank, std::int64_t i,
-  std::int64_t& cell, std::uint32_t& cellRank)
-{
-  if (input.rankedCells)
-  {
-    cell = static_cast<std::int64_t>(input.rankedCells[i] >> 32);
-    cellRank = static_cast<std::uint32_t>(input.rankedCells[i]);
-    return;
-  }
-  cell = input.cellList ? static_cast<std::int64_t>(input.cellList[i]) : i;
-  cellRank = rank[cell];
-}
-
-/// How many cells the by-rank decompositions visit (VisitedCell).
-inline std::int64_t VisitedCells(const DecomposeInput& input)
-{
-  return static_cast<std::int64_t>(input.rankedCells ? input.rankedCellCount
-      : input.cellList                               ? input.cellListCount
-                                                     : input.cells.cellCount);
-}
-
-/// The cells of entries [begin, end) of those VisitedCell gives whose ranks fall in
-/// [firstRank, firstRank + count), in batches.
+/// The cells of entries [begin, end) of those the input visits (DecomposeInput::Visited)
+/// whose ranks fall in [firstRank, firstRank + count), in batches.
 template <typename Access, typename Writer>
 void DecomposeBlock(const Access& cells, const DecomposeInput& input, const float* cellScalars,
   const std::uint32_t* rank, std::size_t firstRank, std::size_t count, std::int64_t begin,
@@ -936,9 +914,9 @@ void DecomposeBlock(const Access& cells, const DecomposeInput& input, const floa
   Batch<Writer> batch(input, writer, classes);
   for (std::int64_t i = begin; i < end; ++i)
   {
-    std::int64_t c;
+    std::size_t c;
     std::uint32_t r;
-    VisitedCell(input, rank, i, c, r);
+    input.Visited(static_cast<std::size_t>(i), rank, c, r);
     const std::uint64_t k = static_cast<std::uint64_t>(r) - firstRank;
     if (r == NotInOrder || k >= count)
     {
@@ -972,16 +950,16 @@ void DecomposeAllByRank(const Access& cells, const DecomposeInput& input, const 
   {
     cellInput.imageSize = {};
   }
-  const std::int64_t n = VisitedCells(input);
+  const auto n = static_cast<std::int64_t>(input.VisitedCount());
   if (input.colours)
   {
     // Dependent colours mix the corners' colours with the scalar code's weights.
     ParallelSlots(n, threads,
       [&](std::int64_t i)
       {
-        std::int64_t c;
+        std::size_t c;
         std::uint32_t r;
-        VisitedCell(input, rank, i, c, r);
+        input.Visited(static_cast<std::size_t>(i), rank, c, r);
         // One unsigned comparison: NotInOrder and ranks outside the window both fail.
         const std::uint64_t k = static_cast<std::uint64_t>(r) - firstRank;
         if (r != NotInOrder && k < count)

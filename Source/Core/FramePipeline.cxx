@@ -436,9 +436,7 @@ void FramePipeline::LightWindow(std::size_t first, std::size_t count, const Ligh
   // By rank, as the decomposition (DecomposeTetrahedraByRank): the cells in storage order
   // (of the window's rank groups, for a batch), each lit into its rank's entry, so that
   // their points and normals are read in order.
-  const std::size_t listed = in.rankedCells ? in.rankedCellCount
-    : in.cellList                           ? in.cellListCount
-                                            : cellCount;
+  const std::size_t listed = in.VisitedCount();
   threads = ThreadsForWork(listed, detail::CellsPerThread, threads);
   detail::DispatchCells(in.cells, in.pointCount,
     [&](const auto& access)
@@ -465,13 +463,10 @@ void FramePipeline::LightWindow(std::size_t first, std::size_t count, const Ligh
 #pragma omp parallel for num_threads(threads) schedule(static)
       for (std::int64_t i = 0; i < n; ++i)
       {
-        if (in.rankedCells)
-        {
-          light(in.rankedCells[i] >> 32, static_cast<std::uint32_t>(in.rankedCells[i]));
-          continue;
-        }
-        const std::size_t cell = in.cellList ? in.cellList[i] : static_cast<std::size_t>(i);
-        light(cell, rank[cell]);
+        std::size_t cell;
+        std::uint32_t r;
+        in.Visited(static_cast<std::size_t>(i), rank, cell, r);
+        light(cell, r);
       }
       // A near-plane piece (id cellCount + j) is lit as its cell.
       for (std::size_t j = 0; j < pieces.size(); ++j)

@@ -130,6 +130,28 @@ struct DecomposeInput
   /// OrderStage::Group), and read no rank array.
   const SortKey* rankedCells = nullptr;
   std::size_t rankedCellCount = 0;
+
+  /// How many cells the by-rank passes visit: rankedCells, else cellList, else every cell.
+  std::size_t VisitedCount() const
+  {
+    return this->rankedCells ? this->rankedCellCount
+      : this->cellList       ? this->cellListCount
+                             : this->cells.cellCount;
+  }
+  /// Entry i of the cells the by-rank passes visit: its cell, and its rank (its entry's, or
+  /// rank[cell]).
+  void Visited(
+    std::size_t i, const std::uint32_t* rank, std::size_t& cell, std::uint32_t& cellRank) const
+  {
+    if (this->rankedCells)
+    {
+      cell = static_cast<std::size_t>(this->rankedCells[i] >> 32);
+      cellRank = static_cast<std::uint32_t>(this->rankedCells[i]);
+      return;
+    }
+    cell = this->cellList ? this->cellList[i] : i;
+    cellRank = rank[cell];
+  }
 };
 
 /**
