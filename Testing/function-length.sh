@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Runs scripts/check-function-length.py (with its self-test) on Source/ with lizard, a
+# Runs scripts/checks/check-function-length.py (with its self-test) on Source/ with lizard, a
 # pinned version from PyPI in a virtual environment under WORK-DIR, made once and reused;
 # skipped (exit 77) when it must be installed and PyPI cannot be reached (pypi-reachable.sh).
 # Usage: Testing/function-length.sh PYTHON SOURCE-DIR WORK-DIR
@@ -15,4 +15,4 @@ if [ "$installed" != "${lizard##*=}" ]; then
   "$python" -m venv "$venv"
   "$venv/bin/python" -m pip install --quiet --disable-pip-version-check "$lizard"
 fi
-exec "$venv/bin/python" "$source/scripts/check-function-length.py" --self-test "$source/Source"
+exec "$venv/bin/python" "$source/scripts/checks/check-function-length.py" --self-test "$source/Source"

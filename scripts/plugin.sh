@@ -13,7 +13,7 @@
 # Prints the figures (RMSE in [0,1] RGB) and exits non-zero on any failure.
 #
 # Usage: scripts/plugin.sh [build-dir]   (default: build-plugin)
-# Needs the packages of scripts/install-deps.sh (paraview, paraview-dev, openmpi-bin, xvfb).
+# Needs the packages of scripts/install/install-deps.sh (paraview, paraview-dev, openmpi-bin, xvfb).
 # MTPT_UPDATE_SCREENSHOT=1 also copies the pvpython image to Documentation/paraview_plugin.png
 # and the depth-peeling test's sphere inside the mesh to Documentation/paraview_peeling.png.
 #
@@ -35,7 +35,7 @@ data="$here/Data/bluntfin_tets.vtu"
 installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q "install ok installed"; }
 for p in paraview paraview-dev openmpi-bin xvfb; do
   if ! installed "$p"; then
-    echo "plugin.sh: package $p is missing; run scripts/install-deps.sh" >&2
+    echo "plugin.sh: package $p is missing; run scripts/install/install-deps.sh" >&2
     exit 1
   fi
 done

@@ -11,7 +11,7 @@ set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="$here/build"
 
-"$here/scripts/build-example.sh"
+"$here/scripts/install/build-example.sh"
 
 args=(--compare-vtk --azimuth 35 --elevation 25 --zoom 1.3
   --output "$build/mtpt_default.png")

@@ -6,9 +6,9 @@ set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${1:-$here/build}"
 
-# Inside the Debian unstable chroot (scripts/sid-chroot.sh) the packages are the chroot's.
+# Inside the Debian unstable chroot (scripts/install/sid-chroot.sh) the packages are the chroot's.
 if [ "${MTPT_IN_SID_CHROOT:-0}" != 1 ]; then
-  "$here/scripts/install-deps.sh"
+  "$here/scripts/install/install-deps.sh"
 fi
 
 jobs="$(nproc)"

@@ -52,7 +52,7 @@ namespace
 {
 
 /// Testing only: MTPT_TESTING_ORDER=reversed or storage draws the cells in a wrong order,
-/// to check that the image tests see the order (scripts/mutation-check.sh).
+/// to check that the image tests see the order (scripts/ci/mutation-check.sh).
 mtpt::OrderMutation OrderMutationFromEnvironment()
 {
   const char* order = std::getenv("MTPT_TESTING_ORDER");

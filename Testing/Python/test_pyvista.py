@@ -3,7 +3,7 @@
 arguments, MTPT as the mapper, and an image that matches VTK's PT given that volume.
 
 Needs PyVista (Debian's python3-pyvista, in the Debian unstable chroot of
-scripts/sid-chroot.sh). Debian bookworm has no PyVista, and PyPI's pulls in PyPI's VTK
+scripts/install/sid-chroot.sh). Debian bookworm has no PyVista, and PyPI's pulls in PyPI's VTK
 beside the system's, so there the module is skipped (Documentation/testing.md)."""
 import numpy as np
 import pytest

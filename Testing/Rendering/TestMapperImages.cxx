@@ -8,7 +8,7 @@
 // differing by more than 0.1 in some channel. Every scene is drawn from three directions
 // (Views: from +z, from -z, obliquely from above) with its cells stored in a random order,
 // so that neither storage order nor a reversed order can pass for the visibility order;
-// `scripts/mutation-check.sh` runs these tests with the order reversed and with no sort
+// `scripts/ci/mutation-check.sh` runs these tests with the order reversed and with no sort
 // (MTPT_TESTING_ORDER=reversed, storage),
 // and both must fail. Thresholds come from measurement (values in the comments, Mesa
 // llvmpipe, 200x200) and sit between the correct order's figures and the mutations'.
@@ -106,7 +106,7 @@ vtkSmartPointer<vtkUnstructuredGrid> MapperImages::BluntFin;
 // Limits: { RMSE over covered pixels, worst pixel, fraction of covered pixels over 0.1 }.
 // Measured with the correct order (Mesa llvmpipe, 200x200, three views): box scenes RMSE
 // 0.0013-0.0027, worst 0.004-0.020, no pixel over 0.1; with the order reversed or left in
-// storage order RMSE 0.006-0.022 and worst 0.035-0.12 (scripts/mutation-check.sh).
+// storage order RMSE 0.006-0.022 and worst 0.035-0.12 (scripts/ci/mutation-check.sh).
 const Limits BoxLimits{ 0.004, 0.03, 0.001 };
 
 TEST_F(MapperImages, SyntheticOrthographicMatchesVTK)

@@ -3,12 +3,12 @@
 # loops compete for the cores, and prints a line per run: the suite must hold on a busy
 # machine (Documentation/testing.md, "Tests under a competing load").
 #
-# Usage: scripts/test-under-load.sh [--load K] [--soak-runs M] [--suite-runs N] [build-dir]
+# Usage: scripts/ci/test-under-load.sh [--load K] [--soak-runs M] [--suite-runs N] [build-dir]
 #   K busy loops (default: one per core, plus one), the soak test M times (default 5), the
 #   whole suite N times (default 3); build-dir default: build. In the Debian unstable chroot:
-#   scripts/sid-chroot.sh scripts/test-under-load.sh build-sid
+#   scripts/install/sid-chroot.sh scripts/ci/test-under-load.sh build-sid
 set -euo pipefail
-here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 load=$(($(nproc) + 1))
 soak_runs=5
 suite_runs=3

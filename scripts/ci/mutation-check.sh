@@ -6,9 +6,9 @@
 #   storage:  the cells as stored, not sorted at all     (MTPT_TESTING_ORDER=storage)
 # Prints, for each, how many tests failed and which.
 #
-# Usage: scripts/mutation-check.sh [build-dir]   (default: build; built by scripts/test.sh)
+# Usage: scripts/ci/mutation-check.sh [build-dir]   (default: build; built by scripts/test.sh)
 set -euo pipefail
-here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 build="${1:-$here/build}"
 tests="$build/Testing/Rendering/mtpt_rendering_tests"
 min_failures="${MIN_FAILURES:-10}"

@@ -19,7 +19,7 @@ usage: level-of-detail-study.py grid|orders [--mesh wavelet|FILE.vtu] [--array N
 Run with the Python that has VTK (/usr/bin/python3 on Debian) and the mtpt package on its
 path, under a display, e.g.:
   PYTHONPATH=build/lib/python3/dist-packages Testing/xvfb-launch.sh /usr/bin/python3 \\
-    scripts/level-of-detail-study.py grid --mesh wavelet
+    scripts/figures/level-of-detail-study.py grid --mesh wavelet
 """
 import argparse
 import math

@@ -5,7 +5,7 @@ cells are sorted into SLABS slabs along an axis by their centres, and slab i goe
 i % BLOCKS, so the blocks interpenetrate in depth wherever the view is oblique to the slabs.
 A test scene for composite input (Examples/mtpt_render.cxx reads .vtm).
 
-usage: scripts/split-blocks.py INPUT.vtu OUTPUT.vtm [--blocks 2] [--slabs 6] [--axis 0]
+usage: scripts/figures/split-blocks.py INPUT.vtu OUTPUT.vtm [--blocks 2] [--slabs 6] [--axis 0]
 Runs with Debian's python3 (python3-vtk9, which libvtk9-dev installs)."""
 import argparse
 

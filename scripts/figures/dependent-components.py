@@ -6,7 +6,7 @@ components (RGBA) and two float components (colour scalar, opacity scalar), from
 directions. Prints each image's covered-pixel RMSE and worst pixel (in 0-255) against VTK's PT
 and against the reference, and writes a picture: per case, MTPT, VTK's PT, the reference.
 
-usage: PYTHONPATH=build/lib/python3/dist-packages scripts/dependent-components.py
+usage: PYTHONPATH=build/lib/python3/dist-packages scripts/figures/dependent-components.py
          [--size 256] [--extent 15] [--picture dependent_components.png]
 Runs with Debian's python3 (python3-vtk9) under an X server (xvfb-run -a when headless)."""
 import argparse

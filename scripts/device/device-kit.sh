@@ -4,8 +4,8 @@
 # from). Unpacked anywhere, its device-bench.sh runs every measurement
 # (Documentation/gpu-and-cores.md).
 #
-# Usage: scripts/device-kit.sh [--smoke-test]
-#   Builds MTPT (Release, scripts/build-example.sh) and packs the kit. --smoke-test then
+# Usage: scripts/device/device-kit.sh [--smoke-test]
+#   Builds MTPT (Release, scripts/install/build-example.sh) and packs the kit. --smoke-test then
 #   unpacks it in a bare Debian chroot (debootstrap minbase: no VTK, no X, no Mesa; a newer
 #   glibc than the kit's) and runs `device-bench.sh --smoke` there with Mesa's software
 #   renderer; its outputs land in build/device-kit-smoke/. Fails when the archive is larger
@@ -15,14 +15,14 @@
 #   libexec/   mtpt_render and the benchmark programs it runs; Xvfb and xkbcomp
 #   bin/       one launcher each: the program through the kit's own loader with
 #              --library-path lib (glibc included, so nothing of the other machine mixes in)
-#   lib/       the shared-library closure of all of them (scripts/device-kit-libraries.py),
+#   lib/       the shared-library closure of all of them (scripts/device/device-kit-libraries.py),
 #              Mesa's GLX library and lib/dri/swrast_dri.so (llvmpipe)
 #   share/X11/xkb, data/bluntfin/, device-bench.sh, README.txt, MANIFEST.txt
 # Debian's VTK draws in X windows only (GLX), so the GPU is reached through a carried Xvfb
 # with glvnd choosing NVIDIA's GLX library (__GLX_VENDOR_LIBRARY_NAME=nvidia), as the
 # machine's notes record it working; the Xvfb itself needs Mesa for its own GLX.
 set -euo pipefail
-here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 build="$here/build"
 stage="$build/device-kit/mtpt-device-kit"
 archive="$build/device-kit.tar.xz"
@@ -36,25 +36,25 @@ esac
 log() { echo "device-kit: $*" >&2; }
 started=$(date +%s)
 
-"$here/scripts/build-example.sh" >/dev/null
+"$here/scripts/install/build-example.sh" >/dev/null
 programs=("$build/example/mtpt_render" "$build/Benchmarks/mtpt_bench_frames"
   "$build/Benchmarks/mtpt_bench_threads" "$build/Benchmarks/mtpt_bench_core" /usr/bin/Xvfb
   /usr/bin/xkbcomp)
 multiarch=/usr/lib/x86_64-linux-gnu
 mesa=("$multiarch/libGLX_mesa.so.0" "$multiarch/dri/swrast_dri.so")
 for f in "${programs[@]}" "${mesa[@]}" /usr/share/X11/xkb/rules/evdev; do
-  [ -e "$f" ] || { log "missing $f (scripts/install-deps.sh installs what the kit needs)"; exit 1; }
+  [ -e "$f" ] || { log "missing $f (scripts/install/install-deps.sh installs what the kit needs)"; exit 1; }
 done
 
 rm -rf "$build/device-kit"
 mkdir -p "$stage"/{bin,libexec,lib/dri,share/X11,data/bluntfin}
-python3 "$here/scripts/device-kit-libraries.py" --into "$stage/lib" \
+python3 "$here/scripts/device/device-kit-libraries.py" --into "$stage/lib" \
   --stub libz3.so.4 --stub libxml2.so.2 "${programs[@]}" "${mesa[@]}"
 cp "$multiarch/libGLX_mesa.so.0" "$stage/lib/"
 cp "$multiarch/dri/swrast_dri.so" "$stage/lib/dri/"
 cp -rL /usr/share/X11/xkb "$stage/share/X11/xkb"
 cp "$here/Data/bluntfin_tets.vtu" "$stage/data/bluntfin/"
-cp "$here/scripts/device-bench.sh" "$stage/device-bench.sh"
+cp "$here/scripts/device/device-bench.sh" "$stage/device-bench.sh"
 
 for program in "${programs[@]}"; do
   name="$(basename "$program")"
@@ -128,8 +128,8 @@ chroot_packages=()
 chroot_binds=()
 chroot_env=(OMP_NUM_THREADS)
 chroot_name=device-kit
-# shellcheck source=scripts/debian-chroot.sh
-. "$here/scripts/debian-chroot.sh"
+# shellcheck source=scripts/install/debian-chroot.sh
+. "$here/scripts/install/debian-chroot.sh"
 chroot_prepare
 work="$(mktemp -d "$chroot_root/tmp/device-kit.XXXXXX")"
 trap 'rm -rf "$work"' EXIT

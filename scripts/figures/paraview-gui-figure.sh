@@ -1,21 +1,21 @@
 #!/usr/bin/env bash
 # The picture of ParaView 6.1's window with the plugin (Documentation/paraview.md): in the
-# Debian unstable chroot, ParaView's GUI on a private Xvfb runs scripts/paraview_gui_scene.py
+# Debian unstable chroot, ParaView's GUI on a private Xvfb runs scripts/figures/paraview_gui_scene.py
 # (the plugin loaded, the blunt fin shown as "Multi-threaded projected tetra"), and xwd
 # takes the screen once the scene is up.
 #
-# Usage: scripts/paraview-gui-figure.sh [output.png]   (default Documentation/paraview_6.1_gui.png)
-# Needs the plugin built in build-sid-plugin (scripts/test-sid.sh builds it).
+# Usage: scripts/figures/paraview-gui-figure.sh [output.png]   (default Documentation/paraview_6.1_gui.png)
+# Needs the plugin built in build-sid-plugin (scripts/ci/test-sid.sh builds it).
 set -euo pipefail
-here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 output="$(realpath -m "${1:-$here/Documentation/paraview_6.1_gui.png}")"
 plugin="$(find "$here/build-sid-plugin/lib" -name MTPT.so -path '*/plugins/MTPT/*' 2>/dev/null | head -n 1)"
-[ -n "$plugin" ] || { echo "paraview-gui-figure: no plugin in build-sid-plugin (run scripts/test-sid.sh)" >&2; exit 1; }
+[ -n "$plugin" ] || { echo "paraview-gui-figure: no plugin in build-sid-plugin (run scripts/ci/test-sid.sh)" >&2; exit 1; }
 case "$output" in "$here"/*) ;; *) echo "paraview-gui-figure: write inside the checkout" >&2; exit 1 ;; esac
 work="$here/build-sid-plugin/gui-figure"
 # A home of its own; --dr (no user settings) also leaves out the welcome dialog.
 rm -rf "$work" && mkdir -p "$work/home"
-"$here/scripts/sid-chroot.sh" bash -c '
+"$here/scripts/install/sid-chroot.sh" bash -c '
   set -euo pipefail
   work="$1"; plugin="$2"; data="$3"; scene="$4"; output="$5"
   command -v xwd >/dev/null || { echo "paraview-gui-figure: xwd missing in the chroot" >&2; exit 1; }
@@ -47,4 +47,4 @@ rgb = quads[:, :, 2::-1] if order == 0 else quads[:, :, 1:]
 Image.fromarray(rgb.copy()).save(sys.argv[2])
 print("paraview-gui-figure:", sys.argv[2], width, "x", height)
 PY
-' bash "$work" "$plugin" "$here/Data/bluntfin_tets.vtu" "$here/scripts/paraview_gui_scene.py" "$output"
+' bash "$work" "$plugin" "$here/Data/bluntfin_tets.vtu" "$here/scripts/figures/paraview_gui_scene.py" "$output"

@@ -114,7 +114,7 @@ def make_stub(soname, importers, real, into):
     if not wanted:
         sys.exit(f"device-kit-libraries: found no symbol imported from {soname}")
     source = [
-        "/* A stub made by the device kit (scripts/device-kit-libraries.py). */",
+        "/* A stub made by the device kit (scripts/device/device-kit-libraries.py). */",
         "#include <stdio.h>",
         "#include <stdlib.h>",
         "static void mtpt_kit_stub_called(const char* symbol) {",

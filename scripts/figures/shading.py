@@ -10,7 +10,7 @@ ignores the shading); then the CPU backend's frame time shaded against unshaded,
 turning before every frame; and writes a picture: a column per case, VTK's GPU ray cast
 below, MTPT (CPU backend, pre-integrated) above.
 
-usage: PYTHONPATH=build/lib/python3/dist-packages scripts/shading.py
+usage: PYTHONPATH=build/lib/python3/dist-packages scripts/figures/shading.py
          [--size 400] [--extent 20] [--frames 7] [--picture shading.png]
 Runs with Debian's python3 (python3-vtk9) under an X server (xvfb-run -a when headless)."""
 import argparse

@@ -10,7 +10,7 @@ is taken, the frame time against the renderer's maximum number of peels for MTPT
 backends) and VTK's GPU ray cast (camera turning 1 degree before every frame); and writes a
 picture: MTPT, VTK's GPU ray cast, VTK's PT, the reference.
 
-usage: PYTHONPATH=build/lib/python3/dist-packages scripts/depth-peeling.py
+usage: PYTHONPATH=build/lib/python3/dist-packages scripts/figures/depth-peeling.py
          [--size 300] [--extent 10] [--frames 5] [--spheres 8] [--picture depth_peeling.png]
 Runs with Debian's python3 (python3-vtk9) under an X server (xvfb-run -a when headless).
 VTK's depth peeling needs a single-sampled window: in a multisampled one (VTK's default)

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Sanitizer and fuzzing checks of the core library (mtpt_core). Usage:
-#   scripts/sanitizers.sh [fuzz-seconds]          (default 60; CI: .ci/run)
-#   scripts/sanitizers.sh 3600                    (the long run: an hour of fuzzing)
+#   scripts/ci/sanitizers.sh [fuzz-seconds]          (default 60; CI: .ci/run)
+#   scripts/ci/sanitizers.sh 3600                    (the long run: an hour of fuzzing)
 #
 # Phases (each configures and builds only the core, RelWithDebInfo, Ninja, in its own
 # build folder; every step runs under `timeout` so CI can never hang):
@@ -34,14 +34,14 @@
 # 5,000 executions per second (about 300,000 in 60 s); the whole script with 60 s of fuzzing
 # takes about 4.5 minutes, well inside CI's 10 (7 minutes with the machine loaded 4-fold).
 #
-# The long run, `scripts/sanitizers.sh 3600`, fuzzes for an hour (about 15-20 million
+# The long run, `scripts/ci/sanitizers.sh 3600`, fuzzes for an hour (about 15-20 million
 # executions) after the same asan and tsan phases; it stops at the first failing input
 # unless MTPT_FUZZ_FLAGS="-fork=2 -ignore_crashes=1" asks libFuzzer to go on and collect
 # every distinct one in the artifacts folder. Its work corpus (<fuzz build>/corpus) is kept
 # and resumed by the next run. See README.md, "Sanitizers and fuzzing".
 set -uo pipefail
 
-here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 fuzz_seconds="${1:-60}"
 if ! [[ "$fuzz_seconds" =~ ^[0-9]+$ ]]; then
   echo "usage: $0 [fuzz-seconds]" >&2
@@ -57,7 +57,7 @@ asan_dir="${asan_dir:-$here/build-asan}"
 tsan_dir="${tsan_dir:-$here/build-tsan}"
 fuzz_dir="${fuzz_dir:-$here/build-fuzz}"
 
-"$here/scripts/install-deps.sh" || exit 1
+"$here/scripts/install/install-deps.sh" || exit 1
 
 summary=()
 failed=0

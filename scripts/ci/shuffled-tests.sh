@@ -3,9 +3,9 @@
 # tests shuffled (--gtest_shuffle) by a random seed printed first, so that a test that leans
 # on state another test left (a global VTK setting, a cache) fails here although ctest, one
 # process per test, passes it. Rerun a failure's order with --seed.
-# Usage: scripts/shuffled-tests.sh [build-dir] [--runs N] [--seed S]   (default: build, 1 run)
+# Usage: scripts/ci/shuffled-tests.sh [build-dir] [--runs N] [--seed S]   (default: build, 1 run)
 set -euo pipefail
-here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 build="$here/build"
 runs=1
 seed=""
@@ -35,7 +35,7 @@ for run in $(seq "$runs"); do
     if [ "$status" != 0 ]; then
       grep -E '^\[  FAILED  \]' "$build/shuffled-$(basename "$program").log" | sort -u || true
       echo "shuffled-tests: $(basename "$program") FAILED with seed $s (log:" \
-        "$build/shuffled-$(basename "$program").log; again: scripts/shuffled-tests.sh --seed $s)"
+        "$build/shuffled-$(basename "$program").log; again: scripts/ci/shuffled-tests.sh --seed $s)"
       exit 1
     fi
     echo "shuffled-tests: passed in $(($(date +%s) - started)) s"

@@ -10,7 +10,7 @@ colours change (the same order composited again), and what the moving-plane fram
 and writes a picture: MTPT without planes, MTPT with them, VTK's GPU ray cast with them, the
 reference.
 
-usage: PYTHONPATH=build/lib/python3/dist-packages scripts/clipping-planes.py
+usage: PYTHONPATH=build/lib/python3/dist-packages scripts/figures/clipping-planes.py
          [--size 400] [--extent 20] [--frames 7] [--picture clipping_planes.png]
 Runs with Debian's python3 (python3-vtk9) under an X server (xvfb-run -a when headless)."""
 import argparse

@@ -4,7 +4,7 @@
 # window (multisampled) and single-sampled, ratios taking each mapper in its faster window,
 # the camera turning before every timed frame, medians, stages apart from the frame).
 #
-# Usage: scripts/benchmark.sh PROGRAM [arguments...]
+# Usage: scripts/figures/benchmark.sh PROGRAM [arguments...]
 #   core      mtpt_bench_core: the core's CPU stages, visibility orders against library sorts
 #   frames    mtpt_bench_frames: whole frames, MTPT's backends against VTK's mappers
 #   scaling   mtpt_bench_scaling: frame time against mesh size or window size, with a plot
@@ -15,7 +15,7 @@
 # Real meshes beyond the repository's (comb, kiefer, pulley, fire_ug, ironProt) come from
 # the folder in MTPT_DATA_DIR, when set; `--help` after the program name lists its options.
 set -euo pipefail
-here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 build="${MTPT_BUILD_DIR:-$here/build}"
 program="${1:-}"
 case "$program" in
@@ -25,7 +25,7 @@ case "$program" in
     exit 2
     ;;
 esac
-"$here/scripts/install-deps.sh" >/dev/null
+"$here/scripts/install/install-deps.sh" >/dev/null
 cmake -S "$here" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$build" --parallel "$(nproc)" --target "mtpt_bench_$program"
 if [ "$program" = core ]; then

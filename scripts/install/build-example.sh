@@ -4,10 +4,10 @@
 # Installs the Debian packages that are missing first. Used by scripts/render.sh and
 # scripts/device-kit.sh.
 set -euo pipefail
-here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 build="$here/build"
 
-"$here/scripts/install-deps.sh"
+"$here/scripts/install/install-deps.sh"
 cmake -S "$here" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$build" --parallel "$(nproc)"
 cmake --install "$build" --prefix "$build/install" >/dev/null

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The device kit's measurements (scripts/device-kit.sh packs this file at the kit's top):
+# The device kit's measurements (scripts/device/device-kit.sh packs this file at the kit's top):
 # MTPT on a machine with a GPU and many cores, from the kit alone, in at most 8 minutes.
 #
 # Usage: device-bench.sh [--smoke] OUTDIR

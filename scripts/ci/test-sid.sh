@@ -4,10 +4,10 @@
 # builds the ParaView plugin against ParaView 6.1 and runs its tests: scripts/test.sh,
 # inside the chroot made or reused by scripts/sid-chroot.sh.
 #
-# Usage: scripts/test-sid.sh [build-dir]   (default: build-sid, in this checkout; the
+# Usage: scripts/ci/test-sid.sh [build-dir]   (default: build-sid, in this checkout; the
 #        plugin's tree is <build-dir>-plugin)
 set -euo pipefail
-here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 build="${1:-build-sid}"
 case "$build" in
 /*) ;;
@@ -22,6 +22,6 @@ case "$build" in
   ;;
 esac
 started=$(date +%s)
-"$here/scripts/sid-chroot.sh" | sed 's/^/test-sid: /' # the versions of the stack
-"$here/scripts/sid-chroot.sh" bash "$here/scripts/test.sh" "$build"
+"$here/scripts/install/sid-chroot.sh" | sed 's/^/test-sid: /' # the versions of the stack
+"$here/scripts/install/sid-chroot.sh" bash "$here/scripts/test.sh" "$build"
 echo "test-sid: today's stack built and tested in $(($(date +%s) - started)) s"

@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: BSD-3-Clause
 """Start-up script for ParaView's GUI (paraview --script=...), used by
-scripts/paraview-gui-figure.sh: loads the plugin, opens a mesh, shows it as the
+scripts/figures/paraview-gui-figure.sh: loads the plugin, opens a mesh, shows it as the
 "Multi-threaded projected tetra" representation coloured by Density, then writes a marker
 file so that the caller knows the window is ready for its screenshot.
 

@@ -8,7 +8,7 @@ compiling it. Exit status 1 with one line per function over the limit.
 --self-test first checks that the measure sees a function of limit + 1 lines in each
 language and passes one of exactly the limit.
 
-usage: scripts/check-function-length.py [--limit N] [--self-test] [SOURCE-DIR]
+usage: scripts/checks/check-function-length.py [--limit N] [--self-test] [SOURCE-DIR]
 """
 import argparse
 import os
@@ -66,7 +66,7 @@ def self_test(limit):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("source", nargs="?",
-                        default=os.path.join(os.path.dirname(__file__), "..", "Source"))
+                        default=os.path.join(os.path.dirname(__file__), "..", "..", "Source"))
     parser.add_argument("--limit", type=int, default=80)
     parser.add_argument("--self-test", action="store_true")
     args = parser.parse_args()

@@ -1,5 +1,5 @@
 # Debian chroots cached on this machine, made with debootstrap from the host's own Debian
-# archive: sourced by scripts/sid-chroot.sh (today's stack) and scripts/device-kit.sh (the
+# archive: sourced by scripts/install/sid-chroot.sh (today's stack) and scripts/device/device-kit.sh (the
 # bare chroot the device kit's smoke test runs in). Not a program of its own.
 #
 # The sourcing script sets, before it calls chroot_prepare:

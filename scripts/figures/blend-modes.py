@@ -9,7 +9,7 @@ mode); then the CPU backend's frame time in each mode against composite frames, 
 turning before every frame, with the time of the order stage; and writes a picture: a column
 per mode, VTK's GPU ray cast below, MTPT (CPU backend) above.
 
-usage: PYTHONPATH=build/lib/python3/dist-packages scripts/blend-modes.py
+usage: PYTHONPATH=build/lib/python3/dist-packages scripts/figures/blend-modes.py
          [--size 400] [--extent 20] [--frames 7] [--picture blend_modes.png]
 Runs with Debian's python3 (python3-vtk9) under an X server (xvfb-run -a when headless)."""
 import argparse

@@ -2,7 +2,7 @@
 # Today's stack in a Debian unstable (sid) chroot: VTK 9.6, ParaView 6.1, PyVista, Python
 # 3.14 and Mesa, from Debian's archive, beside the bookworm host and without touching it.
 #
-# Usage: scripts/sid-chroot.sh [COMMAND [ARGS...]]
+# Usage: scripts/install/sid-chroot.sh [COMMAND [ARGS...]]
 #   Makes the chroot, or reuses the one cached on this machine, then runs COMMAND inside it
 #   (default: print the versions) in this checkout, which is bind-mounted at the same path.
 #   The exit status is COMMAND's.
@@ -11,7 +11,7 @@
 # checkout, so every clone and every CI run on the machine shares it. How it is made, kept
 # up to date with the archive and entered: scripts/debian-chroot.sh.
 set -euo pipefail
-here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 chroot_root="${MTPT_SID_CHROOT:-/var/cache/mtpt/sid-chroot}"
 chroot_suite=sid
 
@@ -33,8 +33,8 @@ chroot_workdir="$here"
 chroot_env=(MTPT_IN_SID_CHROOT)
 chroot_name=sid-chroot
 export MTPT_IN_SID_CHROOT=1
-# shellcheck source=scripts/debian-chroot.sh
-. "$here/scripts/debian-chroot.sh"
+# shellcheck source=scripts/install/debian-chroot.sh
+. "$here/scripts/install/debian-chroot.sh"
 chroot_prepare
 
 if [ $# -eq 0 ]; then
