@@ -539,7 +539,6 @@ TEST(Compositor, DepthRangesSplitSegmentsExactly)
         {
           const float over = front[4 * i + c] + (1.0f - front[4 * i + 3]) * back[4 * i + c];
           worstAll = std::max(worstAll, std::fabs(double(all[4 * i + c]) - whole[4 * i + c]));
-          if (std::fabs(double(all[4 * i + c]) - whole[4 * i + c]) > 5e-5) { static int shown = 0; if (shown++ < 8) printf("DBG px %d,%d c=%d all=%.6f whole=%.6f alpha all %.6f whole %.6f\n", i % w, i / w, c, all[4*i+c], whole[4*i+c], all[4*i+3], whole[4*i+3]); }
           worstSplit = std::max(worstSplit, std::fabs(double(over) - whole[4 * i + c]));
           ASSERT_EQ(none[4 * i + c], 0.0f);
         }
