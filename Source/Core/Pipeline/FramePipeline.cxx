@@ -176,6 +176,7 @@ void FramePipeline::ForgetFrom(std::size_t first)
   {
     stages[i]->Forget();
   }
+  this->LightsRecord.Forget(); // lit from the decompositions forgotten here
 }
 
 void FramePipeline::Release()
@@ -184,7 +185,98 @@ void FramePipeline::Release()
   {
     stage->Release();
   }
+  this->LightsRecord.Forget();
+  std::vector<LightFactors>().swap(this->Lights);
   this->SortedSize = this->BatchCount = this->FanBatchCount = 0;
+}
+
+void ApplyPlan(const FramePlan& plan, FrameInput& input)
+{
+  if (!plan.cullOpacity)
+  {
+    input.opacity = TransferFunctionTable{};
+    input.opacityVersion = 0;
+  }
+  input.cullFrustum = plan.cullFrustum;
+  input.imageSize = plan.cullPixels ? plan.imageSize : ImageSize{};
+  input.cellFraction = plan.cellFraction;
+  input.ordered = plan.ordered;
+  input.lit = plan.lit;
+}
+
+MemoryVerdict CheckMemory(const MemoryNeed& need, std::size_t limit, std::size_t held,
+  const std::function<std::size_t()>& available)
+{
+  MemoryVerdict verdict;
+  verdict.bytes = FramePipeline::BytesNeeded(need);
+  verdict.limit = limit > 0 ? limit : held + available();
+  verdict.fits = verdict.bytes <= verdict.limit;
+  return verdict;
+}
+
+BatchesDrawn FramePipeline::DrawBatches(const FramePlan& plan, const BatchDrawer& draw)
+{
+  BatchesDrawn drawn;
+  const std::size_t total = this->SortedSize;
+  const std::size_t batch = std::max<std::size_t>(
+    1, plan.batchSize > 0 ? std::min(total, plan.batchSize) : total);
+  for (std::size_t first = 0; first < total; first += batch)
+  {
+    Batch b;
+    b.first = first;
+    if (plan.target == BatchTarget::Fans)
+    {
+      this->DecomposeFans(first, batch, plan.threads);
+      b.count = this->FanBatchCount;
+      b.fans = this->FanBuffers.Fans().data();
+      b.version = this->FanBuffers.Version();
+    }
+    else
+    {
+      this->DecomposeBatch(first, batch, plan.threads);
+      b.count = this->BatchCount;
+      b.vertices = this->Slots.Vertices().data();
+      b.indices = this->Slots.Indices().data();
+      b.version = this->Slots.Version();
+    }
+    if (this->FrameShading.lit)
+    {
+      b.lights = this->LightBatch(plan.target, first, batch, plan.threads);
+      b.lightsVersion = this->LightsRecord.Version();
+    }
+    ++drawn.batches;
+    if (!draw(b))
+    {
+      drawn.failed = true;
+      return drawn;
+    }
+    const std::size_t done = std::min(total, first + batch);
+    if (done < total && this->AfterBatch &&
+      !this->AfterBatch(static_cast<double>(done) / static_cast<double>(total)))
+    {
+      drawn.stopped = true;
+      break;
+    }
+  }
+  return drawn;
+}
+
+const LightFactors* FramePipeline::LightBatch(
+  BatchTarget target, std::size_t first, std::size_t count, int threads)
+{
+  const FrameLighting& l = this->FrameShading;
+  LightKey key;
+  key.target = target;
+  key.buffers = target == BatchTarget::Fans ? this->FanBuffers.Version() : this->Slots.Version();
+  key.lighting = l.lighting;
+  key.normals = l.normalsVersion;
+  key.modelView = l.modelView;
+  if (!this->LightsRecord.Holds(key))
+  {
+    this->LightWindow(first, count, l.lighting, l.normals, l.modelView, this->Lights, threads);
+    this->LightsRecord.Store(key);
+  }
+  return this->Lights.data();
 }
 
 bool FramePipeline::Run(const FrameInput& input, int threads)
@@ -230,6 +322,8 @@ bool FramePipeline::Prepare(const FrameInput& input, int threads)
   }
   const MeshKey mesh =
     MeshKey::Of(input.points, input.cells, input.scalars, input.colours, input.dataVersion);
+  this->FrameShading = { input.lit, input.lighting, input.normals, input.normalsVersion,
+    input.modelView };
 
   // 1. Transform.
   const bool projected = Timed(this->LastTimes.transform,

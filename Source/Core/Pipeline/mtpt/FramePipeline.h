@@ -36,6 +36,7 @@
 #include "mtpt/Culling.h"
 #include "mtpt/Decompose.h"
 #include "mtpt/DepthKeys.h"
+#include "mtpt/FramePlan.h"
 #include "mtpt/LevelOfDetail.h"
 #include "mtpt/Lighting.h"
 #include "mtpt/NearPlane.h"
@@ -113,11 +114,28 @@ struct FrameInput
   /// False when the blend mode reduces fragments in any order (BlendMode): the cells are
   /// culled as always but kept in cell order, and nothing is sorted.
   bool ordered = true;
+  /**
+   * Shading (Lighting.h; FramePlan::lit): each cell lit by `lighting` with its normal of
+   * `normals` (CellNormals: 3 floats per cell, model coordinates; `normalsVersion` changes
+   * whenever they do), in the batches of DrawBatches. False: unlit.
+   */
+  bool lit = false;
+  Lighting lighting;
+  const float* normals = nullptr;
+  std::uint64_t normalsVersion = 0;
   /// Change counters, read only with reuse on (FramePipeline::SetReuse): change
   /// `dataVersion` whenever the content of the points, cells or scalars changes, and
   /// `opacityVersion` whenever the content of the opacity table changes.
   std::uint64_t dataVersion = 0, opacityVersion = 0;
 };
+
+/**
+ * Sets what `plan` decides of `input`: the culling (the opacity table is left out when the
+ * plan does not cull by it; the composited image's size only where cells covering no pixel
+ * centre may be culled), the cell fraction, the order and the lighting. The data, matrices,
+ * table and lights stay the caller's.
+ */
+void ApplyPlan(const FramePlan& plan, FrameInput& input);
 
 /**
  * Called after each stage of Prepare with the stage just finished; returning false stops
@@ -126,22 +144,70 @@ struct FrameInput
  */
 using StageCallback = std::function<bool(Stage)>;
 
-/// What FramePipeline::BytesNeeded bounds the buffers of.
-struct MemoryNeed
+/// The lighting of a frame (FrameInput::lit and what it reads), as Prepare took it.
+struct FrameLighting
 {
-  std::size_t points = 0; ///< the mesh's points
-  std::size_t cells = 0;  ///< its tetrahedra
-  /// The largest window decomposed at once (DecomposeBatch, DecomposeFans); clamped to the
-  /// cells and pieces.
-  std::size_t batch = 0;
-  bool slots = false;         ///< windows decomposed into slots (the OpenGL backend)
-  bool fans = false;          ///< windows decomposed into fans (the CPU compositor)
-  bool levelOfDetail = false; ///< frames with a cell fraction below 1
-  int threads = 1;            ///< OpenMP threads (0: all; the radix order's counts)
-  /// Near-plane pieces: at most 3 per cell the near plane cuts, so they grow with the cut's
-  /// area, not with the mesh. 0 leaves them out.
-  std::size_t pieces = 0;
+  bool lit = false;
+  Lighting lighting;
+  const float* normals = nullptr;
+  std::uint64_t normalsVersion = 0;
+  Matrix4 modelView = IdentityMatrix();
 };
+
+/// How FramePipeline::DrawBatches ended.
+struct BatchesDrawn
+{
+  int batches = 0;      ///< batches decomposed and handed to the drawer
+  bool stopped = false; ///< the batch callback stopped the frame (what was drawn stays)
+  bool failed = false;  ///< the drawer failed on a batch; no later batch was drawn
+};
+
+/**
+ * One window of the order, decomposed into the plan's target and lit where the plan is,
+ * for a backend to draw (FramePipeline::DrawBatches). Valid until the next batch.
+ */
+struct Batch
+{
+  std::size_t first = 0; ///< the rank of its first cell
+  std::size_t count = 0; ///< its fans or slots
+  /// BatchTarget::Fans: `count` fans. Slots: `count` slots of VerticesPerTetrahedron
+  /// vertices and IndicesPerTetrahedron indices each.
+  const Fan* fans = nullptr;
+  const TetVertex* vertices = nullptr;
+  const std::uint32_t* indices = nullptr;
+  /// Lit frames: each fan's or slot's lighting (Lighting.h); null when unlit.
+  const LightFactors* lights = nullptr;
+  /// Change whenever the buffers' (the lights') content changes: a consumer that copied
+  /// them (an OpenGL upload) is current exactly when it holds these.
+  std::uint64_t version = 0, lightsVersion = 0;
+};
+
+/// Draws one batch; false when drawing failed (no later batch is drawn).
+using BatchDrawer = std::function<bool(const Batch&)>;
+
+/**
+ * Called after each batch but the last with the fraction of the order drawn so far;
+ * returning false stops the frame there. The mapper reports progress and polls the render
+ * window's abort flag with it.
+ */
+using BatchCallback = std::function<bool(double)>;
+
+/// What the memory policy found for a frame (CheckMemory).
+struct MemoryVerdict
+{
+  bool fits = true;
+  std::size_t bytes = 0; ///< FramePipeline::BytesNeeded of the frame
+  std::size_t limit = 0; ///< what it was compared with
+};
+
+/**
+ * The memory policy: a frame of `need` fits when FramePipeline::BytesNeeded(need) is at most
+ * `limit`, or, with `limit` 0, at most the memory `available()` returns (asked only then)
+ * plus the `held` bytes the pipeline's buffers take already (they are reused). Thread-safe
+ * when `available` is.
+ */
+MemoryVerdict CheckMemory(const MemoryNeed& need, std::size_t limit, std::size_t held,
+  const std::function<std::size_t()>& available);
 
 /**
  * Runs the CPU stages and keeps their results until the next frame. Buffers grow to the
@@ -174,6 +240,8 @@ public:
 
   /// Called after each stage of Prepare (see StageCallback); empty: none.
   void SetStageCallback(StageCallback callback) { this->Callback = std::move(callback); }
+  /// Called after each batch of DrawBatches but the last (see BatchCallback); empty: none.
+  void SetBatchCallback(BatchCallback callback) { this->AfterBatch = std::move(callback); }
 
   /**
    * Stages 1 to 4 and the order's inverse: transform, culling, keys (with the near plane),
@@ -220,6 +288,15 @@ public:
   /// Prepare, then decompose the whole order in one batch.
   bool Run(const FrameInput& input, int threads);
 
+  /**
+   * Stage 5 for the whole frame: after Prepare, the order in windows of `plan.batchSize`
+   * cells (all at once for 0), back to front; each decomposed into the plan's target,
+   * lit (FrameInput::lit), then handed to `draw`. Between batches the batch callback may stop
+   * the frame. The backends draw what this gives them; they decompose nothing themselves.
+   * Deterministic: the batches' content is the same for any thread count.
+   */
+  BatchesDrawn DrawBatches(const FramePlan& plan, const BatchDrawer& draw);
+
   const StageTimes& Times() const { return LastTimes; }
   const FrameStats& Stats() const { return LastStats; }
   /// Cells in the order (after culling): the slots of the whole frame.
@@ -246,6 +323,8 @@ public:
   std::uint64_t BufferVersion() const { return this->Slots.Version(); }
   /// Changes whenever the visibility order (or the set of cells in it) changes.
   std::uint64_t OrderVersionNumber() const { return this->Order.Version(); }
+  /// The lighting of the last Prepare.
+  const FrameLighting& LightingOfFrame() const { return this->FrameShading; }
   /// The view's projected points and the inputs of the decomposition of the last Prepare.
   const DecomposeInput& Decomposition() const { return this->DecomposeState; }
 
@@ -312,9 +391,32 @@ private:
   OrderMutation Mutation = OrderMutation::None;
   bool Reuse = false;
   StageCallback Callback;
+  BatchCallback AfterBatch;
 
   // The frame being prepared.
   DecomposeInput DecomposeState;
+  FrameLighting FrameShading;
+  /// A lit batch's lighting (DrawBatches), and what it was computed from: kept while the
+  /// batch's buffers, the lights, the normals and the view stay the same. A window's
+  /// factors, left out of MemoryBytes as the caller's normals are.
+  struct LightKey
+  {
+    BatchTarget target = BatchTarget::Fans;
+    std::uint64_t buffers = 0; ///< the target's buffer version
+    Lighting lighting;
+    std::uint64_t normals = 0;
+    Matrix4 modelView = IdentityMatrix();
+    bool operator==(const LightKey& o) const
+    {
+      return target == o.target && buffers == o.buffers && lighting == o.lighting &&
+        normals == o.normals && modelView == o.modelView;
+    }
+  };
+  /// The lighting of the batch [first, first + count) just decomposed into `target`.
+  const LightFactors* LightBatch(
+    BatchTarget target, std::size_t first, std::size_t count, int threads);
+  StageRecord<LightKey> LightsRecord;
+  std::vector<LightFactors> Lights;
   std::size_t SortedSize = 0, BatchCount = 0, FanBatchCount = 0;
   bool WasStopped = false;
   StageTimes LastTimes;
