@@ -76,10 +76,6 @@ bool AllocationFaultInjected()
   return fault && std::strcmp(fault, "allocation") == 0;
 }
 
-/// Samples per pixel side at most, for image sample distances below 1: the image and its
-/// buffers grow with the square of it.
-constexpr int MaximumSamplesPerPixel = 4;
-
 /// Fraction of a frame's progress reached at the end of each pipeline stage; the backend's
 /// batches share the rest.
 double StageProgress(mtpt::Stage stage)
@@ -112,7 +108,6 @@ public:
   std::vector<float> Normals;
   mtpt::MeshKey NormalsKey;
   std::uint64_t NormalsVersion = 0;
-  mtpt::Lighting Lighting;
   mtpt::VolumetricPeel Peel;
   /// The pass peeling volumes this frame (depth peeling for volumes), and the volume drawn.
   vtkOpenGLRenderPass* PeelPass = nullptr;
@@ -144,8 +139,9 @@ public:
   /// When the current and the last frame started (Render's entry; none before the first).
   mtpt::Clock::time_point FrameStart, LastFrameStart;
 
-  // The last frame.
-  mtpt::BackendTimes Times;
+  // The last frame: its plan, and what its drawing measured.
+  mtpt::FramePlan Plan;
+  mtpt::DrawTimes Times;
   int LastBackend = OPENGL_BACKEND;
   vtkIdType Tetrahedra = 0;
   bool Stopped = false;
@@ -158,6 +154,24 @@ public:
    * time of the object it is about, not every frame (several messages about one object
    * each appear once, not in turn every frame).
    */
+  /// The last frame's record: the pipeline's times and counts, the drawing's, the
+  /// compositor's.
+  mtpt::FrameStatistics Statistics() const
+  {
+    mtpt::FrameStatistics statistics;
+    statistics.stages = this->Pipeline.Times();
+    statistics.counts = this->Pipeline.Stats();
+    statistics.drawing = this->Times;
+    statistics.cpu = this->LastBackend == CPU_BACKEND;
+    if (statistics.cpu)
+    {
+      statistics.compositor = this->CPU.Stats();
+    }
+    statistics.tetrahedra = static_cast<std::size_t>(this->Tetrahedra);
+    statistics.stopped = this->Stopped;
+    return statistics;
+  }
+
   bool Report(vtkObject* cause, const std::string& message)
   {
     const vtkMTimeType time = cause ? cause->GetMTime() : 0;
@@ -235,36 +249,28 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetMemoryLimit(vtkIdType bytes)
     "SetMemoryLimit", "the limit", "the memory available", bytes, this->MemoryLimit);
 }
 
-bool vtkMultiThreadedProjectedTetrahedraMapper::FitsInMemory(const mtpt::FrameInput& frame)
+bool vtkMultiThreadedProjectedTetrahedraMapper::FitsInMemory(const mtpt::FramePlan& plan)
 {
-  Internals& in = *this->Internal;
-  mtpt::MemoryNeed need;
-  need.points = frame.points.count;
-  need.cells = frame.cells.cellCount;
-  need.batch = this->BatchSize > 0 ? static_cast<std::size_t>(this->BatchSize) : need.cells;
-  need.slots = in.LastBackend == OPENGL_BACKEND;
-  need.fans = !need.slots;
-  need.levelOfDetail = frame.cellFraction < 1 || this->AutoAdjustCellFraction;
-  need.threads = this->NumberOfThreads;
-  const std::size_t bytes = mtpt::FramePipeline::BytesNeeded(need);
-  const std::size_t held = in.Pipeline.MemoryBytes();
-  std::size_t limit = static_cast<std::size_t>(this->MemoryLimit);
-  if (limit == 0)
-  {
-    vtksys::SystemInformation system;
-    system.RunMemoryCheck();
-    limit = held + (static_cast<std::size_t>(system.GetAvailablePhysicalMemory()) << 20);
-  }
-  if (bytes <= limit)
+  const mtpt::MemoryNeed& need = plan.memory;
+  const mtpt::MemoryVerdict verdict =
+    mtpt::CheckMemory(need, static_cast<std::size_t>(this->MemoryLimit),
+      this->Internal->Pipeline.MemoryBytes(),
+      []
+      {
+        vtksys::SystemInformation system;
+        system.RunMemoryCheck();
+        return static_cast<std::size_t>(system.GetAvailablePhysicalMemory()) << 20;
+      });
+  if (verdict.fits)
   {
     return true;
   }
   const auto mib = [](std::size_t b) { return (b + (1u << 20) - 1) >> 20; };
   std::ostringstream text;
   text << "drawing " << need.cells << " tetrahedra (" << need.points << " points) needs up to "
-       << mib(bytes) << " MiB of buffers, over "
-       << (this->MemoryLimit > 0 ? "the memory limit of " : "the memory available, ") << mib(limit)
-       << " MiB" << (this->MemoryLimit > 0 ? " (SetMemoryLimit)" : "")
+       << mib(verdict.bytes) << " MiB of buffers, over "
+       << (this->MemoryLimit > 0 ? "the memory limit of " : "the memory available, ")
+       << mib(verdict.limit) << " MiB" << (this->MemoryLimit > 0 ? " (SetMemoryLimit)" : "")
        << "; nothing was drawn. A smaller batch size (SetBatchSize, now " << this->BatchSize
        << "), a larger limit or fewer cells may fit";
   vtkErrorMacro(<< text.str()); // every frame: each draws nothing
@@ -347,21 +353,7 @@ const char* vtkMultiThreadedProjectedTetrahedraMapper::GetShadingModeAsString()
 
 const char* vtkMultiThreadedProjectedTetrahedraMapper::GetBlendModeAsString()
 {
-  switch (this->BlendMode)
-  {
-    case COMPOSITE_BLEND:
-      return "Composite";
-    case MAXIMUM_INTENSITY_BLEND:
-      return "MaximumIntensity";
-    case MINIMUM_INTENSITY_BLEND:
-      return "MinimumIntensity";
-    case AVERAGE_INTENSITY_BLEND:
-      return "AverageIntensity";
-    case ADDITIVE_BLEND:
-      return "Additive";
-    default:
-      return "Unknown";
-  }
+  return mtpt::BlendModeName(this->BlendMode);
 }
 
 const char* vtkMultiThreadedProjectedTetrahedraMapper::GetBackendAsString()
@@ -372,58 +364,56 @@ const char* vtkMultiThreadedProjectedTetrahedraMapper::GetBackendAsString()
 
 double vtkMultiThreadedProjectedTetrahedraMapper::GetTransformSeconds()
 {
-  return this->Internal->Pipeline.Times().transform;
+  return this->Internal->Statistics().stages.transform;
 }
 double vtkMultiThreadedProjectedTetrahedraMapper::GetDepthKeySeconds()
 {
-  return this->Internal->Pipeline.Times().keys;
+  return this->Internal->Statistics().stages.keys;
 }
 double vtkMultiThreadedProjectedTetrahedraMapper::GetCullSeconds()
 {
-  const mtpt::StageTimes& times = this->Internal->Pipeline.Times();
-  return times.cull + times.select;
+  const mtpt::StageTimes stages = this->Internal->Statistics().stages;
+  return stages.cull + stages.select;
 }
 double vtkMultiThreadedProjectedTetrahedraMapper::GetOrderSeconds()
 {
-  return this->Internal->Pipeline.Times().order;
+  return this->Internal->Statistics().stages.order;
 }
 double vtkMultiThreadedProjectedTetrahedraMapper::GetDecomposeSeconds()
 {
-  return this->Internal->Pipeline.Times().decompose;
+  return this->Internal->Statistics().stages.decompose;
 }
 double vtkMultiThreadedProjectedTetrahedraMapper::GetLightingSeconds()
 {
-  return this->Internal->Pipeline.Times().light;
+  return this->Internal->Statistics().stages.light;
 }
 double vtkMultiThreadedProjectedTetrahedraMapper::GetCPUStageSeconds()
 {
-  return this->Internal->Pipeline.Times().Total();
+  return this->Internal->Statistics().stages.Total();
 }
 double vtkMultiThreadedProjectedTetrahedraMapper::GetUploadSeconds()
 {
-  return this->Internal->Times.upload;
+  return this->Internal->Statistics().drawing.upload;
 }
 double vtkMultiThreadedProjectedTetrahedraMapper::GetDrawSeconds()
 {
-  return this->Internal->Times.draw;
+  return this->Internal->Statistics().drawing.draw;
 }
 double vtkMultiThreadedProjectedTetrahedraMapper::GetCompositeSeconds()
 {
-  return this->Internal->Times.composite;
+  return this->Internal->Statistics().drawing.composite;
 }
 double vtkMultiThreadedProjectedTetrahedraMapper::GetBinSeconds()
 {
-  return this->Internal->LastBackend == CPU_BACKEND ? this->Internal->CPU.Stats().binSeconds : 0;
+  return this->Internal->Statistics().compositor.binSeconds;
 }
 double vtkMultiThreadedProjectedTetrahedraMapper::GetRasterSeconds()
 {
-  return this->Internal->LastBackend == CPU_BACKEND ? this->Internal->CPU.Stats().rasterSeconds : 0;
+  return this->Internal->Statistics().compositor.rasterSeconds;
 }
 vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfFragments()
 {
-  return this->Internal->LastBackend == CPU_BACKEND
-    ? static_cast<vtkIdType>(this->Internal->CPU.Stats().fragments)
-    : 0;
+  return static_cast<vtkIdType>(this->Internal->Statistics().compositor.fragments);
 }
 const char* vtkMultiThreadedProjectedTetrahedraMapper::GetCompositorInstructionSet()
 {
@@ -435,7 +425,7 @@ int vtkMultiThreadedProjectedTetrahedraMapper::GetLastBackend()
 }
 bool vtkMultiThreadedProjectedTetrahedraMapper::GetLastFrameStopped()
 {
-  return this->Internal->Stopped;
+  return this->Internal->Statistics().stopped;
 }
 
 bool vtkMultiThreadedProjectedTetrahedraMapper::IsSoftwareRenderer(const char* renderer)
@@ -456,31 +446,31 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::IsSoftwareRenderer(const char* r
 
 vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfTetrahedra()
 {
-  return this->Internal->Tetrahedra;
+  return static_cast<vtkIdType>(this->Internal->Statistics().tetrahedra);
 }
 vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfCellsLeftOut()
 {
-  return static_cast<vtkIdType>(this->Internal->Pipeline.Stats().leftOut);
+  return static_cast<vtkIdType>(this->Internal->Statistics().counts.leftOut);
 }
 vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfOpacityCulledCells()
 {
-  return static_cast<vtkIdType>(this->Internal->Pipeline.Stats().opacityCulled);
+  return static_cast<vtkIdType>(this->Internal->Statistics().counts.opacityCulled);
 }
 vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfFrustumCulledCells()
 {
-  return static_cast<vtkIdType>(this->Internal->Pipeline.Stats().frustumCulled);
+  return static_cast<vtkIdType>(this->Internal->Statistics().counts.frustumCulled);
 }
 vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfPixelCulledCells()
 {
-  return static_cast<vtkIdType>(this->Internal->Pipeline.Stats().pixelCulled);
+  return static_cast<vtkIdType>(this->Internal->Statistics().counts.pixelCulled);
 }
 vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfNearClippedCells()
 {
-  return static_cast<vtkIdType>(this->Internal->Pipeline.Stats().nearClipped);
+  return static_cast<vtkIdType>(this->Internal->Statistics().counts.nearClipped);
 }
 vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfNearClipPieces()
 {
-  return static_cast<vtkIdType>(this->Internal->Pipeline.Stats().nearPieces);
+  return static_cast<vtkIdType>(this->Internal->Statistics().counts.nearPieces);
 }
 vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfTetrahedralizations()
 {
@@ -488,12 +478,13 @@ vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfTetrahedralizati
 }
 int vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfBatches()
 {
-  return this->Internal->Times.batches;
+  return this->Internal->Statistics().drawing.batches;
 }
 int vtkMultiThreadedProjectedTetrahedraMapper::GetLastFrameReuse()
 {
-  const mtpt::FrameStats& stats = this->Internal->Pipeline.Stats();
-  const bool imageReused = this->Internal->Times.imageReused; // nothing decomposed either
+  const mtpt::FrameStatistics statistics = this->Internal->Statistics();
+  const mtpt::FrameStats& stats = statistics.counts;
+  const bool imageReused = statistics.drawing.imageReused; // nothing decomposed either
   return (stats.transformReused ? REUSED_TRANSFORM : 0) | (stats.orderReused ? REUSED_ORDER : 0) |
     (stats.orderFromPrevious ? ORDER_FROM_PREVIOUS : 0) |
     (stats.decompositionReused || imageReused ? REUSED_DECOMPOSITION : 0) |
@@ -683,7 +674,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
     ~ReleaseThreadsAtEnd() { mtpt::ReleaseIdleThreads(); }
   } releaseThreads;
   Internals& in = *this->Internal;
-  in.Times = mtpt::BackendTimes{};
+  in.Times = mtpt::DrawTimes{};
   in.Tetrahedra = 0;
   in.Stopped = false;
   in.LastFrameStart = in.FrameStart;
@@ -704,11 +695,6 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
   // analysis for the level of detail (DrawPrepared), are not part of the frame.
   const float distance = this->ImageSampleDistance, fraction = this->CellFraction;
   this->AdjustDetail(renderer, volume);
-  // Inside a depth-peeling pass every cell is drawn, as every pixel is: the several volume
-  // passes of one peeled frame must draw the same cells.
-  frame.cellFraction = mtpt::VolumetricPeel::ActivePass(volume, this)
-    ? 1.0
-    : mtpt::CellFractionLevel(this->CellFraction, 0.0);
   const auto start = mtpt::Clock::now();
   in.AnalysisSeconds = 0;
   bool drawn = false;
@@ -754,16 +740,10 @@ double vtkMultiThreadedProjectedTetrahedraMapper::RetrieveFrameInterval()
 void vtkMultiThreadedProjectedTetrahedraMapper::RetrieveFrameCosts(
   double& cellSeconds, double& sampleSeconds, double& viewportSeconds)
 {
-  const Internals& in = *this->Internal;
-  const mtpt::StageTimes& stages = in.Pipeline.Times();
-  cellSeconds = stages.keys + stages.order + stages.decompose + stages.light;
-  sampleSeconds = -1;
-  if (in.LastBackend == CPU_BACKEND && !in.Times.imageReused)
-  {
-    const mtpt::CompositorStats& compositor = in.CPU.Stats();
-    sampleSeconds = compositor.binSeconds + compositor.rasterSeconds;
-  }
-  viewportSeconds = in.Times.viewport;
+  const mtpt::FrameStatistics statistics = this->Internal->Statistics();
+  cellSeconds = statistics.CellSeconds();
+  sampleSeconds = statistics.SampleSeconds();
+  viewportSeconds = statistics.drawing.viewport;
 }
 
 void vtkMultiThreadedProjectedTetrahedraMapper::AdjustDetail(
@@ -814,7 +794,7 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::DrawPrepared(
   mtpt::RenderBackend* backend = this->ChooseBackend();
   this->SetUpFrame(renderer, volume, window, backend, frame, draw);
   this->ReportProgress(window, 0.0);
-  if (!this->FitsInMemory(frame))
+  if (!this->FitsInMemory(in.Plan))
   {
     return false;
   }
@@ -838,8 +818,6 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::DrawPrepared(
     }
     return false;
   }
-  // The level of detail's compensation for the cells left out (mtpt/LevelOfDetail.h).
-  draw.unitDistance /= in.Pipeline.Stats().attenuationScale;
   in.Tetrahedra = static_cast<vtkIdType>(in.Pipeline.SortedCount());
   if (in.Tetrahedra > 0) // else everything is culled: transparent or out of view
   {
@@ -859,134 +837,108 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetUpFrame(vtkRenderer* renderer
   draw.renderer = renderer;
   draw.window = window;
   draw.floatFramebuffer = this->UseFloatingPointFrameBuffer;
-  this->ChooseImageSize(backend, window, draw);
+  draw.synchronizedTiming = this->SynchronizedTiming;
   // Inside a depth-peeling pass's peel loop: the pass's targets are the viewport's size at
-  // the origin, and the volume is composited at that size (no image sample distance).
+  // the origin.
   in.PeelPass = mtpt::VolumetricPeel::ActivePass(volume, this);
   in.PeelVolume = volume;
   if (in.PeelPass)
   {
     draw.peel = &in.Peel;
     draw.origin[0] = draw.origin[1] = 0;
-    draw.imageSize = { draw.size[0], draw.size[1] };
   }
-  this->SetUpClipping(renderer, frame, draw);
-  if (this->CullInvisibleCells)
+  vtkVolumeProperty* property = volume->GetProperty();
+  in.Plan = mtpt::PlanFrame(
+    this->FrameSettingsOf(property), this->FrameFactsOf(renderer, window, backend, frame, draw));
+  for (const mtpt::PlanNote& note : in.Plan.notes)
   {
-    // Cells the opacity function hides are culled (exact: see mtpt/Culling.h), and cells
-    // covering no pixel centre of the composited image where every fragment is sampled at
-    // a pixel centre.
-    frame.opacity = in.Tables.Table();
-    frame.opacityVersion = in.Tables.Version();
-    if (backend->SamplesPixelCentresOnly(draw))
+    if (in.Report(note.about == mtpt::PlanNote::About::Property ? static_cast<vtkObject*>(property)
+                                                                 : this,
+          note.key))
     {
-      frame.imageSize = draw.imageSize;
+      if (note.error)
+      {
+        vtkErrorMacro(<< note.text);
+      }
+      else
+      {
+        vtkWarningMacro(<< note.text);
+      }
     }
   }
-  else
+  this->ImageInUseSize[0] = in.Plan.sampledSize.width;
+  this->ImageInUseSize[1] = in.Plan.sampledSize.height;
+  draw.plan = &in.Plan;
+  draw.pipeline = &in.Pipeline;
+  draw.tables = &in.Tables;
+  frame.opacity = in.Tables.Table();
+  frame.opacityVersion = in.Tables.Version();
+  mtpt::ApplyPlan(in.Plan, frame);
+  if (in.Plan.lit)
   {
-    frame.cullFrustum = false;
+    this->SetUpLighting(renderer, property, frame);
   }
   this->ConfigurePipeline(window);
+}
 
+mtpt::FrameSettings vtkMultiThreadedProjectedTetrahedraMapper::FrameSettingsOf(
+  vtkVolumeProperty* property)
+{
+  mtpt::FrameSettings settings;
+  settings.shading = this->ShadingMode == PRE_INTEGRATED_SHADING ? mtpt::Shading::PreIntegrated
+                                                                 : mtpt::Shading::VTKCompatible;
+  settings.blendMode = this->BlendMode;
+  settings.averageRange[0] = this->AverageIPScalarRange[0];
+  settings.averageRange[1] = this->AverageIPScalarRange[1];
+  settings.shade = property->GetShade(0) != 0;
+  settings.cullInvisibleCells = this->CullInvisibleCells;
+  settings.cellFraction = this->CellFraction;
+  settings.imageSampleDistance = this->ImageSampleDistance;
+  settings.autoAdjustCellFraction = this->AutoAdjustCellFraction != 0;
+  settings.batchSize = static_cast<std::size_t>(this->BatchSize);
+  settings.threads = this->NumberOfThreads;
   std::string warning;
-  draw.unitDistance = mtpt::UnitDistance(volume->GetProperty(), &warning);
-  if (!warning.empty() && in.Report(volume->GetProperty(), warning))
+  settings.unitDistance = mtpt::UnitDistance(property, &warning);
+  if (!warning.empty() && this->Internal->Report(property, warning))
   {
     vtkWarningMacro(<< warning);
   }
-  draw.pipeline = &in.Pipeline;
-  draw.tables = &in.Tables;
-  draw.shading = this->ShadingMode == PRE_INTEGRATED_SHADING ? mtpt::Shading::PreIntegrated
-                                                             : mtpt::Shading::VTKCompatible;
-  draw.vertexColours = in.Dependent;
-  if (in.Dependent && draw.shading == mtpt::Shading::PreIntegrated)
-  {
-    draw.shading = mtpt::Shading::VTKCompatible;
-    if (in.Report(this, "pre-integrated dependent components"))
-    {
-      vtkWarningMacro(<< "pre-integrated shading integrates one scalar through the transfer "
-                         "functions; with dependent components (IndependentComponents off) "
-                         "the data give the colours, which are drawn with VTK-compatible "
-                         "shading");
-    }
-  }
-  this->SetUpBlending(frame, draw);
-  this->SetUpShading(renderer, volume->GetProperty(), frame, draw);
-  // Orthographic projections give the linear default.
-  draw.interpolation = mtpt::PerspectiveInterpolation::FromProjection(frame.projection);
-  draw.threads = this->NumberOfThreads;
-  draw.synchronizedTiming = this->SynchronizedTiming;
-  draw.afterBatch = [this, window](double fraction)
-  {
-    const double begin = StageProgress(mtpt::Stage::Order);
-    this->ReportProgress(window, begin + (1.0 - begin) * fraction);
-    return window->CheckAbortStatus() == 0;
-  };
+  return settings;
 }
 
-void vtkMultiThreadedProjectedTetrahedraMapper::SetUpBlending(
-  mtpt::FrameInput& frame, mtpt::BackendFrame& draw)
+mtpt::FrameFacts vtkMultiThreadedProjectedTetrahedraMapper::FrameFactsOf(vtkRenderer* renderer,
+  vtkOpenGLRenderWindow* window, mtpt::RenderBackend* backend, const mtpt::FrameInput& frame,
+  const mtpt::BackendFrame& draw)
 {
   Internals& in = *this->Internal;
-  const int mode = this->BlendMode;
-  draw.blendMode = mtpt::BlendMode::Composite;
-  if (mode < COMPOSITE_BLEND || mode > ADDITIVE_BLEND)
+  mtpt::FrameFacts facts;
+  facts.points = frame.points.count;
+  facts.cells = frame.cells.cellCount;
+  facts.vertexColours = in.Dependent;
+  facts.cellScalars = frame.scalars.association == mtpt::ScalarsView::Association::Cells;
+  facts.peeling = in.PeelPass != nullptr;
+  facts.target = backend == &in.CPU ? mtpt::BatchTarget::Fans : mtpt::BatchTarget::Slots;
+  facts.viewport[0] = draw.size[0];
+  facts.viewport[1] = draw.size[1];
+  facts.sampledImageLimit = backend->SampledImageLimit(window);
+  facts.centresOnly = backend->SamplesPixelCentresOnly(false, draw.floatFramebuffer);
+  facts.sampledCentresOnly = backend->SamplesPixelCentresOnly(true, draw.floatFramebuffer);
+  facts.projection = frame.projection;
+  int ignored = 0;
+  facts.clipPlanes = mtpt::EyeClipPlanes(this, renderer, ignored);
+  if (ignored > 0 && in.Report(this->ClippingPlanes, "too many clipping planes"))
   {
-    if (in.Report(this, "unknown blend mode"))
-    {
-      vtkErrorMacro(<< "blend mode " << mode << " is none of 0 (composite) to 4 (additive); "
-                    << "drawing with composite blending");
-    }
+    vtkWarningMacro(<< "clipping with the first " << mtpt::ClipPlanes::Max << " of "
+                    << mtpt::ClipPlanes::Max + ignored << " clipping planes, as many as VTK's "
+                    << "GPU ray caster takes");
   }
-  else if (mode != COMPOSITE_BLEND && in.Dependent)
-  {
-    if (in.Report(this, "blend mode with dependent components"))
-    {
-      vtkWarningMacro(<< this->GetBlendModeAsString() << " blending reduces one scalar; with "
-                      << "dependent components (IndependentComponents off) the data give the "
-                      << "colours, which are drawn with composite blending");
-    }
-  }
-  else if (mode != COMPOSITE_BLEND && in.PeelPass)
-  {
-    if (in.Report(this, "blend mode in depth peeling"))
-    {
-      vtkWarningMacro(<< this->GetBlendModeAsString() << " blending is not defined between "
-                      << "translucent surfaces; inside depth peeling the volume is drawn with "
-                      << "composite blending");
-    }
-  }
-  else
-  {
-    draw.blendMode = static_cast<mtpt::BlendMode>(mode);
-  }
-  draw.averageRange[0] = this->AverageIPScalarRange[0];
-  draw.averageRange[1] = this->AverageIPScalarRange[1];
-  frame.ordered = !mtpt::ReducesInAnyOrder(draw.blendMode);
+  return facts;
 }
 
-void vtkMultiThreadedProjectedTetrahedraMapper::SetUpShading(vtkRenderer* renderer,
-  vtkVolumeProperty* property, const mtpt::FrameInput& frame, mtpt::BackendFrame& draw)
+void vtkMultiThreadedProjectedTetrahedraMapper::SetUpLighting(
+  vtkRenderer* renderer, vtkVolumeProperty* property, mtpt::FrameInput& frame)
 {
   Internals& in = *this->Internal;
-  draw.lighting = nullptr;
-  // VTK's GPU ray caster shades composite blending only, and ignores the shading otherwise.
-  if (!property->GetShade(0) || draw.blendMode != mtpt::BlendMode::Composite)
-  {
-    return;
-  }
-  if (in.Dependent || frame.scalars.association == mtpt::ScalarsView::Association::Cells)
-  {
-    if (in.Report(property, "shading without point scalars"))
-    {
-      vtkWarningMacro(<< "shading (ShadeOn) lights the gradient of one point scalar; "
-                      << (in.Dependent ? "with dependent components (IndependentComponents off)"
-                                       : "cell scalars have none, and")
-                      << " the volume is drawn unlit");
-    }
-    return;
-  }
   const mtpt::MeshKey key =
     mtpt::MeshKey::Of(frame.points, frame.cells, frame.scalars, nullptr, frame.dataVersion);
   if (in.NormalsVersion == 0 || !(key == in.NormalsKey))
@@ -1001,30 +953,14 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetUpShading(vtkRenderer* render
     ++in.NormalsVersion;
   }
   int ignored = 0;
-  in.Lighting = mtpt::VolumeLighting(renderer, property, ignored);
+  frame.lighting = mtpt::VolumeLighting(renderer, property, ignored);
   if (ignored > 0 && in.Report(renderer, "too many lights"))
   {
     vtkWarningMacro(<< "shading with the first " << mtpt::Lighting::MaxLights << " of "
                     << mtpt::Lighting::MaxLights + ignored << " lights");
   }
-  draw.lighting = &in.Lighting;
-  draw.normals = in.Normals.data();
-  draw.normalsVersion = in.NormalsVersion;
-  draw.modelView = frame.modelView;
-}
-
-void vtkMultiThreadedProjectedTetrahedraMapper::SetUpClipping(
-  vtkRenderer* renderer, const mtpt::FrameInput& frame, mtpt::BackendFrame& draw)
-{
-  draw.clipping = mtpt::DepthClipping::FromProjection(frame.projection);
-  int ignored = 0;
-  draw.clipPlanes = mtpt::EyeClipPlanes(this, renderer, ignored);
-  if (ignored > 0 && this->Internal->Report(this->ClippingPlanes, "too many clipping planes"))
-  {
-    vtkWarningMacro(<< "clipping with the first " << mtpt::ClipPlanes::Max << " of "
-                    << mtpt::ClipPlanes::Max + ignored << " clipping planes, as many as VTK's "
-                    << "GPU ray caster takes");
-  }
+  frame.normals = in.Normals.data();
+  frame.normalsVersion = in.NormalsVersion;
 }
 
 void vtkMultiThreadedProjectedTetrahedraMapper::ConfigurePipeline(vtkOpenGLRenderWindow* window)
@@ -1041,47 +977,19 @@ void vtkMultiThreadedProjectedTetrahedraMapper::ConfigurePipeline(vtkOpenGLRende
       this->ReportProgress(window, StageProgress(stage));
       return window->CheckAbortStatus() == 0;
     });
-}
-
-void vtkMultiThreadedProjectedTetrahedraMapper::ChooseImageSize(
-  mtpt::RenderBackend* backend, vtkOpenGLRenderWindow* window, mtpt::BackendFrame& draw)
-{
-  const int sampled[2] = { mtpt::SampledImageSize(draw.size[0], this->ImageSampleDistance),
-    mtpt::SampledImageSize(draw.size[1], this->ImageSampleDistance) };
-  draw.imageSize = { draw.size[0], draw.size[1] };
-  const int limit = sampled[0] == draw.size[0] && sampled[1] == draw.size[1]
-    ? 0 // distance 1, or close enough to give the viewport's size
-    : backend->SampledImageLimit(window);
-  if (limit > 0)
-  {
-    const int most[2] = { std::min(limit, MaximumSamplesPerPixel * draw.size[0]),
-      std::min(limit, MaximumSamplesPerPixel * draw.size[1]) };
-    draw.imageSize = { std::min(sampled[0], most[0]), std::min(sampled[1], most[1]) };
-    if (sampled[0] > most[0] || sampled[1] > most[1])
+  pipeline.SetBatchCallback(
+    [this, window](double fraction)
     {
-      std::ostringstream message;
-      message << "ImageSampleDistance " << this->ImageSampleDistance << " asks for an image of "
-              << sampled[0] << " x " << sampled[1] << " pixels; drawing "
-              << draw.imageSize.width << " x " << draw.imageSize.height << " (at most "
-              << MaximumSamplesPerPixel
-              << " samples per pixel side and " << limit << " pixels per side here)";
-      if (this->Internal->Report(this, message.str()))
-      {
-        vtkWarningMacro(<< message.str());
-      }
-    }
-  }
-  this->ImageInUseSize[0] = draw.imageSize.width;
-  this->ImageInUseSize[1] = draw.imageSize.height;
+      const double begin = StageProgress(mtpt::Stage::Order);
+      this->ReportProgress(window, begin + (1.0 - begin) * fraction);
+      return window->CheckAbortStatus() == 0;
+    });
 }
 
 void vtkMultiThreadedProjectedTetrahedraMapper::DrawFrame(
   mtpt::RenderBackend* backend, mtpt::BackendFrame& draw)
 {
   Internals& in = *this->Internal;
-  const std::size_t sorted = in.Pipeline.SortedCount();
-  draw.batchSize =
-    this->BatchSize > 0 ? std::min(sorted, static_cast<std::size_t>(this->BatchSize)) : sorted;
   auto run = [&draw, &in](mtpt::RenderBackend* b)
   { return draw.peel ? b->DrawPeel(draw, in.Times) : b->Draw(draw, in.Times); };
   std::string peelError;
@@ -1110,8 +1018,10 @@ void vtkMultiThreadedProjectedTetrahedraMapper::DrawFrame(
     }
     if (fallBack)
     {
+      // The prepared frame, drawn by the other backend: its batches become slots.
       in.LastBackend = OPENGL_BACKEND;
-      in.Times = mtpt::BackendTimes{};
+      in.Times = mtpt::DrawTimes{};
+      in.Plan.target = mtpt::BatchTarget::Slots;
       drawn = run(&in.OpenGL);
       if (!drawn && in.ReportOpenGL(in.OpenGL.Error()))
       {

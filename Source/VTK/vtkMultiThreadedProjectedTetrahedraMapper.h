@@ -49,7 +49,10 @@ VTK_ABI_NAMESPACE_END
 namespace mtpt
 {
 struct BackendFrame;
+struct FrameFacts;
 struct FrameInput;
+struct FramePlan;
+struct FrameSettings;
 class RenderBackend;
 }
 
@@ -491,8 +494,6 @@ private:
   bool DrawPrepared(vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window,
     mtpt::FrameInput& frame);
   mtpt::RenderBackend* ChooseBackend();
-  void ChooseImageSize(
-    mtpt::RenderBackend* backend, vtkOpenGLRenderWindow* window, mtpt::BackendFrame& draw);
   /// Sets an image sample distance setting, clamped to VTK's range; NaN is rejected.
   void SetDistance(const char* name, float distance, float& setting);
   /// Sets a count or size that must not be negative (Modified on a change); a negative
@@ -501,20 +502,23 @@ private:
   void SetNonNegative(const char* setter, const char* what, const char* zero, T value, T& setting);
   /// Sets ImageSampleDistance and CellFraction for the next frame from the time allotted.
   void AdjustDetail(vtkRenderer* renderer, vtkVolume* volume);
+  /// The frame's view, its plan (mtpt::PlanFrame, whose notes are reported here), what the
+  /// plan sets of `frame`, and the lighting a lit plan reads.
   void SetUpFrame(vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window,
     mtpt::RenderBackend* backend, mtpt::FrameInput& frame, mtpt::BackendFrame& draw);
-  /// The eye ray's depth clipping and the clipping planes of the frame, in eye coordinates.
-  /// The blend mode the frame draws with (reported when another is asked for and cannot be).
-  void SetUpBlending(mtpt::FrameInput& frame, mtpt::BackendFrame& draw);
-  void SetUpShading(vtkRenderer* renderer, vtkVolumeProperty* property,
-    const mtpt::FrameInput& frame, mtpt::BackendFrame& draw);
-  void SetUpClipping(
-    vtkRenderer* renderer, const mtpt::FrameInput& frame, mtpt::BackendFrame& draw);
-  /// The pipeline's settings for the frame, and its progress and abort callback.
+  /// The settings of this mapper and the volume's `property` a frame is planned from.
+  mtpt::FrameSettings FrameSettingsOf(vtkVolumeProperty* property);
+  /// The facts of the input, the window and the chosen backend a frame is planned from.
+  mtpt::FrameFacts FrameFactsOf(vtkRenderer* renderer, vtkOpenGLRenderWindow* window,
+    mtpt::RenderBackend* backend, const mtpt::FrameInput& frame, const mtpt::BackendFrame& draw);
+  /// The renderer's lights and each cell's normal (computed once per change of the data).
+  void SetUpLighting(
+    vtkRenderer* renderer, vtkVolumeProperty* property, mtpt::FrameInput& frame);
+  /// The pipeline's settings for the frame, and its progress and abort callbacks.
   void ConfigurePipeline(vtkOpenGLRenderWindow* window);
   void DrawFrame(mtpt::RenderBackend* backend, mtpt::BackendFrame& draw);
   /// Whether the frame's buffers fit MemoryLimit (or the memory available); reports when not.
-  bool FitsInMemory(const mtpt::FrameInput& frame);
+  bool FitsInMemory(const mtpt::FramePlan& plan);
   void ReportProgress(vtkOpenGLRenderWindow* window, double fraction);
 
   class Internals;

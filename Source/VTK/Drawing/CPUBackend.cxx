@@ -15,7 +15,7 @@ namespace mtpt
 CPUBackend::CPUBackend() = default;
 CPUBackend::~CPUBackend() = default;
 
-bool CPUBackend::SamplesPixelCentresOnly(const BackendFrame&) const
+bool CPUBackend::SamplesPixelCentresOnly(bool, bool) const
 {
   return true; // the compositor samples each pixel once, at its centre
 }
@@ -25,10 +25,14 @@ int CPUBackend::SampledImageLimit(vtkOpenGLRenderWindow*)
   return INT_MAX; // the image lives in the compositor's tiles; only the viewport is uploaded
 }
 
-bool CPUBackend::Draw(const BackendFrame& frame, BackendTimes& times)
+bool CPUBackend::Draw(const BackendFrame& frame, DrawTimes& times)
 {
   this->ErrorMessage.clear();
   TakeOpenGLErrors(); // errors left by others are not this backend's to report
+  if (!this->PlannedFor(frame, BatchTarget::Fans))
+  {
+    return false;
+  }
   if (!this->Path.Capture(frame, times, this->ErrorMessage))
   {
     return false;
@@ -59,43 +63,40 @@ CPUBackend::ImageKey CPUBackend::ImageKey::Of(const BackendFrame& frame)
   key.pipeline = frame.pipeline;
   key.order = frame.pipeline->OrderVersionNumber();
   key.tables = frame.tables->Version();
-  key.batch = frame.batchSize;
-  key.size = frame.imageSize;
-  key.shading = frame.shading;
-  key.vertexColours = frame.vertexColours;
-  key.unitDistance = frame.unitDistance;
-  key.interpolation = frame.interpolation;
-  key.clipPlanes = frame.clipPlanes;
-  key.blendMode = frame.blendMode;
-  key.averageRange[0] = frame.averageRange[0];
-  key.averageRange[1] = frame.averageRange[1];
-  key.lit = frame.lighting != nullptr;
-  if (key.lit)
+  key.plan = *frame.plan;
+  key.unitDistance = frame.UnitDistance();
+  const FrameLighting& lighting = frame.pipeline->LightingOfFrame();
+  if (frame.plan->lit)
   {
-    key.lighting = *frame.lighting;
-    key.normals = frame.normalsVersion;
+    key.lighting = lighting.lighting;
+    key.normals = lighting.normalsVersion;
   }
   return key;
 }
 
 bool CPUBackend::ImageKey::operator==(const ImageKey& o) const
 {
-  const PerspectiveInterpolation &a = this->interpolation, &b = o.interpolation;
-  return pipeline == o.pipeline && order == o.order && tables == o.tables && batch == o.batch &&
-    size == o.size && shading == o.shading &&
-    vertexColours == o.vertexColours && unitDistance == o.unitDistance &&
-    a.perspective == b.perspective && a.inverseWScale == b.inverseWScale &&
-    a.inverseWOffset == b.inverseWOffset && a.scaleX == b.scaleX && a.shiftX == b.shiftX &&
-    a.scaleY == b.scaleY && a.shiftY == b.shiftY && clipPlanes == o.clipPlanes &&
-    blendMode == o.blendMode && averageRange[0] == o.averageRange[0] &&
-    averageRange[1] == o.averageRange[1] && lit == o.lit && lighting == o.lighting &&
-    normals == o.normals;
+  const FramePlan &a = this->plan, &b = o.plan;
+  const PerspectiveInterpolation &ia = a.interpolation, &ib = b.interpolation;
+  return pipeline == o.pipeline && order == o.order && tables == o.tables &&
+    a.batchSize == b.batchSize && a.imageSize == b.imageSize && a.shading == b.shading &&
+    a.vertexColours == b.vertexColours &&
+    unitDistance == o.unitDistance && ia.perspective == ib.perspective &&
+    ia.inverseWScale == ib.inverseWScale && ia.inverseWOffset == ib.inverseWOffset &&
+    ia.scaleX == ib.scaleX && ia.shiftX == ib.shiftX && ia.scaleY == ib.scaleY &&
+    ia.shiftY == ib.shiftY && a.clipPlanes == b.clipPlanes && a.blendMode == b.blendMode &&
+    a.averageRange[0] == b.averageRange[0] && a.averageRange[1] == b.averageRange[1] &&
+    a.lit == b.lit && lighting == o.lighting && normals == o.normals;
 }
 
-bool CPUBackend::DrawPeel(const BackendFrame& frame, BackendTimes& times)
+bool CPUBackend::DrawPeel(const BackendFrame& frame, DrawTimes& times)
 {
   this->ErrorMessage.clear();
   TakeOpenGLErrors(); // errors left by others are not this backend's to report
+  if (!this->PlannedFor(frame, BatchTarget::Fans))
+  {
+    return false;
+  }
   // The compositor's image will be a peel's, not the kept frame's.
   this->HaveImage = false;
   auto start = Clock::now();
@@ -113,7 +114,7 @@ bool CPUBackend::DrawPeel(const BackendFrame& frame, BackendTimes& times)
     std::vector<float>& image = this->PeelColours[which];
     image.resize(4 * static_cast<std::size_t>(frame.size[0]) * frame.size[1]);
     this->Compositing.Resolve({ 0, 0, frame.size[0], frame.size[1] },
-      static_cast<const float*>(nullptr), image.data(), frame.threads);
+      static_cast<const float*>(nullptr), image.data(), frame.plan->threads);
     times.composite += SecondsSince(start);
     const CompositorStats& part = this->Compositing.Stats();
     stats.fans += part.fans;
@@ -132,55 +133,26 @@ bool CPUBackend::DrawPeel(const BackendFrame& frame, BackendTimes& times)
   return uploaded;
 }
 
-void CPUBackend::Composite(const BackendFrame& frame, BackendTimes& times, const float* ranges)
+void CPUBackend::Composite(const BackendFrame& frame, DrawTimes& times, const float* ranges)
 {
-  CompositeSettings& settings = this->Settings;
-  settings = CompositeSettings{};
-  settings.width = frame.imageSize.width;
-  settings.height = frame.imageSize.height;
-  settings.transferFunction = frame.tables->Table();
-  settings.unitDistance = frame.unitDistance;
-  settings.opaqueDepth = ranges ? nullptr : this->Path.OpaqueDepth();
-  settings.depthRange = ranges;
-  settings.clipping = frame.clipping;
-  settings.clipPlanes = frame.clipPlanes;
-  settings.vertexColours = frame.vertexColours;
-  if (frame.shading == Shading::PreIntegrated && !frame.vertexColours)
-  {
-    settings.UsePreIntegration(frame.tables->PreIntegration(), frame.interpolation);
-  }
-  settings.blendMode = frame.blendMode;
-  if (ReducesInAnyOrder(frame.blendMode))
-  {
-    // Reductions interpolate the scalars as pre-integrated shading does.
-    settings.interpolation = frame.interpolation;
-    settings.intensity = &frame.tables->Intensity();
-    settings.averageRange[0] = frame.averageRange[0];
-    settings.averageRange[1] = frame.averageRange[1];
-  }
+  const TransferFunctionTables& tables = *frame.tables;
+  this->Settings = CompositeSettingsFor(*frame.plan, tables.Table(), tables.PreIntegration(),
+    tables.Intensity(), frame.UnitDistance());
+  this->Settings.opaqueDepth = ranges ? nullptr : this->Path.OpaqueDepth();
+  this->Settings.depthRange = ranges;
   // Batch after batch, back to front, into one image: the tiles keep what earlier batches
   // drew. Decomposition and compositing both use every thread, so they take turns.
-  FramePipeline& pipeline = *frame.pipeline;
-  this->Compositing.Begin(settings);
-  ForEachBatch(
-    frame, times,
-    [&](std::size_t first, std::size_t count)
-    {
-      pipeline.DecomposeFans(first, count, frame.threads);
-      if (frame.lighting)
-      {
-        pipeline.LightWindow(first, count, *frame.lighting, frame.normals, frame.modelView,
-          this->Lights, frame.threads);
-      }
-    },
-    [&]
-    {
-      const auto start = Clock::now();
-      this->Compositing.Composite(pipeline.Fans().data(), pipeline.FanCount(), frame.threads,
-        frame.lighting ? this->Lights.data() : nullptr);
-      times.composite += SecondsSince(start);
-      return true;
-    });
+  this->Compositing.Begin(this->Settings);
+  const int threads = frame.plan->threads;
+  Drawn(frame.pipeline->DrawBatches(*frame.plan,
+          [&](const Batch& batch)
+          {
+            const auto start = Clock::now();
+            this->Compositing.Composite(batch.fans, batch.count, threads, batch.lights);
+            times.composite += SecondsSince(start);
+            return true;
+          }),
+    times);
 }
 
 void CPUBackend::ReleaseGraphicsResources(vtkWindow* window)

@@ -6,7 +6,7 @@
  * Captures the viewport and its opaque depth (ImagePath), has the pipeline decompose the
  * sorted tetrahedra into fans (no OpenGL slot buffers), composites them on the CPU with the
  * per-fragment math of the OpenGL path (mtpt::Compositor) at the composited image's size
- * (BackendFrame::imageSize), and writes back only the region the volume touched, composited
+ * (FramePlan::imageSize), and writes back only the region the volume touched, composited
  * over the colour that was there (ImagePath again: at another image size, magnified first).
  * A failed read leaves the window untouched and Draw returns false, so the mapper can fall
  * back to the OpenGL backend instead of drawing garbage.
@@ -39,10 +39,10 @@ public:
   CPUBackend();
   ~CPUBackend() override;
 
-  bool SamplesPixelCentresOnly(const BackendFrame& frame) const override;
+  bool SamplesPixelCentresOnly(bool sampled, bool floatFramebuffer) const override;
   int SampledImageLimit(vtkOpenGLRenderWindow* window) override;
-  bool Draw(const BackendFrame& frame, BackendTimes& times) override;
-  bool DrawPeel(const BackendFrame& frame, BackendTimes& times) override;
+  bool Draw(const BackendFrame& frame, DrawTimes& times) override;
+  bool DrawPeel(const BackendFrame& frame, DrawTimes& times) override;
   void ReleaseGraphicsResources(vtkWindow* window) override;
 
   /// The compositor's work in the last Draw (zero counts when it reused its image).
@@ -55,32 +55,25 @@ private:
   /**
    * Everything the composited image depends on besides the opaque depth. The order's
    * version stands for the view, the projection (and so the interpolation), the data, the
-   * culling and the viewport; the tables' version for the transfer functions. `size` is the
-   * composited image's (BackendFrame::imageSize), which the image sample distance sets.
+   * culling and the viewport; the tables' version for the transfer functions; the plan for
+   * the shading, blending, clipping, the composited image's size and the batches.
    */
   struct ImageKey
   {
     const FramePipeline* pipeline = nullptr;
     std::uint64_t order = 0, tables = 0;
-    std::size_t batch = 0;
-    ImageSize size;
-    Shading shading = Shading::VTKCompatible;
-    bool vertexColours = false;
-    double unitDistance = 0;
-    PerspectiveInterpolation interpolation;
-    ClipPlanes clipPlanes;
-    BlendMode blendMode = BlendMode::Composite;
-    double averageRange[2] = { 0.0, 0.0 };
-    bool lit = false; ///< shading: `lighting` and the normals' version count
-    Lighting lighting;
+    FramePlan plan;          ///< what the image depends on of it (operator==)
+    double unitDistance = 0; ///< with the level of detail's compensation
+    Lighting lighting;       ///< lit plans: the lights and the normals' version
     std::uint64_t normals = 0;
 
     static ImageKey Of(const BackendFrame& frame);
     bool operator==(const ImageKey& other) const;
   };
 
+
   /// The frame's image; with `ranges` (depth peeling) each fragment clipped to its pixel's.
-  void Composite(const BackendFrame& frame, BackendTimes& times, const float* ranges = nullptr);
+  void Composite(const BackendFrame& frame, DrawTimes& times, const float* ranges = nullptr);
 
   Compositor Compositing;
   CompositeSettings Settings;
@@ -89,7 +82,6 @@ private:
   ImageKey Kept; ///< with the opaque depth the image path kept (ImagePath::KeepDepth)
   ImagePath Path;
   std::vector<float> PeelRanges[2], PeelColours[2]; ///< depth peeling: front, back
-  std::vector<LightFactors> Lights;                  ///< shading: the batch's fans' lighting
 };
 
 } // namespace mtpt

@@ -23,7 +23,7 @@ ImagePath::ImagePath()
 
 ImagePath::~ImagePath() = default;
 
-bool ImagePath::Capture(const BackendFrame& frame, BackendTimes& times, std::string& error)
+bool ImagePath::Capture(const BackendFrame& frame, DrawTimes& times, std::string& error)
 {
   // The window's colour and depth, resolved to one sample per pixel; nothing is written to
   // the window before every read succeeded.
@@ -81,16 +81,16 @@ bool ImagePath::ReadDepth(const BackendFrame& frame, std::string& error)
   if (sampled)
   {
     // Each sampled pixel is tested against the viewport pixel under its centre.
-    const ImageSize& image = frame.imageSize;
+    const ImageSize& image = frame.Image();
     this->Depth.resize(static_cast<std::size_t>(image.width) * image.height);
     SampleDepth(viewport.data(), frame.size[0], frame.size[1], this->Depth.data(), image.width,
-      image.height, frame.threads);
+      image.height, frame.plan->threads);
   }
   return true;
 }
 
 bool ImagePath::WriteBack(
-  const BackendFrame& frame, Compositor& compositor, BackendTimes& times, std::string& error)
+  const BackendFrame& frame, Compositor& compositor, DrawTimes& times, std::string& error)
 {
   // Only the region the volume touched changes (for a sampled image, the viewport pixels the
   // magnification reads it into). It is composited over the colour that was there on the
@@ -99,7 +99,7 @@ bool ImagePath::WriteBack(
   // rounding the OpenGL path does not have.
   auto start = Clock::now();
   const PixelRegion region = compositor.TouchedRegion();
-  const ImageSize& image = frame.imageSize;
+  const ImageSize& image = frame.Image();
   const PixelRegion target = frame.Sampled()
     ? MagnifiedRegion(region, image.width, image.height, frame.size[0], frame.size[1])
     : region;
@@ -133,20 +133,20 @@ void ImagePath::Resolve(const BackendFrame& frame, Compositor& compositor,
 {
   if (!frame.Sampled())
   {
-    compositor.Resolve(region, this->Below.data(), this->Region.data(), frame.threads);
+    compositor.Resolve(region, this->Below.data(), this->Region.data(), frame.plan->threads);
     return;
   }
   const std::size_t width = static_cast<std::size_t>(region.x1 - region.x0);
   this->Sampled.resize(4 * width * static_cast<std::size_t>(region.y1 - region.y0));
-  compositor.Resolve(region, nullptr, this->Sampled.data(), frame.threads);
-  const SampledImage image{ this->Sampled.data(), region, frame.imageSize.width,
-    frame.imageSize.height };
+  compositor.Resolve(region, nullptr, this->Sampled.data(), frame.plan->threads);
+  const SampledImage image{ this->Sampled.data(), region, frame.Image().width,
+    frame.Image().height };
   MagnifyOver(image, frame.size[0], frame.size[1], target, this->Below.data(), this->Region.data(),
-    frame.threads);
+    frame.plan->threads);
 }
 
 bool ImagePath::Upload(
-  const BackendFrame& frame, const PixelRegion& target, BackendTimes& times, std::string& error)
+  const BackendFrame& frame, const PixelRegion& target, DrawTimes& times, std::string& error)
 {
   auto start = Clock::now();
   const int width = target.x1 - target.x0, height = target.y1 - target.y0;

@@ -6,7 +6,7 @@
  * One frame goes through it in two steps:
  * - Capture: the renderer's viewport is copied into a single-sampled target (BlendTarget, so
  *   a multisampled window is resolved first) and its opaque depth is read, at the composited
- *   image's size (BackendFrame::imageSize): where the image is sampled, each of its pixels
+ *   image's size (FramePlan::imageSize): where the image is sampled, each of its pixels
  *   takes the depth of the viewport pixel under its centre (mtpt::SampleDepth), which is
  *   what an OpenGL blit with nearest filtering gives the OpenGL backend.
  * - WriteBack: the region of the image the compositor touched is resolved over the colour
@@ -48,7 +48,7 @@ public:
   ~ImagePath();
 
   /// Captures the viewport and reads its opaque depth at the composited image's size.
-  bool Capture(const BackendFrame& frame, BackendTimes& times, std::string& error);
+  bool Capture(const BackendFrame& frame, DrawTimes& times, std::string& error);
   /// The opaque depth of the composited image's pixels (row 0 at the bottom), or null where
   /// nothing opaque can occlude the volume.
   const float* OpaqueDepth() const { return this->Depth.empty() ? nullptr : this->Depth.data(); }
@@ -58,7 +58,7 @@ public:
   void KeepDepth() { this->Depth.swap(this->KeptDepth); }
   /// Writes the compositor's image over the captured colour into the window, and ends the
   /// capture (the window's framebuffer bindings are restored, even where it fails).
-  bool WriteBack(const BackendFrame& frame, Compositor& compositor, BackendTimes& times,
+  bool WriteBack(const BackendFrame& frame, Compositor& compositor, DrawTimes& times,
     std::string& error);
   void ReleaseGraphicsResources(vtkWindow* window);
 
@@ -72,7 +72,7 @@ private:
   /// The composited image's `region` over Below into Region, at the viewport's `target`.
   void Resolve(const BackendFrame& frame, Compositor& compositor, const PixelRegion& region,
     const PixelRegion& target);
-  bool Upload(const BackendFrame& frame, const PixelRegion& target, BackendTimes& times,
+  bool Upload(const BackendFrame& frame, const PixelRegion& target, DrawTimes& times,
     std::string& error);
 
   BlendTarget Target;

@@ -53,27 +53,21 @@ void MakeTableTexture(vtkTextureObject* texture, vtkOpenGLRenderWindow* window, 
  * non-premultiplied colour; in the blend modes other than composite, GL_MAX (maximum, and
  * minimum as the negated scalar) or sums (average, additive) of the reduced values.
  */
-void SetBlending(const BackendFrame& frame, vtkOpenGLState* state)
+void SetBlending(const FramePlan& plan, vtkOpenGLState* state)
 {
   state->vtkglEnable(GL_BLEND);
-  if (!ReducesInAnyOrder(frame.blendMode) || frame.vertexColours)
+  if (!ReducesInAnyOrder(plan.blendMode))
   {
     state->vtkglBlendEquationSeparate(GL_FUNC_ADD, GL_FUNC_ADD);
     state->vtkglBlendFuncSeparate(
       GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
     return;
   }
-  const bool extreme = frame.blendMode == BlendMode::MaximumIntensity ||
-    frame.blendMode == BlendMode::MinimumIntensity;
+  const bool extreme = plan.blendMode == BlendMode::MaximumIntensity ||
+    plan.blendMode == BlendMode::MinimumIntensity;
   const GLenum equation = extreme ? GL_MAX : GL_FUNC_ADD;
   state->vtkglBlendEquationSeparate(equation, equation);
   state->vtkglBlendFuncSeparate(GL_ONE, GL_ONE, GL_ONE, GL_ONE);
-}
-
-/// Whether the frame is lit (shading applies to composite blending only).
-bool Lit(const BackendFrame& frame)
-{
-  return frame.lighting && frame.blendMode == BlendMode::Composite;
 }
 
 } // namespace
@@ -81,12 +75,12 @@ bool Lit(const BackendFrame& frame)
 OpenGLBackend::OpenGLBackend() = default;
 OpenGLBackend::~OpenGLBackend() = default;
 
-bool OpenGLBackend::SamplesPixelCentresOnly(const BackendFrame& frame) const
+bool OpenGLBackend::SamplesPixelCentresOnly(bool sampled, bool floatFramebuffer) const
 {
   // The sampled and the float target are single-sampled; without them the window's own
   // framebuffer is drawn.
-  return (frame.Sampled() && !this->SampledTargetFailed) ||
-    (frame.floatFramebuffer && !this->FloatTargetFailed) || !DrawFramebufferIsMultisampled();
+  return (sampled && !this->SampledTargetFailed) ||
+    (floatFramebuffer && !this->FloatTargetFailed) || !DrawFramebufferIsMultisampled();
 }
 
 int OpenGLBackend::SampledImageLimit(vtkOpenGLRenderWindow*)
@@ -164,25 +158,23 @@ void OpenGLBackend::UploadTables(const BackendFrame& frame)
 
 void OpenGLBackend::SetUniforms(const BackendFrame& frame, vtkShaderProgram* program)
 {
-  const bool preIntegrated = frame.shading == Shading::PreIntegrated && !frame.vertexColours;
-  // The blend modes other than composite interpolate the scalars as pre-integration does.
-  const bool reduce = ReducesInAnyOrder(frame.blendMode) && !frame.vertexColours;
-  const bool scalars = preIntegrated || reduce;
+  const FramePlan& plan = *frame.plan;
+  const bool reduce = ReducesInAnyOrder(plan.blendMode);
   const TransferFunctionTable table = frame.tables->Table();
   program->SetUniformi("transferFunction", this->TransferFunction->GetTextureUnit());
-  program->SetUniformi("shadingMode", frame.vertexColours ? 2 : (scalars ? 1 : 0));
+  program->SetUniformi("shadingMode", static_cast<int>(plan.values));
   program->SetUniformi("tableSize", table.size);
-  program->SetUniformi("blendMode", reduce ? static_cast<int>(frame.blendMode) : 0);
+  program->SetUniformi("blendMode", reduce ? static_cast<int>(plan.blendMode) : 0);
   program->SetUniformi("clampEntries", reduce ? 0 : 1);
   if (reduce)
   {
     program->SetUniformi("intensityPrefix", this->IntensityPrefix->GetTextureUnit());
     double range[2];
-    AverageRangeEntries(table, frame.averageRange, AverageRangeBeyond, range);
+    AverageRangeEntries(table, plan.averageRange, AverageRangeBeyond, range);
     const float averageRange[2] = { static_cast<float>(range[0]), static_cast<float>(range[1]) };
     program->SetUniform2f("averageRange", averageRange);
   }
-  if (preIntegrated)
+  if (plan.preIntegrationTable)
   {
     program->SetUniformi("integralsHigh", this->IntegralsHigh->GetTextureUnit());
     program->SetUniformi("integralsLow", this->IntegralsLow->GetTextureUnit());
@@ -195,15 +187,15 @@ void OpenGLBackend::SetUniforms(const BackendFrame& frame, vtkShaderProgram* pro
   const double entryScale = (n - 1.0) / (high - low);
   program->SetUniformf("entryScale", static_cast<float>(entryScale));
   program->SetUniformf("entryShift", static_cast<float>(-low * entryScale));
-  const PerspectiveInterpolation& view = frame.interpolation;
-  program->SetUniformi("perspectiveExact", scalars && view.perspective ? 1 : 0);
+  const PerspectiveInterpolation& view = plan.interpolation;
+  program->SetUniformi("perspectiveExact", plan.perspectiveExact ? 1 : 0);
   program->SetUniformf("inverseDepthScale", static_cast<float>(view.inverseWScale));
   program->SetUniformf("inverseDepthOffset", static_cast<float>(view.inverseWOffset));
   const float rayScale[2] = { static_cast<float>(view.scaleX), static_cast<float>(view.scaleY) };
   const float rayShift[2] = { static_cast<float>(view.shiftX), static_cast<float>(view.shiftY) };
   program->SetUniform2f("rayScale", rayScale);
   program->SetUniform2f("rayShift", rayShift);
-  program->SetUniformf("inverseUnitDistance", static_cast<float>(1.0 / frame.unitDistance));
+  program->SetUniformf("inverseUnitDistance", static_cast<float>(1.0 / frame.UnitDistance()));
   program->SetUniformi("peelRanges", frame.peel ? 1 : 0);
   // Unused, the peel's samplers still name a unit: the transfer function's, of their own type
   // (samplers of different types on one unit fail the draw, and the light texture may get
@@ -224,7 +216,7 @@ PixelRegion OpenGLBackend::DrawnPixels(const BackendFrame& frame) const
       frame.origin[1] + frame.size[1] };
   }
   const ImageSize size =
-    this->SampledTargetUsed ? frame.imageSize : ImageSize{ frame.size[0], frame.size[1] };
+    this->SampledTargetUsed ? frame.Image() : ImageSize{ frame.size[0], frame.size[1] };
   return { 0, 0, size.width, size.height };
 }
 
@@ -232,7 +224,7 @@ void OpenGLBackend::SetClippingUniforms(const BackendFrame& frame, vtkShaderProg
 {
   // The eye ray of each fragment, for depth peeling's ranges and the clipping planes: from
   // its pixel in the target drawn into (the window's viewport, or a target of its own).
-  const DepthClipping& clipping = frame.clipping;
+  const DepthClipping& clipping = frame.plan->clipping;
   program->SetUniformi("depthPerspective", clipping.perspective ? 1 : 0);
   program->SetUniformf("depthA", static_cast<float>(clipping.a));
   program->SetUniformf("depthB", static_cast<float>(clipping.b));
@@ -248,7 +240,7 @@ void OpenGLBackend::SetClippingUniforms(const BackendFrame& frame, vtkShaderProg
     static_cast<float>(clipping.shiftY) };
   program->SetUniform2f("orthoScale", orthoScale);
   program->SetUniform2f("orthoShift", orthoShift);
-  const ClipPlanes& planes = frame.clipPlanes;
+  const ClipPlanes& planes = frame.plan->clipPlanes;
   float values[ClipPlanes::Max][4] = {};
   for (int i = 0; i < planes.count; ++i)
   {
@@ -261,11 +253,15 @@ void OpenGLBackend::SetClippingUniforms(const BackendFrame& frame, vtkShaderProg
   program->SetUniform4fv("clipPlanes", ClipPlanes::Max, values);
 }
 
-bool OpenGLBackend::DrawPeel(const BackendFrame& frame, BackendTimes& times)
+bool OpenGLBackend::DrawPeel(const BackendFrame& frame, DrawTimes& times)
 {
   this->ErrorMessage.clear();
   TakeOpenGLErrors(); // errors left by others are not this backend's to report
-  vtkShaderProgram* program = this->ReadyProgram(frame.window, Lit(frame));
+  if (!this->PlannedFor(frame, BatchTarget::Slots))
+  {
+    return false;
+  }
+  vtkShaderProgram* program = this->ReadyProgram(frame.window, frame.plan->lit);
   if (!program)
   {
     this->ErrorMessage = "could not compile the MTPT shaders";
@@ -288,20 +284,24 @@ bool OpenGLBackend::DrawPeel(const BackendFrame& frame, BackendTimes& times)
   return drawn;
 }
 
-bool OpenGLBackend::Draw(const BackendFrame& frame, BackendTimes& times)
+bool OpenGLBackend::Draw(const BackendFrame& frame, DrawTimes& times)
 {
   this->ErrorMessage.clear();
   this->WarningMessage.clear();
   TakeOpenGLErrors(); // errors left by others are not this backend's to report
+  if (!this->PlannedFor(frame, BatchTarget::Slots))
+  {
+    return false;
+  }
   vtkOpenGLRenderWindow* window = frame.window;
-  vtkShaderProgram* program = this->ReadyProgram(window, Lit(frame));
+  vtkShaderProgram* program = this->ReadyProgram(window, frame.plan->lit);
   if (!program)
   {
     this->ErrorMessage = "could not compile the MTPT shaders";
     return false;
   }
   this->UploadTables(frame);
-  if (ReducesInAnyOrder(frame.blendMode) && !frame.vertexColours)
+  if (ReducesInAnyOrder(frame.plan->blendMode))
   {
     return this->DrawReduced(frame, program, times);
   }
@@ -311,7 +311,7 @@ bool OpenGLBackend::Draw(const BackendFrame& frame, BackendTimes& times)
 }
 
 bool OpenGLBackend::DrawReduced(
-  const BackendFrame& frame, vtkShaderProgram* program, BackendTimes& times)
+  const BackendFrame& frame, vtkShaderProgram* program, DrawTimes& times)
 {
   vtkOpenGLRenderWindow* window = frame.window;
   this->BindTarget(frame, true);
@@ -325,8 +325,8 @@ bool OpenGLBackend::DrawReduced(
   }
   BlendTarget& target = this->SampledTargetUsed ? this->SampledTarget : this->Target;
   // The target keeps the window's depth; its colour starts at the mode's neutral value.
-  const bool extreme = frame.blendMode == BlendMode::MaximumIntensity ||
-    frame.blendMode == BlendMode::MinimumIntensity;
+  const bool extreme = frame.plan->blendMode == BlendMode::MaximumIntensity ||
+    frame.plan->blendMode == BlendMode::MinimumIntensity;
   const float neutral[4] = { extreme ? -1e30f : 0.0f, 0.0f, 0.0f, 0.0f };
   BlendTarget::ClearColour(window, neutral);
   const bool drawn = this->DrawBatches(frame, program, times);
@@ -353,9 +353,9 @@ bool OpenGLBackend::ResolveReduced(const BackendFrame& frame, vtkTextureObject* 
   this->TransferFunction->Activate();
   program->SetUniformi("reduced", reduced->GetTextureUnit());
   program->SetUniformi("transferFunction", this->TransferFunction->GetTextureUnit());
-  program->SetUniformi("blendMode", static_cast<int>(frame.blendMode));
+  program->SetUniformi("blendMode", static_cast<int>(frame.plan->blendMode));
   program->SetUniformi("tableSize", frame.tables->Table().size);
-  program->SetUniformf("inverseUnitDistance", static_cast<float>(1.0 / frame.unitDistance));
+  program->SetUniformf("inverseUnitDistance", static_cast<float>(1.0 / frame.UnitDistance()));
   BlendTarget::DrawQuad(frame.window, *this->ReduceQuad, frame.origin, frame.size, true);
   this->TransferFunction->Deactivate();
   reduced->Deactivate();
@@ -370,7 +370,7 @@ void OpenGLBackend::BindTarget(const BackendFrame& frame, bool floatTarget)
   if (frame.Sampled() && !this->SampledTargetFailed)
   {
     this->SampledTargetUsed = this->SampledTarget.CaptureSampled(
-      window, frame.origin, frame.size, frame.imageSize, this->Target, error);
+      window, frame.origin, frame.size, frame.Image(), this->Target, error);
     if (!this->SampledTargetUsed)
     {
       // In this context: not tried again every frame (SampledImageLimit says 0 from now
@@ -391,7 +391,7 @@ void OpenGLBackend::BindTarget(const BackendFrame& frame, bool floatTarget)
   }
 }
 
-bool OpenGLBackend::WriteTarget(const BackendFrame& frame, bool drawn, BackendTimes& times)
+bool OpenGLBackend::WriteTarget(const BackendFrame& frame, bool drawn, DrawTimes& times)
 {
   const auto start = Clock::now();
   bool written = true;
@@ -416,7 +416,7 @@ bool OpenGLBackend::WriteTarget(const BackendFrame& frame, bool drawn, BackendTi
 }
 
 bool OpenGLBackend::DrawBatches(
-  const BackendFrame& frame, vtkShaderProgram* program, BackendTimes& times)
+  const BackendFrame& frame, vtkShaderProgram* program, DrawTimes& times)
 {
   vtkOpenGLState* state = frame.window->GetState();
   vtkOpenGLState::ScopedglDepthMask depthMask(state);
@@ -448,43 +448,34 @@ bool OpenGLBackend::DrawBatches(
     state->vtkglEnable(GL_DEPTH_TEST);
   }
   state->vtkglDisable(GL_CULL_FACE);
-  SetBlending(frame, state);
+  SetBlending(*frame.plan, state);
   this->TransferFunction->Activate();
   this->IntegralsHigh->Activate();
   this->IntegralsLow->Activate();
   this->IntensityPrefix->Activate();
   this->SetUniforms(frame, program);
-  // Shading: per slot, the factors of its cell's lighting (mtpt/Lighting.h).
-  const bool lit = Lit(frame);
 
-  // Batch after batch: decompose, upload, draw. Draw calls return before the rasterizer is
-  // done, so the next batch's decomposition overlaps the previous batch's drawing.
-  FramePipeline& pipeline = *frame.pipeline;
-  std::size_t batchFirst = 0, batchCount = 0;
-  const bool drawn = ForEachBatch(
-    frame, times,
-    [&](std::size_t first, std::size_t count)
-    {
-      pipeline.DecomposeBatch(first, count, frame.threads);
-      batchFirst = first;
-      batchCount = count;
-    },
-    [&]
-    {
-      this->Upload(frame, times);
-      if (lit)
-      {
-        this->BindLights(frame, program, batchFirst, batchCount, times);
-      }
-      const auto start = Clock::now();
-      this->DrawUploaded(program);
-      if (frame.synchronizedTiming)
-      {
-        glFinish();
-      }
-      times.draw += SecondsSince(start);
-      return OpenGLSucceeded("drawing the tetrahedra", this->ErrorMessage);
-    });
+  // Batch after batch, as the pipeline decomposes them: upload, draw. Draw calls return
+  // before the rasterizer is done, so the next batch's decomposition overlaps the previous
+  // batch's drawing.
+  const bool drawn = Drawn(frame.pipeline->DrawBatches(*frame.plan,
+                             [&](const Batch& batch)
+                             {
+                               this->Upload(frame, batch, times);
+                               if (frame.plan->lit)
+                               {
+                                 this->BindLights(frame, program, batch, times);
+                               }
+                               const auto start = Clock::now();
+                               this->DrawUploaded(program);
+                               if (frame.synchronizedTiming)
+                               {
+                                 glFinish();
+                               }
+                               times.draw += SecondsSince(start);
+                               return OpenGLSucceeded("drawing the tetrahedra", this->ErrorMessage);
+                             }),
+    times);
   this->TransferFunction->Deactivate();
   this->IntegralsHigh->Deactivate();
   this->IntegralsLow->Deactivate();
@@ -494,63 +485,54 @@ bool OpenGLBackend::DrawBatches(
   return drawn;
 }
 
-void OpenGLBackend::Upload(const BackendFrame& frame, BackendTimes& times)
+void OpenGLBackend::Upload(const BackendFrame& frame, const Batch& batch, DrawTimes& times)
 {
-  const FramePipeline& pipeline = *frame.pipeline;
-  if (pipeline.BufferVersion() == this->UploadedBuffers)
+  if (batch.version == this->UploadedBuffers)
   {
     return; // the buffers hold this decomposition already
   }
   const auto start = Clock::now();
-  const std::size_t count = pipeline.TetrahedronCount();
+  const std::size_t count = batch.count;
   this->VertexBuffer->SetStride(static_cast<unsigned int>(sizeof(TetVertex)));
-  this->VertexBuffer->Upload(reinterpret_cast<const float*>(pipeline.Vertices().data()),
+  this->VertexBuffer->Upload(reinterpret_cast<const float*>(batch.vertices),
     count * VerticesPerTetrahedron * FloatsPerVertex, vtkOpenGLBufferObject::ArrayBuffer);
-  this->Triangles.IBO->Upload(pipeline.Indices().data(), count * IndicesPerTetrahedron,
+  this->Triangles.IBO->Upload(batch.indices, count * IndicesPerTetrahedron,
     vtkOpenGLBufferObject::ElementArrayBuffer);
   this->Triangles.IBO->IndexCount = count * IndicesPerTetrahedron;
   if (frame.synchronizedTiming)
   {
     glFinish();
   }
-  this->UploadedBuffers = pipeline.BufferVersion();
+  this->UploadedBuffers = batch.version;
   times.upload += SecondsSince(start);
 }
 
-void OpenGLBackend::BindLights(const BackendFrame& frame, vtkShaderProgram* program,
-  std::size_t first, std::size_t count, BackendTimes& times)
+void OpenGLBackend::BindLights(
+  const BackendFrame& frame, vtkShaderProgram* program, const Batch& batch, DrawTimes& times)
 {
-  this->UploadLights(frame, first, count, times);
+  this->UploadLights(frame, batch, times);
   this->LightTexture->Activate();
   program->SetUniformi("lightFactors", this->LightTexture->GetTextureUnit());
 }
 
-void OpenGLBackend::UploadLights(
-  const BackendFrame& frame, std::size_t first, std::size_t count, BackendTimes& times)
+void OpenGLBackend::UploadLights(const BackendFrame& frame, const Batch& batch, DrawTimes& times)
 {
-  FramePipeline& pipeline = *frame.pipeline;
-  const LightKey key{ pipeline.BufferVersion(), *frame.lighting, frame.normalsVersion,
-    frame.modelView };
-  if (this->LightTexture->GetHandle() != 0 && key == this->UploadedLights)
+  if (this->LightTexture->GetHandle() != 0 && batch.lightsVersion == this->UploadedLights)
   {
     return; // the texture holds these slots lit so already (a frame that moved nothing)
   }
-  pipeline.LightWindow(
-    first, count, *frame.lighting, frame.normals, frame.modelView, this->Lights, frame.threads);
   const auto start = Clock::now();
   // A texture buffer is never empty.
-  if (this->Lights.empty())
-  {
-    this->Lights.push_back(Unlit());
-  }
+  const LightFactors unlit = Unlit();
+  const LightFactors* lights = batch.count > 0 ? batch.lights : &unlit;
+  const std::size_t count = std::max<std::size_t>(1, batch.count);
   this->LightBuffer->SetType(vtkOpenGLBufferObject::TextureBuffer);
-  this->LightBuffer->Upload(reinterpret_cast<const float*>(this->Lights.data()),
-    this->Lights.size() * sizeof(LightFactors) / sizeof(float),
-    vtkOpenGLBufferObject::TextureBuffer);
+  this->LightBuffer->Upload(reinterpret_cast<const float*>(lights),
+    count * sizeof(LightFactors) / sizeof(float), vtkOpenGLBufferObject::TextureBuffer);
   this->LightTexture->SetContext(frame.window);
   this->LightTexture->CreateTextureBuffer(
-    static_cast<unsigned int>(2 * this->Lights.size()), 4, VTK_FLOAT, this->LightBuffer);
-  this->UploadedLights = key;
+    static_cast<unsigned int>(2 * count), 4, VTK_FLOAT, this->LightBuffer);
+  this->UploadedLights = batch.lightsVersion;
   times.upload += SecondsSince(start);
 }
 
@@ -618,8 +600,7 @@ void OpenGLBackend::ReleaseGraphicsResources(vtkWindow* window)
   this->ReduceQuad.reset();
   this->Target.ReleaseGraphicsResources(window);
   this->SampledTarget.ReleaseGraphicsResources(window);
-  this->UploadedBuffers = this->UploadedTables = 0;
-  this->UploadedLights = LightKey{};
+  this->UploadedBuffers = this->UploadedTables = this->UploadedLights = 0;
   this->FloatTargetFailed = this->SampledTargetFailed = false;
   this->MaxTargetSize = 0;
 }

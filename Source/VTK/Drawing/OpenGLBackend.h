@@ -15,7 +15,7 @@
  * - all of them, the shader program and the float target belong to one context: released
  *   in ReleaseGraphicsResources, after which everything is uploaded again.
  *
- * At an image sample distance other than 1 (BackendFrame::imageSize differs from the
+ * At an image sample distance other than 1 (FramePlan::imageSize differs from the
  * viewport's size) the batches are drawn into a float target of the sampled image's size
  * instead, whose colour starts transparent and whose depth is the window's, under each of
  * its pixels' centres (BlendTarget::CaptureSampled); that image is then composited over the
@@ -52,10 +52,10 @@ public:
   OpenGLBackend();
   ~OpenGLBackend() override;
 
-  bool SamplesPixelCentresOnly(const BackendFrame& frame) const override;
+  bool SamplesPixelCentresOnly(bool sampled, bool floatFramebuffer) const override;
   int SampledImageLimit(vtkOpenGLRenderWindow* window) override;
-  bool Draw(const BackendFrame& frame, BackendTimes& times) override;
-  bool DrawPeel(const BackendFrame& frame, BackendTimes& times) override;
+  bool Draw(const BackendFrame& frame, DrawTimes& times) override;
+  bool DrawPeel(const BackendFrame& frame, DrawTimes& times) override;
   void ReleaseGraphicsResources(vtkWindow* window) override;
 
   /// Whether the last Draw blended in a float target (false: in the window's framebuffer).
@@ -75,7 +75,7 @@ private:
   void BindTarget(const BackendFrame& frame, bool floatTarget);
   /// Unbinds the target and, when the batches were `drawn`, puts what they drew into the
   /// window.
-  bool WriteTarget(const BackendFrame& frame, bool drawn, BackendTimes& times);
+  bool WriteTarget(const BackendFrame& frame, bool drawn, DrawTimes& times);
   void UploadTables(const BackendFrame& frame);
   void SetUniforms(const BackendFrame& frame, vtkShaderProgram* program);
   /// Whether DrawBatches draws into a target of its own (sampled, float or a peel's), from
@@ -88,36 +88,21 @@ private:
   PixelRegion DrawnPixels(const BackendFrame& frame) const;
   /// Each fragment's eye ray (depth peeling, clipping planes) and the clipping planes.
   void SetClippingUniforms(const BackendFrame& frame, vtkShaderProgram* program);
-  bool DrawBatches(const BackendFrame& frame, vtkShaderProgram* program, BackendTimes& times);
+  bool DrawBatches(const BackendFrame& frame, vtkShaderProgram* program, DrawTimes& times);
   /// Blend modes other than composite: the fragments reduced in a float target of their own
   /// (cleared to the mode's neutral value, with the window's depth), then mapped to colour
   /// over the window's viewport (ResolveReduced).
-  bool DrawReduced(const BackendFrame& frame, vtkShaderProgram* program, BackendTimes& times);
+  bool DrawReduced(const BackendFrame& frame, vtkShaderProgram* program, DrawTimes& times);
   bool ResolveReduced(const BackendFrame& frame, vtkTextureObject* reduced);
-  void Upload(const BackendFrame& frame, BackendTimes& times);
+  /// The batch's slots into the vertex and index buffers; nothing when they hold them.
+  void Upload(const BackendFrame& frame, const Batch& batch, DrawTimes& times);
   void DrawUploaded(vtkShaderProgram* program);
-  /// Shading: the lighting of the batch's slots [first, first + count) of the order
-  /// (FramePipeline::LightWindow) into the buffer texture the lit fragment shader reads per
-  /// slot; nothing when it holds them already.
-  void UploadLights(
-    const BackendFrame& frame, std::size_t first, std::size_t count, BackendTimes& times);
+  /// Shading: the lighting of the batch's slots (Batch::lights) into the buffer texture the
+  /// lit fragment shader reads per slot; nothing when it holds them already.
+  void UploadLights(const BackendFrame& frame, const Batch& batch, DrawTimes& times);
   /// UploadLights, then the texture bound for `program` (DrawUploaded unbinds it).
-  void BindLights(const BackendFrame& frame, vtkShaderProgram* program, std::size_t first,
-    std::size_t count, BackendTimes& times);
-
-  /// What the light texture holds: the buffers' version, the lighting and the view.
-  struct LightKey
-  {
-    std::uint64_t buffers = 0;
-    Lighting lighting;
-    std::uint64_t normals = 0;
-    Matrix4 modelView{};
-    bool operator==(const LightKey& o) const
-    {
-      return buffers == o.buffers && lighting == o.lighting && normals == o.normals &&
-        modelView == o.modelView;
-    }
-  };
+  void BindLights(
+    const BackendFrame& frame, vtkShaderProgram* program, const Batch& batch, DrawTimes& times);
 
   vtkNew<vtkOpenGLVertexBufferObject> VertexBuffer;
   vtkOpenGLHelper Triangles;
@@ -127,13 +112,12 @@ private:
   std::unique_ptr<vtkOpenGLQuadHelper> ReduceQuad;      // blend modes: reduced to colour
   vtkNew<vtkOpenGLBufferObject> LightBuffer;            // shading: factors per slot
   vtkNew<vtkTextureObject> LightTexture;                // ... read as a buffer texture
-  std::vector<LightFactors> Lights;                     // ... of the batch
   BlendTarget Target;
   BlendTarget SampledTarget; ///< at an image sample distance other than 1
 
-  std::uint64_t UploadedBuffers = 0; ///< FramePipeline::BufferVersion() in the buffers
+  std::uint64_t UploadedBuffers = 0; ///< Batch::version in the buffers
   std::uint64_t UploadedTables = 0;  ///< TransferFunctionTables::Version() in the textures
-  LightKey UploadedLights;           ///< in LightTexture
+  std::uint64_t UploadedLights = 0;  ///< Batch::lightsVersion in LightTexture
   bool ProgramLit = false;           ///< Triangles.Program is the lit variant
   bool FloatTargetFailed = false;    ///< no float target in this context: do not retry
   bool FloatTargetUsed = false;

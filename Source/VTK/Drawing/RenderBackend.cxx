@@ -2,7 +2,6 @@
 #include "Drawing/RenderBackend.h"
 
 #include "mtpt/FramePipeline.h"
-#include "mtpt/Timing.h"
 
 #include "Basics/OpenGLHeader.h"
 
@@ -71,31 +70,28 @@ bool DrawFramebufferIsMultisampled()
   return sampleBuffers > 0;
 }
 
-bool RenderBackend::ForEachBatch(const BackendFrame& frame, BackendTimes& times,
-  const std::function<void(std::size_t first, std::size_t count)>& decompose,
-  const std::function<bool()>& draw)
+double BackendFrame::UnitDistance() const
 {
-  const std::size_t total = frame.pipeline->SortedCount();
-  const std::size_t batch = std::max<std::size_t>(1, frame.batchSize);
-  for (std::size_t first = 0; first < total; first += batch)
+  return plan->unitDistance / pipeline->Stats().attenuationScale;
+}
+
+bool RenderBackend::PlannedFor(const BackendFrame& frame, BatchTarget target)
+{
+  if (frame.plan->target == target)
   {
-    const auto start = Clock::now();
-    decompose(first, batch);
-    times.decompose += SecondsSince(start);
-    ++times.batches;
-    if (!draw())
-    {
-      return false;
-    }
-    const std::size_t done = std::min(total, first + batch);
-    if (done < total && frame.afterBatch &&
-      !frame.afterBatch(static_cast<double>(done) / static_cast<double>(total)))
-    {
-      times.stopped = true;
-      break;
-    }
+    return true;
   }
-  return true;
+  this->ErrorMessage = target == BatchTarget::Fans
+    ? "the frame was planned for OpenGL's slots, not the CPU compositor's fans"
+    : "the frame was planned for the CPU compositor's fans, not OpenGL's slots";
+  return false;
+}
+
+bool RenderBackend::Drawn(const BatchesDrawn& drawn, DrawTimes& times)
+{
+  times.batches += drawn.batches;
+  times.stopped = times.stopped || drawn.stopped;
+  return !drawn.failed;
 }
 
 } // namespace mtpt
