@@ -127,8 +127,9 @@ public:
     /// is shaded by pre-integration over them (integral functions of the transfer
     /// functions, exact optical depth): features of the transfer functions between vertex
     /// values are not missed, and interpolates perspective-exactly. See
-    /// mtpt::PreIntegrationTable. About twice the frame time of VTK-compatible shading on the
-    /// CPU backend (Documentation/accuracy.md).
+    /// mtpt::PreIntegrationTable; its accuracy: Documentation/accuracy.md; its cost on the
+    /// CPU backend: Documentation/compositor.md, "Pre-integrated shading at the fast mode's
+    /// price".
     PRE_INTEGRATED_SHADING = 1
   };
 
