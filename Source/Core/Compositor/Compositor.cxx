@@ -6,7 +6,6 @@
 #include "detail/TileRaster.h"
 
 #include <hwy/targets.h>
-#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
@@ -221,6 +220,31 @@ void Over(const float* front, float* back)
 
 } // namespace
 
+/// One thread's scratch for Rasterize: a tile's opaque depth, its peel ranges, a transparent
+/// image for fans drawn over an earlier Composite's, a chunk of fans and their lighting, and
+/// what the thread counted.
+struct RasterScratch
+{
+  std::vector<float> depth = std::vector<float>(TilePixels);
+  std::vector<float> range = std::vector<float>(2 * TilePixels);
+  std::vector<float> batch = std::vector<float>(4 * TilePixels);
+  std::vector<Fan> chunk = std::vector<Fan>(FansPerChunk);
+  std::vector<LightFactors> lit = std::vector<LightFactors>(FansPerChunk);
+  detail::RasterCounts counts;
+};
+
+struct Compositor::ThreadScratch
+{
+  detail::PerThread<RasterScratch> threads;
+};
+
+Compositor::Compositor()
+  : Scratch(std::make_unique<ThreadScratch>())
+{
+}
+
+Compositor::~Compositor() = default;
+
 void Compositor::Begin(const CompositeSettings& settings)
 {
   this->Settings = settings;
@@ -274,14 +298,29 @@ void Compositor::Bin(const Fan* fans, std::size_t count, int threads)
   // the 128-byte fans themselves into the lists moved the whole frame's fans through memory
   // twice more.)
   const int blocks = ThreadsForWork(count, detail::FansPerThread, threads);
-  this->CountPairs(fans, count, blocks);
-  const std::size_t total = this->PlaceEntries(blocks);
-  this->ListEntries(count, blocks);
+  this->PrepareBins(count, blocks);
+  std::size_t total = 0;
+  detail::CountPlaceScatter(
+    count, blocks, blocks,
+    [&](int b, detail::IndexRange r) { this->CountPairs(fans, b, r.begin, r.end); },
+    [&]
+    {
+      total = this->PlaceEntries(blocks);
+      return true;
+    },
+    [&](int b, detail::IndexRange r) { this->ListEntries(b, r.begin, r.end); });
+  for (int b = 0; b < blocks; ++b)
+  {
+    this->Statistics.fans += this->BlockBinned[b];
+    const PixelRegion& r = this->BlockTouched[b];
+    this->Touched = { std::min(this->Touched.x0, r.x0), std::min(this->Touched.y0, r.y0),
+      std::max(this->Touched.x1, r.x1), std::max(this->Touched.y1, r.y1) };
+  }
   this->Statistics.binEntries += total;
   this->Statistics.tiles += this->Tiles.size();
 }
 
-void Compositor::CountPairs(const Fan* fans, std::size_t count, int blocks)
+void Compositor::PrepareBins(std::size_t count, int blocks)
 {
   const std::size_t tiles = static_cast<std::size_t>(this->TilesX) * this->TilesY;
   this->Counts.assign(static_cast<std::size_t>(blocks) * tiles, 0);
@@ -289,64 +328,56 @@ void Compositor::CountPairs(const Fan* fans, std::size_t count, int blocks)
   {
     this->Ranges.resize(count);
   }
-  const ClipPlanes& planes = this->Settings.clipPlanes;
-  if (planes.count > 0 && this->Straddles.size() < count)
+  if (this->Settings.clipPlanes.count > 0 && this->Straddles.size() < count)
   {
     this->Straddles.resize(count);
   }
+  this->BlockTouched.assign(static_cast<std::size_t>(blocks), this->Touched);
+  this->BlockBinned.assign(static_cast<std::size_t>(blocks), 0);
+}
+
+void Compositor::CountPairs(const Fan* fans, int b, std::size_t begin, std::size_t end)
+{
+  const std::size_t tiles = static_cast<std::size_t>(this->TilesX) * this->TilesY;
+  const ClipPlanes& planes = this->Settings.clipPlanes;
   const int width = this->Settings.width, height = this->Settings.height;
-  std::vector<PixelRegion> touched(blocks, this->Touched);
-  std::vector<std::size_t> binned(blocks, 0);
-#pragma omp parallel num_threads(blocks)
+  std::uint32_t* counts = this->Counts.data() + b * tiles;
+  // Counted in locals, stored once: the blocks' entries share cache lines.
+  std::size_t blockBinned = 0;
+  PixelRegion region = this->BlockTouched[b];
+  for (std::size_t i = begin; i < end; ++i)
   {
-    for (int b = omp_get_thread_num(); b < blocks; b += omp_get_num_threads())
+    int x0, x1, y0, y1;
+    TileRange& range = this->Ranges[i];
+    const FanSide side = planes.count > 0 && fans[i].count >= 2
+      ? SideOfPlanes(fans[i], planes, this->Settings.clipping)
+      : FanSide::Kept;
+    if (fans[i].count < 2 || side == FanSide::Clipped ||
+      !FanPixels(fans[i], width, height, x0, x1, y0, y1))
     {
-      std::uint32_t* counts = this->Counts.data() + b * tiles;
-      // Counted in locals, stored once: the blocks' entries share cache lines.
-      std::size_t blockBinned = 0;
-      PixelRegion region = touched[b];
-      for (std::size_t i = count * b / blocks; i < count * (b + 1) / blocks; ++i)
+      range = TileRange{ 1, 0, 0, 0 };
+      continue;
+    }
+    if (planes.count > 0)
+    {
+      this->Straddles[i] = side == FanSide::Straddles ? 1 : 0;
+    }
+    ++blockBinned;
+    region = { std::min(region.x0, x0), std::min(region.y0, y0), std::max(region.x1, x1 + 1),
+      std::max(region.y1, y1 + 1) };
+    range = TileRange{ static_cast<std::uint16_t>(x0 / TileSize),
+      static_cast<std::uint16_t>(x1 / TileSize), static_cast<std::uint16_t>(y0 / TileSize),
+      static_cast<std::uint16_t>(y1 / TileSize) };
+    for (int ty = range.y0; ty <= range.y1; ++ty)
+    {
+      for (int tx = range.x0; tx <= range.x1; ++tx)
       {
-        int x0, x1, y0, y1;
-        TileRange& range = this->Ranges[i];
-        const FanSide side = planes.count > 0 && fans[i].count >= 2
-          ? SideOfPlanes(fans[i], planes, this->Settings.clipping)
-          : FanSide::Kept;
-        if (fans[i].count < 2 || side == FanSide::Clipped ||
-          !FanPixels(fans[i], width, height, x0, x1, y0, y1))
-        {
-          range = TileRange{ 1, 0, 0, 0 };
-          continue;
-        }
-        if (planes.count > 0)
-        {
-          this->Straddles[i] = side == FanSide::Straddles ? 1 : 0;
-        }
-        ++blockBinned;
-        region = { std::min(region.x0, x0), std::min(region.y0, y0), std::max(region.x1, x1 + 1),
-          std::max(region.y1, y1 + 1) };
-        range = TileRange{ static_cast<std::uint16_t>(x0 / TileSize),
-          static_cast<std::uint16_t>(x1 / TileSize), static_cast<std::uint16_t>(y0 / TileSize),
-          static_cast<std::uint16_t>(y1 / TileSize) };
-        for (int ty = range.y0; ty <= range.y1; ++ty)
-        {
-          for (int tx = range.x0; tx <= range.x1; ++tx)
-          {
-            ++counts[ty * this->TilesX + tx];
-          }
-        }
+        ++counts[ty * this->TilesX + tx];
       }
-      binned[b] = blockBinned;
-      touched[b] = region;
     }
   }
-  for (int b = 0; b < blocks; ++b)
-  {
-    this->Statistics.fans += binned[b];
-    const PixelRegion& r = touched[b];
-    this->Touched = { std::min(this->Touched.x0, r.x0), std::min(this->Touched.y0, r.y0),
-      std::max(this->Touched.x1, r.x1), std::max(this->Touched.y1, r.y1) };
-  }
+  this->BlockBinned[b] = blockBinned;
+  this->BlockTouched[b] = region;
 }
 
 std::size_t Compositor::PlaceEntries(int blocks)
@@ -355,21 +386,16 @@ std::size_t Compositor::PlaceEntries(int blocks)
   const std::size_t tiles = static_cast<std::size_t>(this->TilesX) * this->TilesY;
   this->TileStart.assign(tiles + 1, 0);
   this->Tiles.clear();
-  std::size_t total = 0;
-  for (std::size_t t = 0; t < tiles; ++t)
-  {
-    this->TileStart[t] = total;
-    for (int b = 0; b < blocks; ++b)
-    {
-      const std::size_t n = this->Counts[b * tiles + t];
-      this->Counts[b * tiles + t] = static_cast<std::uint32_t>(total);
-      total += n;
-    }
-    if (total > this->TileStart[t])
-    {
-      this->Tiles.push_back(static_cast<int>(t));
-    }
-  }
+  const std::size_t total =
+    detail::ExclusivePrefixByBucket(this->Counts.data(), static_cast<std::size_t>(blocks), tiles,
+      [&](std::size_t t, std::size_t first, std::size_t pairs)
+      {
+        this->TileStart[t] = first;
+        if (pairs > 0)
+        {
+          this->Tiles.push_back(static_cast<int>(t));
+        }
+      });
   this->TileStart[tiles] = total;
   if (this->Entries.size() < total)
   {
@@ -378,24 +404,18 @@ std::size_t Compositor::PlaceEntries(int blocks)
   return total;
 }
 
-void Compositor::ListEntries(std::size_t count, int blocks)
+void Compositor::ListEntries(int b, std::size_t begin, std::size_t end)
 {
   const std::size_t tiles = static_cast<std::size_t>(this->TilesX) * this->TilesY;
-#pragma omp parallel num_threads(blocks)
+  std::uint32_t* cursor = this->Counts.data() + b * tiles;
+  for (std::size_t i = begin; i < end; ++i)
   {
-    for (int b = omp_get_thread_num(); b < blocks; b += omp_get_num_threads())
+    const TileRange& range = this->Ranges[i];
+    for (int ty = range.y0; ty <= range.y1; ++ty)
     {
-      std::uint32_t* cursor = this->Counts.data() + b * tiles;
-      for (std::size_t i = count * b / blocks; i < count * (b + 1) / blocks; ++i)
+      for (int tx = range.x0; tx <= range.x1; ++tx)
       {
-        const TileRange& range = this->Ranges[i];
-        for (int ty = range.y0; ty <= range.y1; ++ty)
-        {
-          for (int tx = range.x0; tx <= range.x1; ++tx)
-          {
-            this->Entries[cursor[ty * this->TilesX + tx]++] = static_cast<std::uint32_t>(i);
-          }
-        }
+        this->Entries[cursor[ty * this->TilesX + tx]++] = static_cast<std::uint32_t>(i);
       }
     }
   }
@@ -422,24 +442,24 @@ void Compositor::Rasterize(const Fan* fans, const LightFactors* lights, int thre
   const bool reduce = ReducesInAnyOrder(s.blendMode);
   const std::uint8_t* straddles = s.clipPlanes.count > 0 ? this->Straddles.data() : nullptr;
   const auto jobs = static_cast<std::int64_t>(this->Tiles.size());
-  std::size_t triangles = 0, fragments = 0, hidden = 0, vectors = 0;
   // Threads take tiles: no more threads than tiles, nor than the binned fans are worth.
   const std::size_t entries = this->TileStart.empty() ? 0 : this->TileStart.back();
   const int team = std::min(ThreadsForWork(this->Tiles.size(), 1, threads),
     ThreadsForWork(entries, detail::FansPerThread, threads));
-#pragma omp parallel num_threads(team) reduction(+ : triangles, fragments, hidden, vectors)
+  detail::PerThread<RasterScratch>& scratch = this->Scratch->threads;
+  scratch.Prepare(team, [] { return RasterScratch(); });
+  for (RasterScratch& mine : scratch)
   {
-    std::vector<float> depth(s.opaqueDepth ? TilePixels : 0), batch;
-    std::vector<float> range(s.depthRange ? 2 * TilePixels : 0);
-    std::vector<Fan> chunk(FansPerChunk);
-    std::vector<LightFactors> lit(lights ? FansPerChunk : 0);
-#pragma omp for schedule(dynamic, 1)
-    for (std::int64_t job = 0; job < jobs; ++job)
+    mine.counts = detail::RasterCounts{};
+  }
+  detail::ParallelForDynamic(jobs, team,
+    [&](std::int64_t job, int thread)
     {
+      RasterScratch& mine = scratch[thread];
       const int tile = this->Tiles[job];
-      if (s.depthRange && !CopyRanges(tile, this->TilesX, s, range))
+      if (s.depthRange && !CopyRanges(tile, this->TilesX, s, mine.range))
       {
-        continue; // depth peeling: no pixel of the tile has a range to composite
+        return; // depth peeling: no pixel of the tile has a range to composite
       }
       // A tile drawn by an earlier Composite holds what lies behind these fans: they are
       // drawn into a transparent image of their own, composited over it afterwards.
@@ -448,29 +468,31 @@ void Compositor::Rasterize(const Fan* fans, const LightFactors* lights, int thre
       float* pixels = this->Tile(tile);
       if (behind)
       {
-        batch.assign(4 * TilePixels, 0.0f);
+        std::fill(mine.batch.begin(), mine.batch.end(), 0.0f);
       }
       detail::TileTarget target =
-        TargetOf(tile, this->TilesX, s, behind ? batch.data() : pixels, depth);
-      target.range = s.depthRange ? range.data() : nullptr;
+        TargetOf(tile, this->TilesX, s, behind ? mine.batch.data() : pixels, mine.depth);
+      target.range = s.depthRange ? mine.range.data() : nullptr;
       detail::RasterCounts counts;
       const std::size_t first = this->TileStart[tile];
       DrawFrontToBack(fans, straddles, lights, this->Entries.data() + first,
-        this->TileStart[tile + 1] - first, frame, target, chunk, lit, counts);
+        this->TileStart[tile + 1] - first, frame, target, mine.chunk, mine.lit, counts);
       if (behind)
       {
-        Over(batch.data(), pixels);
+        Over(mine.batch.data(), pixels);
       }
-      triangles += counts.triangles;
-      fragments += counts.fragments;
-      hidden += counts.hidden;
-      vectors += counts.fanVectors;
-    }
+      mine.counts.triangles += counts.triangles;
+      mine.counts.fragments += counts.fragments;
+      mine.counts.hidden += counts.hidden;
+      mine.counts.fanVectors += counts.fanVectors;
+    });
+  for (const RasterScratch& mine : scratch)
+  {
+    this->Statistics.triangles += mine.counts.triangles;
+    this->Statistics.fragments += mine.counts.fragments;
+    this->Statistics.hiddenFans += mine.counts.hidden;
+    this->Statistics.fanVectors += mine.counts.fanVectors;
   }
-  this->Statistics.triangles += triangles;
-  this->Statistics.fragments += fragments;
-  this->Statistics.hiddenFans += hidden;
-  this->Statistics.fanVectors += vectors;
 }
 
 const char* Compositor::InstructionSet()
@@ -548,18 +570,19 @@ void ForEachPixel(const PixelRegion& region, int tilesX, const std::vector<std::
   const std::size_t pixels = static_cast<std::size_t>(std::max(width, 0)) *
     static_cast<std::size_t>(std::max(region.y1 - region.y0, 0));
   const int team = ThreadsForWork(pixels, detail::PixelsPerThread, threads);
-#pragma omp parallel for num_threads(team) schedule(static)
-  for (int y = region.y0; y < region.y1; ++y)
-  {
-    for (int x = region.x0; x < region.x1; ++x)
+  detail::ParallelFor(region.y0, region.y1, team,
+    [&](std::int64_t row)
     {
-      const int tile = (y / TileSize) * tilesX + x / TileSize;
-      const std::size_t i = static_cast<std::size_t>(y - region.y0) * width + (x - region.x0);
-      pixel(i,
-        cleared[tile] ? image + 4 * TilePixels * tile + (y % TileSize) * TileSize + x % TileSize
-                      : nullptr);
-    }
-  }
+      const int y = static_cast<int>(row);
+      for (int x = region.x0; x < region.x1; ++x)
+      {
+        const int tile = (y / TileSize) * tilesX + x / TileSize;
+        const std::size_t i = static_cast<std::size_t>(y - region.y0) * width + (x - region.x0);
+        pixel(i,
+          cleared[tile] ? image + 4 * TilePixels * tile + (y % TileSize) * TileSize + x % TileSize
+                        : nullptr);
+      }
+    });
 }
 
 } // namespace

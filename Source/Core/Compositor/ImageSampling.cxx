@@ -60,18 +60,18 @@ void SampleDepth(const float* depth, int width, int height, float* sampled, int 
   }
   const std::size_t pixels = static_cast<std::size_t>(sampledWidth) * sampledHeight;
   const int team = ThreadsForWork(pixels, detail::PixelsPerThread, threads);
-#pragma omp parallel for num_threads(team) schedule(static)
-  for (int j = 0; j < sampledHeight; ++j)
-  {
-    const double y = (j + 0.5) * height / sampledHeight;
-    const int row = std::min(height - 1, static_cast<int>(y));
-    const float* in = depth + static_cast<std::size_t>(row) * width;
-    float* out = sampled + static_cast<std::size_t>(j) * sampledWidth;
-    for (int i = 0; i < sampledWidth; ++i)
+  detail::ParallelFor(0, sampledHeight, team,
+    [&](std::int64_t j)
     {
-      out[i] = in[columns[static_cast<std::size_t>(i)]];
-    }
-  }
+      const double y = (j + 0.5) * height / sampledHeight;
+      const int row = std::min(height - 1, static_cast<int>(y));
+      const float* in = depth + static_cast<std::size_t>(row) * width;
+      float* out = sampled + static_cast<std::size_t>(j) * sampledWidth;
+      for (int i = 0; i < sampledWidth; ++i)
+      {
+        out[i] = in[columns[static_cast<std::size_t>(i)]];
+      }
+    });
 }
 
 namespace
@@ -159,33 +159,33 @@ void MagnifyOver(const SampledImage& image, int width, int height, const PixelRe
   };
   const std::size_t pixels = static_cast<std::size_t>(targetWidth) * (target.y1 - target.y0);
   const int team = ThreadsForWork(pixels, detail::PixelsPerThread, threads);
-#pragma omp parallel for num_threads(team) schedule(static)
-  for (int y = 0; y < target.y1 - target.y0; ++y)
-  {
-    const int r0 = rows.first[static_cast<std::size_t>(y)];
-    const int r1 = rows.second[static_cast<std::size_t>(y)];
-    const float wy = rows.weight[static_cast<std::size_t>(y)];
-    for (int x = 0; x < targetWidth; ++x)
+  detail::ParallelFor(0, target.y1 - target.y0, team,
+    [&](std::int64_t y)
     {
-      const std::size_t c = static_cast<std::size_t>(x);
-      const float wx = columns.weight[c];
-      const float *a = texel(r0, columns.first[c]), *b = texel(r0, columns.second[c]);
-      const float *d = texel(r1, columns.first[c]), *e = texel(r1, columns.second[c]);
-      float filtered[4];
-      for (int k = 0; k < 4; ++k)
+      const int r0 = rows.first[static_cast<std::size_t>(y)];
+      const int r1 = rows.second[static_cast<std::size_t>(y)];
+      const float wy = rows.weight[static_cast<std::size_t>(y)];
+      for (int x = 0; x < targetWidth; ++x)
       {
-        const float lower = a[k] + wx * (b[k] - a[k]);
-        const float upper = d[k] + wx * (e[k] - d[k]);
-        filtered[k] = lower + wy * (upper - lower);
+        const std::size_t c = static_cast<std::size_t>(x);
+        const float wx = columns.weight[c];
+        const float *a = texel(r0, columns.first[c]), *b = texel(r0, columns.second[c]);
+        const float *d = texel(r1, columns.first[c]), *e = texel(r1, columns.second[c]);
+        float filtered[4];
+        for (int k = 0; k < 4; ++k)
+        {
+          const float lower = a[k] + wx * (b[k] - a[k]);
+          const float upper = d[k] + wx * (e[k] - d[k]);
+          filtered[k] = lower + wy * (upper - lower);
+        }
+        const std::size_t i = 4 * (static_cast<std::size_t>(y) * targetWidth + c);
+        const float rest = 1.0f - filtered[3];
+        for (int k = 0; k < 4; ++k)
+        {
+          StoreUnit(filtered[k] + rest * (below[i + k] * (1.0f / 255.0f)), rgba[i + k]);
+        }
       }
-      const std::size_t i = 4 * (static_cast<std::size_t>(y) * targetWidth + c);
-      const float rest = 1.0f - filtered[3];
-      for (int k = 0; k < 4; ++k)
-      {
-        StoreUnit(filtered[k] + rest * (below[i + k] * (1.0f / 255.0f)), rgba[i + k]);
-      }
-    }
-  }
+    });
 }
 
 } // namespace mtpt

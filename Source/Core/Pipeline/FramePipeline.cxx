@@ -218,8 +218,8 @@ BatchesDrawn FramePipeline::DrawBatches(const FramePlan& plan, const BatchDrawer
 {
   BatchesDrawn drawn;
   const std::size_t total = this->SortedSize;
-  const std::size_t batch = std::max<std::size_t>(
-    1, plan.batchSize > 0 ? std::min(total, plan.batchSize) : total);
+  const std::size_t batch =
+    std::max<std::size_t>(1, plan.batchSize > 0 ? std::min(total, plan.batchSize) : total);
   for (std::size_t first = 0; first < total; first += batch)
   {
     Batch b;
@@ -350,8 +350,7 @@ bool FramePipeline::Prepare(const FrameInput& input, int threads)
     [&]
     {
       return this->Selection.Update(CellSelectionKeyOf(input, mesh, this->Culling.Version()),
-        input.points, input.cells, this->Culling.Visible(), this->Culling.VisibleCount(),
-        threads);
+        input.points, input.cells, this->Culling.Visible(), this->Culling.VisibleCount(), threads);
     });
   this->LastStats.leftOut = this->Selection.LeftOut();
   this->LastStats.attenuationScale = this->Selection.AttenuationScale();
@@ -510,8 +509,7 @@ void FramePipeline::DecomposeFans(std::size_t first, std::size_t count, int thre
 }
 
 void FramePipeline::LightWindow(std::size_t first, std::size_t count, const Lighting& lighting,
-  const float* normals, const Matrix4& modelView, std::vector<LightFactors>& factors,
-  int threads)
+  const float* normals, const Matrix4& modelView, std::vector<LightFactors>& factors, int threads)
 {
   const auto start = Clock::now();
   first = std::min(first, this->SortedSize);
@@ -554,14 +552,14 @@ void FramePipeline::LightWindow(std::size_t first, std::size_t count, const Ligh
         factors[r - first] = LightTetrahedron(lighting, normalMatrix, normals + 3 * cell, corners);
       };
       const auto n = static_cast<std::int64_t>(listed);
-#pragma omp parallel for num_threads(threads) schedule(static)
-      for (std::int64_t i = 0; i < n; ++i)
-      {
-        std::size_t cell;
-        std::uint32_t r;
-        in.Visited(static_cast<std::size_t>(i), rank, cell, r);
-        light(cell, r);
-      }
+      detail::ParallelFor(0, n, threads,
+        [&](std::int64_t i)
+        {
+          std::size_t cell;
+          std::uint32_t r;
+          in.Visited(static_cast<std::size_t>(i), rank, cell, r);
+          light(cell, r);
+        });
       // A near-plane piece (id cellCount + j) is lit as its cell.
       for (std::size_t j = 0; j < pieces.size(); ++j)
       {

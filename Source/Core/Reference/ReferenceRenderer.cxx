@@ -4,8 +4,6 @@
 #include "detail/MeshAccess.h"
 #include "detail/Parallel.h"
 
-#include <omp.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -525,22 +523,24 @@ std::vector<LightFactors> CellLights(const CellsView& cells, std::size_t pointCo
     return lights;
   }
   lights.assign(cells.cellCount, Unlit());
-  detail::DispatchCells(cells, pointCount, [&](const auto& access) {
-    for (std::size_t c = 0; c < cells.cellCount; ++c)
+  detail::DispatchCells(cells, pointCount,
+    [&](const auto& access)
     {
-      std::int64_t ids[4];
-      if (!access.TetrahedronPoints(c, ids))
+      for (std::size_t c = 0; c < cells.cellCount; ++c)
       {
-        continue;
+        std::int64_t ids[4];
+        if (!access.TetrahedronPoints(c, ids))
+        {
+          continue;
+        }
+        double corners[4][3];
+        for (int i = 0; i < 4; ++i)
+        {
+          std::copy(eye[ids[i]].eye, eye[ids[i]].eye + 3, corners[i]);
+        }
+        lights[c] = LightTetrahedron(s.lighting, normalMatrix, s.normals + 3 * c, corners);
       }
-      double corners[4][3];
-      for (int i = 0; i < 4; ++i)
-      {
-        std::copy(eye[ids[i]].eye, eye[ids[i]].eye + 3, corners[i]);
-      }
-      lights[c] = LightTetrahedron(s.lighting, normalMatrix, s.normals + 3 * c, corners);
-    }
-  });
+    });
   return lights;
 }
 
@@ -624,39 +624,39 @@ std::vector<EyePoint> EyePoints(
   for (const PointsView& part : pointParts)
   {
     const auto partCount = static_cast<std::int64_t>(part.count);
-#pragma omp parallel for num_threads(nthreads) schedule(static)
-    for (std::int64_t j = 0; j < partCount; ++j)
-    {
-      double m[3];
-      for (int d = 0; d < 3; ++d)
+    detail::ParallelFor(0, partCount, nthreads,
+      [&](std::int64_t j)
       {
-        m[d] = part.type == PointsView::Type::Float32
-          ? static_cast<const float*>(part.data)[3 * j + d]
-          : static_cast<const double*>(part.data)[3 * j + d];
-      }
-      EyePoint& e = eye[first + static_cast<std::size_t>(j)];
-      double w = 1;
-      for (int r = 0; r < 3; ++r)
-      {
-        e.eye[r] = mv[4 * r] * m[0] + mv[4 * r + 1] * m[1] + mv[4 * r + 2] * m[2] + mv[4 * r + 3];
-      }
-      w = mv[12] * m[0] + mv[13] * m[1] + mv[14] * m[2] + mv[15];
-      for (int r = 0; r < 3; ++r)
-      {
-        e.eye[r] /= w;
-      }
-      double clip[4];
-      for (int r = 0; r < 4; ++r)
-      {
-        clip[r] =
-          p[4 * r] * e.eye[0] + p[4 * r + 1] * e.eye[1] + p[4 * r + 2] * e.eye[2] + p[4 * r + 3];
-      }
-      e.clipW = clip[3];
-      e.windowX = (clip[0] / clip[3] + 1.0) * 0.5 * width;
-      e.windowY = (clip[1] / clip[3] + 1.0) * 0.5 * height;
-      e.finite = std::isfinite(e.eye[0]) && std::isfinite(e.eye[1]) && std::isfinite(e.eye[2]) &&
-        std::isfinite(w) && w != 0;
-    }
+        double m[3];
+        for (int d = 0; d < 3; ++d)
+        {
+          m[d] = part.type == PointsView::Type::Float32
+            ? static_cast<const float*>(part.data)[3 * j + d]
+            : static_cast<const double*>(part.data)[3 * j + d];
+        }
+        EyePoint& e = eye[first + static_cast<std::size_t>(j)];
+        double w = 1;
+        for (int r = 0; r < 3; ++r)
+        {
+          e.eye[r] = mv[4 * r] * m[0] + mv[4 * r + 1] * m[1] + mv[4 * r + 2] * m[2] + mv[4 * r + 3];
+        }
+        w = mv[12] * m[0] + mv[13] * m[1] + mv[14] * m[2] + mv[15];
+        for (int r = 0; r < 3; ++r)
+        {
+          e.eye[r] /= w;
+        }
+        double clip[4];
+        for (int r = 0; r < 4; ++r)
+        {
+          clip[r] =
+            p[4 * r] * e.eye[0] + p[4 * r + 1] * e.eye[1] + p[4 * r + 2] * e.eye[2] + p[4 * r + 3];
+        }
+        e.clipW = clip[3];
+        e.windowX = (clip[0] / clip[3] + 1.0) * 0.5 * width;
+        e.windowY = (clip[1] / clip[3] + 1.0) * 0.5 * height;
+        e.finite = std::isfinite(e.eye[0]) && std::isfinite(e.eye[1]) && std::isfinite(e.eye[2]) &&
+          std::isfinite(w) && w != 0;
+      });
     first += part.count;
   }
   return eye;
@@ -672,48 +672,48 @@ std::vector<PixelBox> PixelBoxes(const CellsView& cells, std::size_t pointCount,
   detail::DispatchCells(cells, pointCount,
     [&](const auto& access)
     {
-#pragma omp parallel for num_threads(nthreads) schedule(static)
-      for (std::int64_t c = 0; c < static_cast<std::int64_t>(cellCount); ++c)
-      {
-        PixelBox& box = boxes[c];
-        box = { 1, 0, 1, 0 };
-        std::int64_t ids[4];
-        if (!access.TetrahedronPoints(static_cast<std::size_t>(c), ids))
+      detail::ParallelFor(0, static_cast<std::int64_t>(cellCount), nthreads,
+        [&](std::int64_t c)
         {
-          continue;
-        }
-        bool inFront = true, finite = true;
-        double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
-        for (std::int64_t id : ids)
-        {
-          const EyePoint& e = eye[id];
-          finite = finite && e.finite;
-          inFront = inFront && e.clipW > 0;
-          x0 = std::min(x0, e.windowX);
-          x1 = std::max(x1, e.windowX);
-          y0 = std::min(y0, e.windowY);
-          y1 = std::max(y1, e.windowY);
-        }
-        if (!finite)
-        {
-          continue;
-        }
-        if (!inFront || !(x1 - x0 < 1e300) || !(y1 - y0 < 1e300))
-        {
-          // The cell reaches the eye plane: its projection is unbounded.
-          box = { 0, width - 1, 0, height - 1 };
-          continue;
-        }
-        // Centres x + 0.5 within [x0, x1], one pixel of margin for rounding.
-        box.xmin = static_cast<int>(std::max(0.0, std::floor(x0 - 0.5) - 1));
-        box.xmax = static_cast<int>(std::min(width - 1.0, std::ceil(x1 - 0.5) + 1));
-        box.ymin = static_cast<int>(std::max(0.0, std::floor(y0 - 0.5) - 1));
-        box.ymax = static_cast<int>(std::min(height - 1.0, std::ceil(y1 - 0.5) + 1));
-        if (x1 < -1.0 || x0 > width + 1.0 || y1 < -1.0 || y0 > height + 1.0)
-        {
+          PixelBox& box = boxes[c];
           box = { 1, 0, 1, 0 };
-        }
-      }
+          std::int64_t ids[4];
+          if (!access.TetrahedronPoints(static_cast<std::size_t>(c), ids))
+          {
+            return;
+          }
+          bool inFront = true, finite = true;
+          double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
+          for (std::int64_t id : ids)
+          {
+            const EyePoint& e = eye[id];
+            finite = finite && e.finite;
+            inFront = inFront && e.clipW > 0;
+            x0 = std::min(x0, e.windowX);
+            x1 = std::max(x1, e.windowX);
+            y0 = std::min(y0, e.windowY);
+            y1 = std::max(y1, e.windowY);
+          }
+          if (!finite)
+          {
+            return;
+          }
+          if (!inFront || !(x1 - x0 < 1e300) || !(y1 - y0 < 1e300))
+          {
+            // The cell reaches the eye plane: its projection is unbounded.
+            box = { 0, width - 1, 0, height - 1 };
+            return;
+          }
+          // Centres x + 0.5 within [x0, x1], one pixel of margin for rounding.
+          box.xmin = static_cast<int>(std::max(0.0, std::floor(x0 - 0.5) - 1));
+          box.xmax = static_cast<int>(std::min(width - 1.0, std::ceil(x1 - 0.5) + 1));
+          box.ymin = static_cast<int>(std::max(0.0, std::floor(y0 - 0.5) - 1));
+          box.ymax = static_cast<int>(std::min(height - 1.0, std::ceil(y1 - 0.5) + 1));
+          if (x1 < -1.0 || x0 > width + 1.0 || y1 < -1.0 || y0 > height + 1.0)
+          {
+            box = { 1, 0, 1, 0 };
+          }
+        });
     });
   return boxes;
 }
@@ -908,47 +908,48 @@ void GatherSegments(const Scene& scene, int bandStart, int bandEnd,
     detail::DispatchCells(scene.cells, scene.pointCount,
       [&](const auto& access)
       {
-#pragma omp parallel for num_threads(scene.nthreads) schedule(dynamic, 256)
-        for (std::int64_t c = 0; c < static_cast<std::int64_t>(scene.cells.cellCount); ++c)
-        {
-          const PixelBox& box = scene.boxes[c];
-          if (box.xmin > box.xmax || box.ymax < bandStart || box.ymin >= bandEnd)
+        // Cells of uneven work (their boxes' pixels) in chunks of 256.
+        detail::ParallelForDynamic(
+          static_cast<std::int64_t>(scene.cells.cellCount), scene.nthreads,
+          [&](std::int64_t c, int)
           {
-            continue;
-          }
-          std::int64_t ids[4];
-          access.TetrahedronPoints(static_cast<std::size_t>(c), ids);
-          double values[4][4];
-          scene.CellValues(static_cast<std::size_t>(c), ids, C, values);
-          CellPlanes planes;
-          if (!SetUpCell(scene.eye.data(), ids, values, C, planes))
-          {
-            continue;
-          }
-          const int y0 = std::max(box.ymin, bandStart), y1 = std::min(box.ymax, bandEnd - 1);
-          for (int y = y0; y <= y1; ++y)
-          {
-            for (int x = box.xmin; x <= box.xmax; ++x)
+            const PixelBox& box = scene.boxes[c];
+            if (box.xmin > box.xmax || box.ymax < bandStart || box.ymin >= bandEnd)
             {
-              double origin[3], direction[3];
-              scene.ray(x, y, origin, direction);
-              Segment<C> segment;
-              if (!Clip(planes, origin, direction, segment))
+              return;
+            }
+            std::int64_t ids[4];
+            access.TetrahedronPoints(static_cast<std::size_t>(c), ids);
+            double values[4][4];
+            scene.CellValues(static_cast<std::size_t>(c), ids, C, values);
+            CellPlanes planes;
+            if (!SetUpCell(scene.eye.data(), ids, values, C, planes))
+            {
+              return;
+            }
+            const int y0 = std::max(box.ymin, bandStart), y1 = std::min(box.ymax, bandEnd - 1);
+            for (int y = y0; y <= y1; ++y)
+            {
+              for (int x = box.xmin; x <= box.xmax; ++x)
               {
-                continue;
-              }
-              segment.cell = static_cast<std::uint32_t>(c);
-              const std::size_t pixel = static_cast<std::size_t>(y - bandStart) * width + x;
-              std::uint32_t slot;
-#pragma omp atomic capture
-              slot = counts[pixel]++;
-              if (fill == 1)
-              {
-                segments[offsets[pixel] + slot] = segment;
+                double origin[3], direction[3];
+                scene.ray(x, y, origin, direction);
+                Segment<C> segment;
+                if (!Clip(planes, origin, direction, segment))
+                {
+                  continue;
+                }
+                segment.cell = static_cast<std::uint32_t>(c);
+                const std::size_t pixel = static_cast<std::size_t>(y - bandStart) * width + x;
+                const std::uint32_t slot = detail::FetchAdd(counts[pixel], 1u);
+                if (fill == 1)
+                {
+                  segments[offsets[pixel] + slot] = segment;
+                }
               }
             }
-          }
-        }
+          },
+          256);
       });
   }
 }
@@ -1134,8 +1135,7 @@ struct Reduction
 /// Integrals of o x over a segment of `length` whose scalar runs linearly between `low` and
 /// `high` (in either direction): split at every breakpoint of o, of the clamping and of the
 /// average's range, so that on each piece the clamped scalar is linear and o x quadratic.
-void IntegrateIntensity(
-  const Scene& scene, double length, double low, double high, Reduction& r)
+void IntegrateIntensity(const Scene& scene, double length, double low, double high, Reduction& r)
 {
   const ReferenceSettings& s = scene.settings;
   const double lo = s.scalarRange[0], hi = s.scalarRange[1];
@@ -1271,49 +1271,53 @@ void IntegratePixels(const Scene& scene, int bandStart, int bandEnd,
   GatherHits(scene, bandStart, bandEnd, hitOffsets, hits);
   const int width = scene.settings.width;
   const std::size_t bandPixels = static_cast<std::size_t>(bandEnd - bandStart) * width;
-#pragma omp parallel for num_threads(scene.nthreads) schedule(dynamic, 64)
-  for (std::int64_t i = 0; i < static_cast<std::int64_t>(bandPixels); ++i)
-  {
-    Segment<C>* begin = segments.data() + offsets[i];
-    Segment<C>* end = segments.data() + offsets[i + 1];
-    std::sort(begin, end);
-    const int x = static_cast<int>(i % width);
-    const int y = bandStart + static_cast<int>(i / width);
-    double origin[3], direction[3];
-    scene.ray(x, y, origin, direction);
-    const double scale = std::sqrt(Dot3(direction, direction));
-    if (scene.settings.clipPlanes.count > 0)
+  // Pixels of uneven work (their segments) in chunks of 64.
+  detail::ParallelForDynamic(
+    static_cast<std::int64_t>(bandPixels), scene.nthreads,
+    [&](std::int64_t i, int)
     {
-      double low, high;
-      KeptStretch(scene.settings.clipPlanes, origin, direction, low, high);
-      CutSegments(begin, end, low, high);
-    }
-    double* out = rgb + 3 * (static_cast<std::size_t>(y) * width + x);
-    if constexpr (C == 1)
-    {
-      if (scene.settings.blendMode != BlendMode::Composite)
+      Segment<C>* begin = segments.data() + offsets[i];
+      Segment<C>* end = segments.data() + offsets[i + 1];
+      std::sort(begin, end);
+      const int x = static_cast<int>(i % width);
+      const int y = bandStart + static_cast<int>(i / width);
+      double origin[3], direction[3];
+      scene.ray(x, y, origin, direction);
+      const double scale = std::sqrt(Dot3(direction, direction));
+      if (scene.settings.clipPlanes.count > 0)
       {
-        Reduction reduction;
-        for (const Segment<C>* s = begin; s != end; ++s)
-        {
-          if (s->exit > s->enter)
-          {
-            ReduceSegment(scene, (s->exit - s->enter) * scale, s->front[0], s->back[0], reduction);
-          }
-        }
-        ReducedPixel(scene, reduction, out);
-        continue;
+        double low, high;
+        KeptStretch(scene.settings.clipPlanes, origin, direction, low, high);
+        CutSegments(begin, end, low, high);
       }
-    }
-    RayState state;
-    IntegrateRay(scene.tf, scale, begin, end, hits.data() + hitOffsets[i],
-      hits.data() + hitOffsets[i + 1], scene.lights.empty() ? nullptr : scene.lights.data(),
-      state);
-    for (int k = 0; k < 3; ++k)
-    {
-      out[k] = state.color[k] + state.transmittance * scene.settings.background[k];
-    }
-  }
+      double* out = rgb + 3 * (static_cast<std::size_t>(y) * width + x);
+      if constexpr (C == 1)
+      {
+        if (scene.settings.blendMode != BlendMode::Composite)
+        {
+          Reduction reduction;
+          for (const Segment<C>* s = begin; s != end; ++s)
+          {
+            if (s->exit > s->enter)
+            {
+              ReduceSegment(
+                scene, (s->exit - s->enter) * scale, s->front[0], s->back[0], reduction);
+            }
+          }
+          ReducedPixel(scene, reduction, out);
+          return;
+        }
+      }
+      RayState state;
+      IntegrateRay(scene.tf, scale, begin, end, hits.data() + hitOffsets[i],
+        hits.data() + hitOffsets[i + 1], scene.lights.empty() ? nullptr : scene.lights.data(),
+        state);
+      for (int k = 0; k < 3; ++k)
+      {
+        out[k] = state.color[k] + state.transmittance * scene.settings.background[k];
+      }
+    },
+    64);
 }
 
 /// The image in bands of rows that keep the gathered segments within the settings' budget.
@@ -1385,8 +1389,8 @@ bool RenderReference(const PointsView& points, const CellsView& cells, const Sca
   }
   if (settings.blendMode != BlendMode::Composite &&
     (!std::isfinite(settings.scalarRange[0]) || !std::isfinite(settings.scalarRange[1]) ||
-      settings.scalarRange[1] < settings.scalarRange[0] ||
-      std::isnan(settings.averageRange[0]) || std::isnan(settings.averageRange[1])))
+      settings.scalarRange[1] < settings.scalarRange[0] || std::isnan(settings.averageRange[0]) ||
+      std::isnan(settings.averageRange[1])))
   {
     return Fail(error, "the scalar range must be finite and ordered, the average's range a number");
   }

@@ -90,27 +90,26 @@ bool SelectsExactlyThese(const OpacityCulling& culling, std::size_t cellCount,
     return false;
   }
   const int nthreads = detail::ResolveThreads(threads);
-  int same = 1;
-#pragma omp parallel for num_threads(nthreads) schedule(static, 1) reduction(&& : same)
-  for (int b = 0; b < nthreads; ++b)
-  {
-    // This block's cells and the part of the list that can name them.
-    const std::size_t begin = cellCount * static_cast<std::size_t>(b) / nthreads;
-    const std::size_t end = cellCount * static_cast<std::size_t>(b + 1) / nthreads;
-    const std::uint32_t* next = std::lower_bound(cells, cells + count, begin);
-    const std::uint32_t* const stop = std::lower_bound(next, cells + count, end);
-    bool match = true;
-    for (std::size_t c = begin; c < end && match; ++c)
+  return detail::ParallelReduce(
+    0, nthreads, nthreads, true, [](bool a, bool b) { return a && b; },
+    [&](std::int64_t b)
     {
-      float low, high;
-      rangeOf(c, low, high);
-      const bool listed = next != stop && *next == c;
-      match = culling.Visible(low, high) == listed;
-      next += listed ? 1 : 0;
-    }
-    same = same && match && next == stop;
-  }
-  return same != 0;
+      // This block's cells and the part of the list that can name them.
+      const std::size_t begin = cellCount * static_cast<std::size_t>(b) / nthreads;
+      const std::size_t end = cellCount * static_cast<std::size_t>(b + 1) / nthreads;
+      const std::uint32_t* next = std::lower_bound(cells, cells + count, begin);
+      const std::uint32_t* const stop = std::lower_bound(next, cells + count, end);
+      bool match = true;
+      for (std::size_t c = begin; c < end && match; ++c)
+      {
+        float low, high;
+        rangeOf(c, low, high);
+        const bool listed = next != stop && *next == c;
+        match = culling.Visible(low, high) == listed;
+        next += listed ? 1 : 0;
+      }
+      return match && next == stop;
+    });
 }
 
 } // namespace
@@ -123,11 +122,11 @@ void ComputeCellScalarRanges(const CellsView& cells, std::size_t pointCount,
   detail::DispatchCells(cells, pointCount,
     [&](const auto& access)
     {
-#pragma omp parallel for num_threads(nthreads) schedule(static)
-      for (std::int64_t c = 0; c < n; ++c)
-      {
-        RangeOfCell(access, scalars, static_cast<std::size_t>(c), ranges[2 * c], ranges[2 * c + 1]);
-      }
+      detail::ParallelFor(0, n, nthreads,
+        [&](std::int64_t c) {
+          RangeOfCell(
+            access, scalars, static_cast<std::size_t>(c), ranges[2 * c], ranges[2 * c + 1]);
+        });
     });
 }
 
@@ -258,7 +257,7 @@ bool CullingStage::Update(const Key& key, const CellsView& cells, std::size_t po
 std::size_t CullingStage::VisibleCount() const
 {
   return this->Record.Inputs().mode == CullingMode::None ? this->Record.Inputs().mesh.cellCount
-                                                  : this->List.size();
+                                                         : this->List.size();
 }
 
 void CullingStage::Release()

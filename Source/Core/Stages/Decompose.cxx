@@ -762,15 +762,15 @@ inline const float* CellScalars(const DecomposeInput& input)
 template <typename Body>
 void ParallelSlots(std::int64_t n, int threads, Body&& body)
 {
-#pragma omp parallel num_threads(threads)
-  {
-#pragma omp for schedule(static) nowait
-    for (std::int64_t i = 0; i < n; ++i)
+  detail::ForEachThreadBlock(static_cast<std::size_t>(n), threads,
+    [&](detail::IndexRange r)
     {
-      body(i);
-    }
-    detail::FinishStores();
-  }
+      for (std::size_t i = r.begin; i < r.end; ++i)
+      {
+        body(static_cast<std::int64_t>(i));
+      }
+      detail::FinishStores();
+    });
 }
 
 template <typename Access>
@@ -970,13 +970,13 @@ void DecomposeAllByRank(const Access& cells, const DecomposeInput& input, const 
       });
     return;
   }
-#pragma omp parallel num_threads(threads)
-  {
-    const std::int64_t t = omp_get_thread_num(), team = omp_get_num_threads();
-    DecomposeBlock(cells, cellInput, cellScalars, rank, firstRank, count, n * t / team,
-      n * (t + 1) / team, writer, classes);
-    detail::FinishStores();
-  }
+  detail::ForEachThreadBlock(static_cast<std::size_t>(n), threads,
+    [&](detail::IndexRange r)
+    {
+      DecomposeBlock(cells, cellInput, cellScalars, rank, firstRank, count,
+        static_cast<std::int64_t>(r.begin), static_cast<std::int64_t>(r.end), writer, classes);
+      detail::FinishStores();
+    });
 }
 
 } // namespace
@@ -1056,32 +1056,38 @@ bool DecompositionStage::Run(const Key& key, const DecomposeInput& input, const 
   cells(input, first, count, this->Classes.data(), threads);
   // Pieces of cells cut by the near plane: ranks after the cells'.
   const auto pieceCount = static_cast<std::int64_t>(pieces.size());
-#pragma omp parallel for num_threads(detail::ResolveThreads(threads))                              \
-  schedule(static) if (pieceCount > 1024)
-  for (std::int64_t j = 0; j < pieceCount; ++j)
-  {
-    const std::uint32_t r = rank[input.cells.cellCount + j];
-    const std::uint64_t k = static_cast<std::uint64_t>(r) - first;
-    if (r != NotInOrder && k < count)
+  // Few pieces are not worth waking the threads.
+  detail::ParallelFor(0, pieceCount, pieceCount > 1024 ? threads : 1,
+    [&](std::int64_t j)
     {
-      const NearPiece& p = pieces[j];
-      const ProjectedPoint* corners[4] = { &p.corners[0], &p.corners[1], &p.corners[2],
-        &p.corners[3] };
-      const float* colours[4] = { p.colours[0], p.colours[1], p.colours[2], p.colours[3] };
-      this->Classes[k] = piece(input, corners, p.scalars, input.colours ? colours : nullptr, k);
-    }
-  }
-  std::size_t pixelCulled = 0, notDrawable = 0;
-  const auto m = static_cast<std::int64_t>(count);
-#pragma omp parallel for num_threads(detail::ResolveThreads(threads)) schedule(static) \
-  reduction(+ : pixelCulled, notDrawable)
-  for (std::int64_t k = 0; k < m; ++k)
+      const std::uint32_t r = rank[input.cells.cellCount + j];
+      const std::uint64_t k = static_cast<std::uint64_t>(r) - first;
+      if (r != NotInOrder && k < count)
+      {
+        const NearPiece& p = pieces[j];
+        const ProjectedPoint* corners[4] = { &p.corners[0], &p.corners[1], &p.corners[2],
+          &p.corners[3] };
+        const float* colours[4] = { p.colours[0], p.colours[1], p.colours[2], p.colours[3] };
+        this->Classes[k] = piece(input, corners, p.scalars, input.colours ? colours : nullptr, k);
+      }
+    });
+  // The window's slots that draw nothing: covering no pixel centre, or not drawable.
+  struct Undrawn
   {
-    pixelCulled += this->Classes[k] == ProjectionClass::CoversNoPixel;
-    notDrawable += this->Classes[k] == ProjectionClass::NotDrawable;
-  }
-  this->CoversNoPixel = pixelCulled;
-  this->Undrawable = notDrawable;
+    std::size_t pixelCulled = 0, notDrawable = 0;
+  };
+  const Undrawn undrawn = detail::ParallelReduce(
+    0, static_cast<std::int64_t>(count), threads, Undrawn{},
+    [](Undrawn a, Undrawn b) {
+      return Undrawn{ a.pixelCulled + b.pixelCulled, a.notDrawable + b.notDrawable };
+    },
+    [&](std::int64_t k)
+    {
+      return Undrawn{ this->Classes[k] == ProjectionClass::CoversNoPixel ? 1u : 0u,
+        this->Classes[k] == ProjectionClass::NotDrawable ? 1u : 0u };
+    });
+  this->CoversNoPixel = undrawn.pixelCulled;
+  this->Undrawable = undrawn.notDrawable;
   this->Record.Store(key);
   return true;
 }

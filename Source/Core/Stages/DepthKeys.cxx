@@ -6,6 +6,7 @@
 #include "detail/Parallel.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -123,11 +124,9 @@ void ComputeDepthKeys(const ProjectedPoint* points, std::size_t pointCount, cons
   detail::DispatchCells(cells, pointCount,
     [&](const auto& access)
     {
-#pragma omp parallel for num_threads(nthreads) schedule(static)
-      for (std::int64_t c = 0; c < count; ++c)
-      {
-        keys[c] = CellKey(access, points, static_cast<std::uint32_t>(c), perspective);
-      }
+      detail::ParallelFor(0, count, nthreads,
+        [&](std::int64_t c)
+        { keys[c] = CellKey(access, points, static_cast<std::uint32_t>(c), perspective); });
     });
 }
 
@@ -137,7 +136,7 @@ KeyCounts ComputeVisibleDepthKeys(const ProjectedPoint* points, std::size_t poin
 {
   const std::size_t n = list ? listCount : cells.cellCount;
   KeyCounts counts;
-  std::size_t pixelCulled = 0;
+  std::atomic<std::size_t> pixelCulled{ 0 };
   detail::DispatchCells(cells, pointCount,
     [&](const auto& access)
     {
@@ -148,13 +147,12 @@ KeyCounts ComputeVisibleDepthKeys(const ProjectedPoint* points, std::size_t poin
           std::size_t noPixel = 0;
           const std::size_t written =
             KeysInBatches(access, points, list, begin, end, rules, out, noPixel);
-#pragma omp atomic
           pixelCulled += noPixel;
           return written;
         });
     });
-  counts.pixelCulled = pixelCulled;
-  counts.frustumCulled = n - counts.kept - pixelCulled;
+  counts.pixelCulled = pixelCulled.load();
+  counts.frustumCulled = n - counts.kept - counts.pixelCulled;
   return counts;
 }
 

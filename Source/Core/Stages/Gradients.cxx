@@ -40,8 +40,8 @@ std::vector<double> ModelCoordinates(const PointsView& points)
  * (d_1 e_2 x e_3 + d_2 e_3 x e_1 + d_3 e_1 x e_2) / det and the volume |det| / 6, so no
  * division is needed. False (nothing counts) for a flat or non-finite cell.
  */
-bool WeightedGradient(const double* xyz, const float* scalars, const std::int64_t ids[4],
-  double weighted[4])
+bool WeightedGradient(
+  const double* xyz, const float* scalars, const std::int64_t ids[4], double weighted[4])
 {
   double e[3][3], d[3];
   const double* p0 = xyz + 3 * ids[0];
@@ -89,19 +89,21 @@ void PointGradients(const PointsView& points, const CellsView& cells, const Scal
   std::vector<double> weighted(4 * cellCount, 0.0);
   std::vector<std::int64_t> ids(4 * cellCount, -1);
   const int nthreads = detail::ResolveThreads(threads);
-  detail::DispatchCells(cells, points.count, [&](const auto& access) {
-    const auto count = static_cast<std::int64_t>(cellCount);
-#pragma omp parallel for num_threads(nthreads) schedule(static)
-    for (std::int64_t c = 0; c < count; ++c)
+  detail::DispatchCells(cells, points.count,
+    [&](const auto& access)
     {
-      std::int64_t* cellIds = ids.data() + 4 * c;
-      if (!access.TetrahedronPoints(static_cast<std::size_t>(c), cellIds) ||
-        !WeightedGradient(xyz.data(), scalars.values, cellIds, weighted.data() + 4 * c))
-      {
-        cellIds[0] = -1;
-      }
-    }
-  });
+      const auto count = static_cast<std::int64_t>(cellCount);
+      detail::ParallelFor(0, count, nthreads,
+        [&](std::int64_t c)
+        {
+          std::int64_t* cellIds = ids.data() + 4 * c;
+          if (!access.TetrahedronPoints(static_cast<std::size_t>(c), cellIds) ||
+            !WeightedGradient(xyz.data(), scalars.values, cellIds, weighted.data() + 4 * c))
+          {
+            cellIds[0] = -1;
+          }
+        });
+    });
   std::vector<double> sums(4 * points.count, 0.0);
   for (std::size_t c = 0; c < cellCount; ++c)
   {
@@ -147,33 +149,35 @@ void CellNormals(const CellsView& cells, std::size_t pointCount,
     return;
   }
   const int nthreads = detail::ResolveThreads(threads);
-  detail::DispatchCells(cells, pointCount, [&](const auto& access) {
-    const auto count = static_cast<std::int64_t>(cells.cellCount);
-#pragma omp parallel for num_threads(nthreads) schedule(static)
-    for (std::int64_t c = 0; c < count; ++c)
+  detail::DispatchCells(cells, pointCount,
+    [&](const auto& access)
     {
-      std::int64_t ids[4];
-      if (!access.TetrahedronPoints(static_cast<std::size_t>(c), ids))
-      {
-        continue;
-      }
-      double mean[3] = { 0, 0, 0 };
-      for (int i = 0; i < 4; ++i)
-      {
-        for (int k = 0; k < 3; ++k)
+      const auto count = static_cast<std::int64_t>(cells.cellCount);
+      detail::ParallelFor(0, count, nthreads,
+        [&](std::int64_t c)
         {
-          mean[k] += gradients[3 * ids[i] + k];
-        }
-      }
-      if (Normalize3(mean))
-      {
-        for (int k = 0; k < 3; ++k)
-        {
-          normals[3 * c + k] = static_cast<float>(mean[k]);
-        }
-      }
-    }
-  });
+          std::int64_t ids[4];
+          if (!access.TetrahedronPoints(static_cast<std::size_t>(c), ids))
+          {
+            return;
+          }
+          double mean[3] = { 0, 0, 0 };
+          for (int i = 0; i < 4; ++i)
+          {
+            for (int k = 0; k < 3; ++k)
+            {
+              mean[k] += gradients[3 * ids[i] + k];
+            }
+          }
+          if (Normalize3(mean))
+          {
+            for (int k = 0; k < 3; ++k)
+            {
+              normals[3 * c + k] = static_cast<float>(mean[k]);
+            }
+          }
+        });
+    });
 }
 
 } // namespace mtpt

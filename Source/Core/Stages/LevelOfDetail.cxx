@@ -79,8 +79,7 @@ std::uint32_t ReverseBits(std::uint32_t v, int bits)
 
 /// The Morton codes of the cells' centroids on a 1024^3 lattice over the points' bounding
 /// box, as keys (code << 32 | cell) so that sorting them orders the cells along the curve.
-void MortonKeys(
-  const PointsView& points, const CellsView& cells, std::uint64_t* keys, int threads)
+void MortonKeys(const PointsView& points, const CellsView& cells, std::uint64_t* keys, int threads)
 {
   const PointReader reader(points);
   const auto pointCount = static_cast<std::int64_t>(points.count);
@@ -110,34 +109,34 @@ void MortonKeys(
   detail::DispatchCells(cells, points.count,
     [&](const auto& access)
     {
-#pragma omp parallel for num_threads(threads) schedule(static)
-      for (std::int64_t c = 0; c < n; ++c)
-      {
-        std::int64_t ids[4];
-        double centre[3] = { low[0], low[1], low[2] };
-        if (access.TetrahedronPoints(static_cast<std::size_t>(c), ids))
+      detail::ParallelFor(0, n, threads,
+        [&](std::int64_t c)
         {
-          centre[0] = centre[1] = centre[2] = 0;
-          for (int i = 0; i < 4; ++i)
+          std::int64_t ids[4];
+          double centre[3] = { low[0], low[1], low[2] };
+          if (access.TetrahedronPoints(static_cast<std::size_t>(c), ids))
           {
-            double p[3];
-            reader.Read(static_cast<std::size_t>(ids[i]), p);
-            for (int a = 0; a < 3; ++a)
+            centre[0] = centre[1] = centre[2] = 0;
+            for (int i = 0; i < 4; ++i)
             {
-              centre[a] += 0.25 * p[a];
+              double p[3];
+              reader.Read(static_cast<std::size_t>(ids[i]), p);
+              for (int a = 0; a < 3; ++a)
+              {
+                centre[a] += 0.25 * p[a];
+              }
             }
           }
-        }
-        std::uint32_t code = 0;
-        for (int a = 0; a < 3; ++a)
-        {
-          const double q = (centre[a] - low[a]) * scale[a];
-          // NaN and out-of-box centroids (from unusable points) land on the lattice's edge.
-          const auto v = static_cast<std::uint32_t>(q > 0 ? std::min(q, 1023.0) : 0.0);
-          code |= SpreadBits(v) << a;
-        }
-        keys[c] = (static_cast<std::uint64_t>(code) << 32) | static_cast<std::uint64_t>(c);
-      }
+          std::uint32_t code = 0;
+          for (int a = 0; a < 3; ++a)
+          {
+            const double q = (centre[a] - low[a]) * scale[a];
+            // NaN and out-of-box centroids (from unusable points) land on the lattice's edge.
+            const auto v = static_cast<std::uint32_t>(q > 0 ? std::min(q, 1023.0) : 0.0);
+            code |= SpreadBits(v) << a;
+          }
+          keys[c] = (static_cast<std::uint64_t>(code) << 32) | static_cast<std::uint64_t>(c);
+        });
     });
 }
 
@@ -168,11 +167,9 @@ void ComputeImportance(
   detail::ParallelSort(keys.data(), n, nthreads);
   const int bits = ImportanceBits(n);
   const auto count = static_cast<std::int64_t>(n);
-#pragma omp parallel for num_threads(nthreads) schedule(static)
-  for (std::int64_t p = 0; p < count; ++p)
-  {
-    importance[keys[p] & 0xffffffffu] = ReverseBits(static_cast<std::uint32_t>(p), bits);
-  }
+  detail::ParallelFor(0, count, nthreads,
+    [&](std::int64_t p)
+    { importance[keys[p] & 0xffffffffu] = ReverseBits(static_cast<std::uint32_t>(p), bits); });
 }
 
 std::uint64_t ImportanceThreshold(double fraction, std::size_t cellCount)
@@ -215,7 +212,8 @@ bool CellSelectionStage::Update(const Key& key, const PointsView& points, const 
   if (KeepsEveryCell(key.threshold, n))
   {
     // Every visible cell: the visible list itself, a new result only if it was a subset.
-    this->Record.Store(key, !this->Passed || !this->Record.Valid() ||
+    this->Record.Store(key,
+      !this->Passed || !this->Record.Valid() ||
         !(this->Record.Inputs().visible == key.visible && this->Record.Inputs().mesh == key.mesh));
     this->Passed = true;
     return false;

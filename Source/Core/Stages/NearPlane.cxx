@@ -218,12 +218,10 @@ bool NearPlaneStage::Classify(const std::vector<SortKey>& keys, const ProjectedP
   const int nthreads = detail::ResolveThreads(threads);
   // Most frames have no point in front of the plane: one pass over the points decides.
   const auto points64 = static_cast<std::int64_t>(pointCount);
-  int any = 0;
-#pragma omp parallel for num_threads(nthreads) schedule(static) reduction(| : any)
-  for (std::int64_t i = 0; i < points64; ++i)
-  {
-    any |= HasFiniteEyeCoordinates(points[i]) && plane.Distance(points[i]) < 0.0 ? 1 : 0;
-  }
+  const int any = detail::ParallelReduce(
+    0, points64, nthreads, 0, [](int a, int b) { return a | b; },
+    [&](std::int64_t i)
+    { return HasFiniteEyeCoordinates(points[i]) && plane.Distance(points[i]) < 0.0 ? 1 : 0; });
   if (!any)
   {
     return false;
@@ -238,27 +236,27 @@ bool NearPlaneStage::Classify(const std::vector<SortKey>& keys, const ProjectedP
   detail::DispatchCells(cells, pointCount,
     [&](const auto& access)
     {
-#pragma omp parallel for num_threads(nthreads) schedule(static)
-      for (std::int64_t k = 0; k < count; ++k)
-      {
-        const std::uint32_t cell = CellOfKey(keys[k]);
-        std::int64_t ids[4];
-        Verdict verdict = Keep;
-        if (access.TetrahedronPoints(cell, ids) &&
-          (!cellScalars || std::isfinite(cellScalars[cell])))
+      detail::ParallelFor(0, count, nthreads,
+        [&](std::int64_t k)
         {
-          int front = 0, finite = 0;
-          for (int i = 0; i < 4; ++i)
+          const std::uint32_t cell = CellOfKey(keys[k]);
+          std::int64_t ids[4];
+          Verdict verdict = Keep;
+          if (access.TetrahedronPoints(cell, ids) &&
+            (!cellScalars || std::isfinite(cellScalars[cell])))
           {
-            const ProjectedPoint& p = points[ids[i]];
-            const bool ok = HasFiniteEyeCoordinates(p);
-            finite += ok ? 1 : 0;
-            front += ok && plane.Distance(p) < 0.0 ? 1 : 0;
+            int front = 0, finite = 0;
+            for (int i = 0; i < 4; ++i)
+            {
+              const ProjectedPoint& p = points[ids[i]];
+              const bool ok = HasFiniteEyeCoordinates(p);
+              finite += ok ? 1 : 0;
+              front += ok && plane.Distance(p) < 0.0 ? 1 : 0;
+            }
+            verdict = finite < 4 || front == 0 ? Keep : (front == 4 ? InFront : Crosses);
           }
-          verdict = finite < 4 || front == 0 ? Keep : (front == 4 ? InFront : Crosses);
-        }
-        this->Verdicts[k] = verdict;
-      }
+          this->Verdicts[k] = verdict;
+        });
     });
   return true;
 }

@@ -3,8 +3,6 @@
 
 #include "detail/Parallel.h"
 
-#include <omp.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -80,11 +78,9 @@ public:
     // completes the order. Dynamic scheduling absorbs their unequal sizes.
     const auto n = static_cast<std::int64_t>(this->SubArrays.size());
     const int nthreads = detail::ResolveThreads(threads);
-#pragma omp parallel for num_threads(nthreads) schedule(dynamic, 1)
-    for (std::int64_t s = 0; s < n; ++s)
-    {
-      std::sort(keys + this->SubArrays[s].first, keys + this->SubArrays[s].second);
-    }
+    detail::ParallelForDynamic(n, nthreads,
+      [&](std::int64_t s, int)
+      { std::sort(keys + this->SubArrays[s].first, keys + this->SubArrays[s].second); });
   }
 
 private:
@@ -162,11 +158,7 @@ public:
     if (source != keys)
     {
       const auto n = static_cast<std::int64_t>(count);
-#pragma omp parallel for num_threads(nthreads) schedule(static)
-      for (std::int64_t i = 0; i < n; ++i)
-      {
-        keys[i] = source[i];
-      }
+      detail::ParallelFor(0, n, nthreads, [&](std::int64_t i) { keys[i] = source[i]; });
     }
   }
 
@@ -174,13 +166,9 @@ private:
   static bool IdsAscending(const SortKey* keys, std::size_t count, int nthreads)
   {
     const auto n = static_cast<std::int64_t>(count);
-    int ascending = 1;
-#pragma omp parallel for num_threads(nthreads) schedule(static) reduction(&& : ascending)
-    for (std::int64_t i = 1; i < n; ++i)
-    {
-      ascending = ascending && CellOfKey(keys[i - 1]) < CellOfKey(keys[i]);
-    }
-    return ascending != 0;
+    return detail::ParallelReduce(
+      1, n, nthreads, true, [](bool a, bool b) { return a && b; },
+      [&](std::int64_t i) { return CellOfKey(keys[i - 1]) < CellOfKey(keys[i]); });
   }
 
   /// One stable counting pass on the digit at `shift`. Returns false if it was skipped
@@ -190,45 +178,34 @@ private:
     constexpr std::size_t Buckets = 256;
     this->Counts.assign(static_cast<std::size_t>(nthreads) * Buckets, 0);
     bool skip = false;
-#pragma omp parallel num_threads(nthreads)
-    {
-      const int t = omp_get_thread_num();
-      const int team = omp_get_num_threads();
-      const std::size_t begin = count * t / team;
-      const std::size_t end = count * (t + 1) / team;
-      std::size_t* mine = this->Counts.data() + static_cast<std::size_t>(t) * Buckets;
-      for (std::size_t i = begin; i < end; ++i)
+    detail::CountPlaceScatter(
+      count, nthreads, nthreads,
+      [&](int b, detail::IndexRange r)
       {
-        ++mine[(source[i] >> shift) & 0xff];
-      }
-#pragma omp barrier
-#pragma omp single
-      {
-        // Exclusive prefix in (digit, thread) order: digit-major keeps the pass stable.
-        std::size_t running = 0;
-        for (std::size_t d = 0; d < Buckets; ++d)
+        std::size_t* mine = this->Counts.data() + static_cast<std::size_t>(b) * Buckets;
+        for (std::size_t i = r.begin; i < r.end; ++i)
         {
-          std::size_t digitTotal = 0;
-          for (int u = 0; u < team; ++u)
-          {
-            std::size_t& c = this->Counts[static_cast<std::size_t>(u) * Buckets + d];
-            digitTotal += c;
-            const std::size_t n = c;
-            c = running;
-            running += n;
-          }
-          skip = skip || digitTotal == count;
+          ++mine[(source[i] >> shift) & 0xff];
         }
-      } // implicit barrier
-      if (!skip)
+      },
+      [&]
       {
-        for (std::size_t i = begin; i < end; ++i)
+        // Places in (digit, block) order: digit-major keeps the pass stable. A digit that
+        // every key shares skips the pass.
+        detail::ExclusivePrefixByBucket(this->Counts.data(), static_cast<std::size_t>(nthreads),
+          Buckets,
+          [&](std::size_t, std::size_t, std::size_t size) { skip = skip || size == count; });
+        return !skip;
+      },
+      [&](int b, detail::IndexRange r)
+      {
+        std::size_t* mine = this->Counts.data() + static_cast<std::size_t>(b) * Buckets;
+        for (std::size_t i = r.begin; i < r.end; ++i)
         {
           const SortKey k = source[i];
           target[mine[(k >> shift) & 0xff]++] = k;
         }
-      }
-    }
+      });
     return !skip;
   }
 
@@ -265,27 +242,27 @@ bool SortNearlySorted(SortKey* keys, std::size_t count, std::size_t moveBudget, 
   const int nthreads = detail::ResolveThreads(threads);
   const int blocks = count < SmallInput ? 1 : nthreads;
   const std::size_t blockBudget = moveBudget / static_cast<std::size_t>(blocks) + 1;
-  int gaveUp = 0;
   // Insertion sort inside each block: the work is the number of inversions in the block.
-#pragma omp parallel for num_threads(blocks) schedule(static, 1) reduction(| : gaveUp)
-  for (int b = 0; b < blocks; ++b)
-  {
-    const std::size_t begin = count * b / blocks, end = count * (b + 1) / blocks;
-    std::size_t moves = 0;
-    for (std::size_t i = begin + 1; i < end && moves <= blockBudget; ++i)
+  const bool gaveUp = detail::ParallelReduce(
+    0, blocks, blocks, false, [](bool a, bool b) { return a || b; },
+    [&](std::int64_t b)
     {
-      const SortKey key = keys[i];
-      std::size_t j = i;
-      while (j > begin && keys[j - 1] > key)
+      const std::size_t begin = count * b / blocks, end = count * (b + 1) / blocks;
+      std::size_t moves = 0;
+      for (std::size_t i = begin + 1; i < end && moves <= blockBudget; ++i)
       {
-        keys[j] = keys[j - 1];
-        --j;
+        const SortKey key = keys[i];
+        std::size_t j = i;
+        while (j > begin && keys[j - 1] > key)
+        {
+          keys[j] = keys[j - 1];
+          --j;
+        }
+        moves += i - j;
+        keys[j] = key;
       }
-      moves += i - j;
-      keys[j] = key;
-    }
-    gaveUp |= moves > blockBudget ? 1 : 0;
-  }
+      return moves > blockBudget;
+    });
   if (gaveUp)
   {
     return false;
@@ -293,17 +270,19 @@ bool SortNearlySorted(SortKey* keys, std::size_t count, std::size_t moveBudget, 
   // Merge the sorted blocks pairwise: log2(blocks) linear passes.
   for (int width = 1; width < blocks; width *= 2)
   {
-#pragma omp parallel for num_threads(nthreads) schedule(static, 1)
-    for (int b = 0; b < blocks - width; b += 2 * width)
-    {
-      const std::size_t begin = count * b / blocks;
-      const std::size_t middle = count * (b + width) / blocks;
-      const std::size_t end = count * std::min(b + 2 * width, blocks) / blocks;
-      if (keys[middle - 1] > keys[middle]) // already in order across the seam otherwise
+    const std::int64_t pairs = (blocks - width + 2 * width - 1) / (2 * width);
+    detail::ParallelFor(0, pairs, nthreads,
+      [&](std::int64_t p)
       {
-        std::inplace_merge(keys + begin, keys + middle, keys + end);
-      }
-    }
+        const int b = static_cast<int>(p) * 2 * width;
+        const std::size_t begin = count * b / blocks;
+        const std::size_t middle = count * (b + width) / blocks;
+        const std::size_t end = count * std::min(b + 2 * width, blocks) / blocks;
+        if (keys[middle - 1] > keys[middle]) // already in order across the seam otherwise
+        {
+          std::inplace_merge(keys + begin, keys + middle, keys + end);
+        }
+      });
   }
   return true;
 }
@@ -317,35 +296,18 @@ void InvertOrder(const SortKey* order, std::size_t count, std::size_t cellCount,
   const auto n = static_cast<std::int64_t>(count);
   const auto listed = static_cast<std::int64_t>(candidateCount);
   const auto first = static_cast<std::int64_t>(std::min(meshCells, cellCount));
-#pragma omp parallel num_threads(nthreads)
+  if (candidates) // the candidates and the ids after the mesh's cells
   {
-    if (candidates) // the candidates and the ids after the mesh's cells
-    {
-#pragma omp for schedule(static) nowait
-      for (std::int64_t i = 0; i < listed; ++i)
-      {
-        rank[candidates[i]] = NotInOrder;
-      }
-#pragma omp for schedule(static)
-      for (std::int64_t c = first; c < cells; ++c)
-      {
-        rank[c] = NotInOrder;
-      }
-    }
-    else if (n < cells) // only a partial order leaves ranks to mark
-    {
-#pragma omp for schedule(static)
-      for (std::int64_t c = 0; c < cells; ++c)
-      {
-        rank[c] = NotInOrder;
-      }
-    }
-#pragma omp for schedule(static)
-    for (std::int64_t k = 0; k < n; ++k)
-    {
-      rank[CellOfKey(order[k])] = static_cast<std::uint32_t>(k);
-    }
+    detail::ParallelFor(
+      0, listed, nthreads, [&](std::int64_t i) { rank[candidates[i]] = NotInOrder; });
+    detail::ParallelFor(first, cells, nthreads, [&](std::int64_t c) { rank[c] = NotInOrder; });
   }
+  else if (n < cells) // only a partial order leaves ranks to mark
+  {
+    detail::ParallelFor(0, cells, nthreads, [&](std::int64_t c) { rank[c] = NotInOrder; });
+  }
+  detail::ParallelFor(0, n, nthreads,
+    [&](std::int64_t k) { rank[CellOfKey(order[k])] = static_cast<std::uint32_t>(k); });
 }
 
 OrderStage::OrderStage()
@@ -427,12 +389,12 @@ bool OrderStage::SortFromPrevious(std::vector<SortKey>& scratch, int threads)
   const std::size_t count = this->Sorted.size();
   scratch.resize(count);
   const auto m = static_cast<std::int64_t>(count);
-#pragma omp parallel for num_threads(detail::ResolveThreads(threads)) schedule(static)
-  for (std::int64_t i = 0; i < m; ++i)
-  {
-    const SortKey key = this->Sorted[i];
-    scratch[this->Ranks[CellOfKey(key)]] = key;
-  }
+  detail::ParallelFor(0, m, detail::ResolveThreads(threads),
+    [&](std::int64_t i)
+    {
+      const SortKey key = this->Sorted[i];
+      scratch[this->Ranks[CellOfKey(key)]] = key;
+    });
   // Budget: about the cost of a full sort; beyond it the keys moved too far.
   if (!SortNearlySorted(scratch.data(), count, 4 * count, threads))
   {
@@ -485,50 +447,44 @@ void OrderStage::Group(std::size_t ranksPerGroup, std::size_t meshCells,
   this->GroupCounts.assign(static_cast<std::size_t>(nthreads) * groups, 0);
   this->GroupStarts.assign(groups + 1, 0);
   const std::uint32_t* rank = this->Ranks.data();
-  // A stable counting sort of the ranked cells by group: each thread counts its block's,
-  // an exclusive prefix in (group, thread) order places them, and each thread scatters.
-#pragma omp parallel num_threads(nthreads)
-  {
-    const auto t = static_cast<std::size_t>(omp_get_thread_num());
-    const auto team = static_cast<std::size_t>(omp_get_num_threads());
-    const std::size_t begin = n * t / team, end = n * (t + 1) / team;
-    std::size_t* mine = this->GroupCounts.data() + t * groups;
-    for (std::size_t i = begin; i < end; ++i)
+  // A stable counting sort of the ranked cells by group: each block counts its cells, an
+  // exclusive prefix in (group, block) order places them, and each block scatters.
+  detail::CountPlaceScatter(
+    n, nthreads, nthreads,
+    [&](int b, detail::IndexRange r)
     {
-      const std::uint32_t r = rank[candidates ? candidates[i] : i];
-      if (r != NotInOrder)
+      std::size_t* mine = this->GroupCounts.data() + static_cast<std::size_t>(b) * groups;
+      for (std::size_t i = r.begin; i < r.end; ++i)
       {
-        ++mine[r / size];
-      }
-    }
-#pragma omp barrier
-#pragma omp single
-    {
-      std::size_t running = 0;
-      for (std::size_t g = 0; g < groups; ++g)
-      {
-        this->GroupStarts[g] = running;
-        for (std::size_t u = 0; u < team; ++u)
+        const std::uint32_t rk = rank[candidates ? candidates[i] : i];
+        if (rk != NotInOrder)
         {
-          std::size_t& c = this->GroupCounts[u * groups + g];
-          const std::size_t here = c;
-          c = running;
-          running += here;
+          ++mine[rk / size];
         }
       }
-      this->GroupStarts[groups] = running;
-      storage.resize(running);
-    } // implicit barrier
-    for (std::size_t i = begin; i < end; ++i)
+    },
+    [&]
     {
-      const std::size_t c = candidates ? candidates[i] : i;
-      const std::uint32_t r = rank[c];
-      if (r != NotInOrder)
+      const std::size_t total = detail::ExclusivePrefixByBucket(this->GroupCounts.data(),
+        static_cast<std::size_t>(nthreads), groups,
+        [&](std::size_t g, std::size_t first, std::size_t) { this->GroupStarts[g] = first; });
+      this->GroupStarts[groups] = total;
+      storage.resize(total);
+      return true;
+    },
+    [&](int b, detail::IndexRange r)
+    {
+      std::size_t* mine = this->GroupCounts.data() + static_cast<std::size_t>(b) * groups;
+      for (std::size_t i = r.begin; i < r.end; ++i)
       {
-        storage[mine[r / size]++] = static_cast<SortKey>(c) << 32 | r;
+        const std::size_t c = candidates ? candidates[i] : i;
+        const std::uint32_t rk = rank[c];
+        if (rk != NotInOrder)
+        {
+          storage[mine[rk / size]++] = static_cast<SortKey>(c) << 32 | rk;
+        }
       }
-    }
-  }
+    });
   this->GroupedVersion = this->Version();
 }
 

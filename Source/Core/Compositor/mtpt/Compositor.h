@@ -64,6 +64,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -144,10 +145,10 @@ struct CompositorStats
   /// Vectors of fragments the fan path tested for coverage (its fans' boxes, row by row):
   /// with `fragments`, how full its vectors are (Documentation/compositor.md, "The floor").
   std::size_t fanVectors = 0;
-  std::size_t tiles = 0;      ///< tiles that had fans
-  double binSeconds = 0;      ///< binning
-  double rasterSeconds = 0;   ///< set-up and fragments
-  double resolveSeconds = 0;  ///< Resolve
+  std::size_t tiles = 0;     ///< tiles that had fans
+  double binSeconds = 0;     ///< binning
+  double rasterSeconds = 0;  ///< set-up and fragments
+  double resolveSeconds = 0; ///< Resolve
 };
 
 /**
@@ -160,6 +161,11 @@ class Compositor
 public:
   /// Pixels per side of a tile (Records.h).
   static constexpr int TileSize = mtpt::TileSize;
+
+  Compositor();
+  ~Compositor();
+  Compositor(const Compositor&) = delete;
+  Compositor& operator=(const Compositor&) = delete;
 
   /**
    * Starts a new image of settings.width x height, transparent. `settings` (and what it
@@ -221,11 +227,13 @@ public:
 
 private:
   void Bin(const Fan* fans, std::size_t count, int threads);
-  /// Binning's three steps: count each block's (fan, tile) pairs and the touched region;
-  /// turn the counts into places (returns the pairs); list the fans' indices in their places.
-  void CountPairs(const Fan* fans, std::size_t count, int blocks);
+  /// Binning's buffers for `count` fans in `blocks` blocks, before its three steps: count a
+  /// block's (fan, tile) pairs and touched region; turn the counts into places (returns the
+  /// pairs); list a block's fans' indices in their places.
+  void PrepareBins(std::size_t count, int blocks);
+  void CountPairs(const Fan* fans, int block, std::size_t begin, std::size_t end);
   std::size_t PlaceEntries(int blocks);
-  void ListEntries(std::size_t count, int blocks);
+  void ListEntries(int block, std::size_t begin, std::size_t end);
   template <typename T>
   void ResolveInto(const PixelRegion& region, const T* below, T* rgba, int threads);
   void Rasterize(const Fan* fans, const LightFactors* lights, int threads);
@@ -240,16 +248,22 @@ private:
   CompositeSettings Settings;
   CompositorStats Statistics;
   int TilesX = 0, TilesY = 0;
-  std::vector<float> Image;           ///< per tile: R, G, B, A planes
-  std::vector<std::uint8_t> Cleared;  ///< per tile: cleared since Begin
-  std::vector<TileRange> Ranges;      ///< per fan of the last Composite
-  std::vector<std::uint8_t> Straddles; ///< per fan of the last Composite: cut by a plane
-  std::vector<std::uint32_t> Counts;  ///< per (block, tile): pairs, then the block's cursor
-  std::vector<std::size_t> TileStart; ///< per tile: its first entry (tiles + 1 values)
-  std::vector<std::uint32_t> Entries; ///< fans of the last Composite, tile by tile, in order
-  std::vector<int> Tiles;             ///< tiles with fans in the last Composite
+  std::vector<float> Image;              ///< per tile: R, G, B, A planes
+  std::vector<std::uint8_t> Cleared;     ///< per tile: cleared since Begin
+  std::vector<TileRange> Ranges;         ///< per fan of the last Composite
+  std::vector<std::uint8_t> Straddles;   ///< per fan of the last Composite: cut by a plane
+  std::vector<std::uint32_t> Counts;     ///< per (block, tile): pairs, then the block's cursor
+  std::vector<std::size_t> TileStart;    ///< per tile: its first entry (tiles + 1 values)
+  std::vector<std::uint32_t> Entries;    ///< fans of the last Composite, tile by tile, in order
+  std::vector<int> Tiles;                ///< tiles with fans in the last Composite
+  std::vector<PixelRegion> BlockTouched; ///< per binning block: the region its fans touch
+  std::vector<std::size_t> BlockBinned;  ///< per binning block: its fans that touch the image
+  /// Each thread's scratch for Rasterize (Compositor.cxx), made before its parallel loop and
+  /// kept from call to call: the loop allocates nothing.
+  struct ThreadScratch;
+  std::unique_ptr<ThreadScratch> Scratch;
   PixelRegion Touched;
-  std::vector<Fan> SlotFans;          ///< the slot entry point's fans
+  std::vector<Fan> SlotFans;            ///< the slot entry point's fans
   std::vector<LightFactors> SlotLights; ///< and their lighting
 };
 

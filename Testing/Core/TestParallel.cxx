@@ -1,0 +1,272 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The core's parallel primitives (Source/Core/Parallel/detail/Parallel.h): each visits what
+// it promises exactly once, and the results the core relies on are the same for any thread
+// count.
+#include "detail/Parallel.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cstdint>
+#include <numeric>
+#include <random>
+#include <utility>
+#include <vector>
+
+namespace
+{
+
+namespace detail = mtpt::detail;
+
+constexpr int ThreadCounts[] = { 1, 2, 3, 7 };
+
+TEST(Parallel, BlocksCutARangeInOrderWithoutGapsOrOverlaps)
+{
+  for (const std::size_t n : { std::size_t{ 0 }, std::size_t{ 5 }, std::size_t{ 1000 } })
+  {
+    for (const std::size_t blocks : { std::size_t{ 1 }, std::size_t{ 3 }, std::size_t{ 8 } })
+    {
+      std::size_t next = 0;
+      for (std::size_t b = 0; b < blocks; ++b)
+      {
+        const detail::IndexRange r = detail::BlockOf(n, b, blocks);
+        EXPECT_EQ(r.begin, next);
+        EXPECT_LE(r.begin, r.end);
+        EXPECT_LE(r.end - r.begin, n / blocks + 1);
+        next = r.end;
+      }
+      EXPECT_EQ(next, n);
+    }
+  }
+}
+
+TEST(Parallel, ParallelForVisitsEveryIndexOnce)
+{
+  for (const int threads : ThreadCounts)
+  {
+    std::vector<int> visits(1003, 0);
+    detail::ParallelFor(
+      3, 1003, threads, [&](std::int64_t i) { ++visits[static_cast<std::size_t>(i)]; });
+    for (std::size_t i = 0; i < visits.size(); ++i)
+    {
+      ASSERT_EQ(visits[i], i < 3 ? 0 : 1) << "index " << i << ", " << threads << " threads";
+    }
+    detail::ParallelFor(5, 5, threads, [&](std::int64_t) { ADD_FAILURE() << "empty range"; });
+  }
+}
+
+TEST(Parallel, ParallelForDynamicVisitsEveryIndexOnceWithTheCallingThreadsIndex)
+{
+  for (const int threads : ThreadCounts)
+  {
+    for (const int chunk : { 1, 64 })
+    {
+      std::vector<int> visits(777, 0);
+      std::atomic<int> badThread{ 0 };
+      detail::ParallelForDynamic(
+        777, threads,
+        [&](std::int64_t i, int thread)
+        {
+          ++visits[static_cast<std::size_t>(i)];
+          badThread += thread < 0 || thread >= threads ? 1 : 0;
+        },
+        chunk);
+      EXPECT_EQ(badThread.load(), 0);
+      EXPECT_TRUE(std::all_of(visits.begin(), visits.end(), [](int v) { return v == 1; }));
+    }
+  }
+}
+
+TEST(Parallel, EveryBlockOnceWhateverTheTeam)
+{
+  for (const int threads : ThreadCounts)
+  {
+    for (const int blocks : { 1, 4, 9 })
+    {
+      std::vector<int> visits(static_cast<std::size_t>(blocks), 0);
+      detail::ForEachBlock(blocks, threads, [&](int b) { ++visits[static_cast<std::size_t>(b)]; });
+      EXPECT_TRUE(std::all_of(visits.begin(), visits.end(), [](int v) { return v == 1; }));
+    }
+    std::vector<int> covered(100, 0);
+    detail::ForEachThreadBlock(100, threads,
+      [&](detail::IndexRange r)
+      {
+        for (std::size_t i = r.begin; i < r.end; ++i)
+        {
+          ++covered[i];
+        }
+      });
+    EXPECT_TRUE(std::all_of(covered.begin(), covered.end(), [](int v) { return v == 1; }));
+  }
+}
+
+TEST(Parallel, ReductionsOfCountsAndFlagsDoNotDependOnTheTeam)
+{
+  for (const int threads : ThreadCounts)
+  {
+    const auto sum = detail::ParallelReduce(
+      0, 10001, threads, std::uint64_t{ 0 }, [](std::uint64_t a, std::uint64_t b) { return a + b; },
+      [](std::int64_t i) { return static_cast<std::uint64_t>(i); });
+    EXPECT_EQ(sum, 10000u * 10001u / 2);
+    const bool all = detail::ParallelReduce(
+      0, 500, threads, true, [](bool a, bool b) { return a && b; },
+      [](std::int64_t i) { return i != 321; });
+    EXPECT_FALSE(all);
+    const int any = detail::ParallelReduce(
+      0, 500, threads, 0, [](int a, int b) { return a | b; },
+      [](std::int64_t i) { return i == 499 ? 4 : 0; });
+    EXPECT_EQ(any, 4);
+    // An empty range gives the identity.
+    EXPECT_EQ(
+      detail::ParallelReduce(
+        7, 7, threads, 0, [](int a, int b) { return a + b; }, [](std::int64_t) { return 1; }),
+      0);
+  }
+}
+
+TEST(Parallel, PerThreadScratchIsMadeBeforeAndKept)
+{
+  detail::PerThread<std::vector<int>> scratch;
+  int made = 0;
+  scratch.Prepare(3, [&] { return std::vector<int>(static_cast<std::size_t>(++made), 0); });
+  EXPECT_EQ(scratch.size(), 3u);
+  EXPECT_EQ(made, 3);
+  scratch[1].push_back(9);
+  scratch.Prepare(2, [&] { return std::vector<int>(++made, 0); }); // enough already
+  scratch.Prepare(4, [&] { return std::vector<int>(++made, 0); });
+  EXPECT_EQ(scratch.size(), 4u);
+  EXPECT_EQ(made, 4);
+  EXPECT_EQ(scratch[1].back(), 9); // kept
+  // Each thread of a loop reaches its own.
+  detail::ParallelForDynamic(
+    1000, 4, [&](std::int64_t, int thread) { scratch[thread].push_back(1); });
+  std::size_t total = 0;
+  for (const std::vector<int>& mine : scratch)
+  {
+    total += static_cast<std::size_t>(std::count(mine.begin(), mine.end(), 1));
+  }
+  EXPECT_EQ(total, 1000u);
+}
+
+TEST(Parallel, ThePrefixByBucketPlacesEachBlockAfterTheEarlierOnes)
+{
+  // Two blocks, three buckets: counts[block * 3 + bucket].
+  std::vector<std::uint32_t> counts = { 2, 0, 1, 3, 4, 0 };
+  std::vector<std::pair<std::size_t, std::size_t>> buckets;
+  const std::size_t total = detail::ExclusivePrefixByBucket(counts.data(), 2, 3,
+    [&](std::size_t, std::size_t first, std::size_t size) { buckets.emplace_back(first, size); });
+  EXPECT_EQ(total, 10u);
+  EXPECT_EQ(counts, (std::vector<std::uint32_t>{ 0, 5, 9, 2, 5, 10 }));
+  EXPECT_EQ(
+    buckets, (std::vector<std::pair<std::size_t, std::size_t>>{ { 0, 5 }, { 5, 4 }, { 9, 1 } }));
+}
+
+TEST(Parallel, CountPlaceScatterIsAStableCountingSortForAnyTeam)
+{
+  std::mt19937 random(7);
+  std::vector<std::uint32_t> items(5000);
+  for (std::uint32_t& item : items)
+  {
+    item = static_cast<std::uint32_t>(random() % 50) << 16 |
+      static_cast<std::uint32_t>(&item - items.data());
+  }
+  std::vector<std::uint32_t> expected = items;
+  std::stable_sort(expected.begin(), expected.end(),
+    [](std::uint32_t a, std::uint32_t b) { return (a >> 16) < (b >> 16); });
+  for (const int threads : ThreadCounts)
+  {
+    for (const int blocks : { 1, 3, 8 })
+    {
+      std::vector<std::size_t> counts(static_cast<std::size_t>(blocks) * 50, 0);
+      std::vector<std::uint32_t> sorted;
+      detail::CountPlaceScatter(
+        items.size(), blocks, threads,
+        [&](int b, detail::IndexRange r)
+        {
+          for (std::size_t i = r.begin; i < r.end; ++i)
+          {
+            ++counts[static_cast<std::size_t>(b) * 50 + (items[i] >> 16)];
+          }
+        },
+        [&]
+        {
+          sorted.resize(detail::ExclusivePrefixByBucket(
+            counts.data(), static_cast<std::size_t>(blocks), 50, [](auto, auto, auto) {}));
+          return true;
+        },
+        [&](int b, detail::IndexRange r)
+        {
+          for (std::size_t i = r.begin; i < r.end; ++i)
+          {
+            sorted[counts[static_cast<std::size_t>(b) * 50 + (items[i] >> 16)]++] = items[i];
+          }
+        });
+      EXPECT_EQ(sorted, expected) << threads << " threads, " << blocks << " blocks";
+    }
+  }
+  // A place step that declines skips the scatter.
+  bool scattered = false;
+  detail::CountPlaceScatter(
+    10, 2, 2, [](int, detail::IndexRange) {}, [] { return false; },
+    [&](int, detail::IndexRange) { scattered = true; });
+  EXPECT_FALSE(scattered);
+}
+
+TEST(Parallel, CompactionKeepsTheInputOrderAndSortingTheOneOrder)
+{
+  std::vector<int> input(1234);
+  std::iota(input.begin(), input.end(), 0);
+  std::vector<int> odd;
+  std::copy_if(
+    input.begin(), input.end(), std::back_inserter(odd), [](int v) { return v % 3 == 1; });
+  std::mt19937 random(3);
+  std::vector<std::uint64_t> keys(4321);
+  for (std::uint64_t& k : keys)
+  {
+    k = static_cast<std::uint64_t>(random()) << 32 | static_cast<std::uint64_t>(&k - keys.data());
+  }
+  std::vector<std::uint64_t> sortedKeys = keys;
+  std::sort(sortedKeys.begin(), sortedKeys.end());
+  for (const int threads : ThreadCounts)
+  {
+    std::vector<int> items = input;
+    const std::size_t kept = detail::CompactInOrder(items.size(), threads, items.data(),
+      [&](std::size_t begin, std::size_t end, int* out)
+      {
+        std::size_t n = 0;
+        for (std::size_t i = begin; i < end; ++i)
+        {
+          if (input[i] % 3 == 1)
+          {
+            out[n++] = input[i];
+          }
+        }
+        return n;
+      });
+    items.resize(kept);
+    EXPECT_EQ(items, odd) << threads << " threads";
+    std::vector<std::uint64_t> k = keys;
+    detail::ParallelSort(k.data(), k.size(), threads);
+    EXPECT_EQ(k, sortedKeys) << threads << " threads";
+  }
+}
+
+TEST(Parallel, FetchAddGivesEveryCallerItsOwnValue)
+{
+  for (const int threads : ThreadCounts)
+  {
+    std::uint32_t counter = 0;
+    std::vector<std::uint32_t> got(2000);
+    detail::ParallelFor(0, 2000, threads,
+      [&](std::int64_t i) { got[static_cast<std::size_t>(i)] = detail::FetchAdd(counter, 1u); });
+    EXPECT_EQ(counter, 2000u);
+    std::sort(got.begin(), got.end());
+    for (std::uint32_t i = 0; i < 2000; ++i)
+    {
+      ASSERT_EQ(got[i], i);
+    }
+  }
+}
+
+} // namespace
