@@ -252,15 +252,14 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetMemoryLimit(vtkIdType bytes)
 bool vtkMultiThreadedProjectedTetrahedraMapper::FitsInMemory(const mtpt::FramePlan& plan)
 {
   const mtpt::MemoryNeed& need = plan.memory;
-  const mtpt::MemoryVerdict verdict =
-    mtpt::CheckMemory(need, static_cast<std::size_t>(this->MemoryLimit),
-      this->Internal->Pipeline.MemoryBytes(),
-      []
-      {
-        vtksys::SystemInformation system;
-        system.RunMemoryCheck();
-        return static_cast<std::size_t>(system.GetAvailablePhysicalMemory()) << 20;
-      });
+  const mtpt::MemoryVerdict verdict = mtpt::CheckMemory(need,
+    static_cast<std::size_t>(this->MemoryLimit), this->Internal->Pipeline.MemoryBytes(),
+    []
+    {
+      vtksys::SystemInformation system;
+      system.RunMemoryCheck();
+      return static_cast<std::size_t>(system.GetAvailablePhysicalMemory()) << 20;
+    });
   if (verdict.fits)
   {
     return true;
@@ -770,8 +769,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::AdjustDetail(
   mtpt::MeasuredFrame measured;
   measured.detail = this->Internal->LastDetail;
   measured.seconds = last;
-  this->RetrieveFrameCosts(
-    measured.cellSeconds, measured.sampleSeconds, measured.viewportSeconds);
+  this->RetrieveFrameCosts(measured.cellSeconds, measured.sampleSeconds, measured.viewportSeconds);
   const mtpt::Detail next =
     mtpt::ChooseDetail(measured, mtpt::VolumeBudget(allotted, this->RetrieveFrameInterval(), last),
       limits, { this->CellFraction, this->ImageSampleDistance });
@@ -852,8 +850,8 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetUpFrame(vtkRenderer* renderer
     this->FrameSettingsOf(property), this->FrameFactsOf(renderer, window, backend, frame, draw));
   for (const mtpt::PlanNote& note : in.Plan.notes)
   {
-    if (in.Report(note.about == mtpt::PlanNote::About::Property ? static_cast<vtkObject*>(property)
-                                                                 : this,
+    if (in.Report(
+          note.about == mtpt::PlanNote::About::Property ? static_cast<vtkObject*>(property) : this,
           note.key))
     {
       if (note.error)
@@ -1081,7 +1079,6 @@ void vtkMultiThreadedProjectedTetrahedraMapper::PrintSelf(ostream& os, vtkIndent
      << this->GetTransformSeconds() << " s, cull " << this->GetCullSeconds() << " s, depth keys "
      << this->GetDepthKeySeconds() << " s, order " << this->GetOrderSeconds() << " s, decompose "
      << this->GetDecomposeSeconds() << " s, lighting " << this->GetLightingSeconds()
-     << " s, composite " << this->GetCompositeSeconds()
-     << " s, upload " << this->GetUploadSeconds() << " s, draw " << this->GetDrawSeconds()
-     << " s\n";
+     << " s, composite " << this->GetCompositeSeconds() << " s, upload " << this->GetUploadSeconds()
+     << " s, draw " << this->GetDrawSeconds() << " s\n";
 }

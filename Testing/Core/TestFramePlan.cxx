@@ -147,8 +147,8 @@ TEST(FramePlan, LightingNeedsCompositeBlendingAndPointScalars)
     const auto notes = NotesWith(plan, "shading without point scalars");
     ASSERT_EQ(notes.size(), 1u);
     EXPECT_EQ(notes[0].about, PlanNote::About::Property);
-    EXPECT_NE(notes[0].text.find(colours ? "dependent components" : "cell scalars"),
-      std::string::npos);
+    EXPECT_NE(
+      notes[0].text.find(colours ? "dependent components" : "cell scalars"), std::string::npos);
   }
 }
 

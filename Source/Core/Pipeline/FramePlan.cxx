@@ -46,14 +46,16 @@ void PlanBlending(const FrameSettings& s, const FrameFacts& f, FramePlan& plan)
   else if (mode != static_cast<int>(BlendMode::Composite) && f.vertexColours)
   {
     Note(plan, PlanNote::About::Mapper, false, "blend mode with dependent components",
-      name + " blending reduces one scalar; with dependent components (IndependentComponents "
-             "off) the data give the colours, which are drawn with composite blending");
+      name +
+        " blending reduces one scalar; with dependent components (IndependentComponents "
+        "off) the data give the colours, which are drawn with composite blending");
   }
   else if (mode != static_cast<int>(BlendMode::Composite) && f.peeling)
   {
     Note(plan, PlanNote::About::Mapper, false, "blend mode in depth peeling",
-      name + " blending is not defined between translucent surfaces; inside depth peeling the "
-             "volume is drawn with composite blending");
+      name +
+        " blending is not defined between translucent surfaces; inside depth peeling the "
+        "volume is drawn with composite blending");
   }
   else
   {
@@ -123,10 +125,9 @@ void PlanImage(const FrameSettings& s, const FrameFacts& f, FramePlan& plan)
     {
       std::ostringstream text;
       text << "ImageSampleDistance " << s.imageSampleDistance << " asks for an image of "
-           << sampled[0] << " x " << sampled[1] << " pixels; drawing "
-           << plan.sampledSize.width << " x " << plan.sampledSize.height << " (at most "
-           << MaximumSamplesPerPixel << " samples per pixel side and " << limit
-           << " pixels per side here)";
+           << sampled[0] << " x " << sampled[1] << " pixels; drawing " << plan.sampledSize.width
+           << " x " << plan.sampledSize.height << " (at most " << MaximumSamplesPerPixel
+           << " samples per pixel side and " << limit << " pixels per side here)";
       Note(plan, PlanNote::About::Mapper, false, text.str(), text.str());
     }
   }
@@ -158,8 +159,7 @@ void PlanBatches(const FrameSettings& s, const FrameFacts& f, FramePlan& plan)
 } // namespace
 
 CompositeSettings CompositeSettingsFor(const FramePlan& plan, const TransferFunctionTable& table,
-  const PreIntegrationTable& preIntegration, const IntensityTable& intensity,
-  double unitDistance)
+  const PreIntegrationTable& preIntegration, const IntensityTable& intensity, double unitDistance)
 {
   CompositeSettings settings;
   settings.width = plan.imageSize.width;

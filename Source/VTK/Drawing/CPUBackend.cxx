@@ -80,13 +80,13 @@ bool CPUBackend::ImageKey::operator==(const ImageKey& o) const
   const PerspectiveInterpolation &ia = a.interpolation, &ib = b.interpolation;
   return pipeline == o.pipeline && order == o.order && tables == o.tables &&
     a.batchSize == b.batchSize && a.imageSize == b.imageSize && a.shading == b.shading &&
-    a.vertexColours == b.vertexColours &&
-    unitDistance == o.unitDistance && ia.perspective == ib.perspective &&
-    ia.inverseWScale == ib.inverseWScale && ia.inverseWOffset == ib.inverseWOffset &&
-    ia.scaleX == ib.scaleX && ia.shiftX == ib.shiftX && ia.scaleY == ib.scaleY &&
-    ia.shiftY == ib.shiftY && a.clipPlanes == b.clipPlanes && a.blendMode == b.blendMode &&
-    a.averageRange[0] == b.averageRange[0] && a.averageRange[1] == b.averageRange[1] &&
-    a.lit == b.lit && lighting == o.lighting && normals == o.normals;
+    a.vertexColours == b.vertexColours && unitDistance == o.unitDistance &&
+    ia.perspective == ib.perspective && ia.inverseWScale == ib.inverseWScale &&
+    ia.inverseWOffset == ib.inverseWOffset && ia.scaleX == ib.scaleX && ia.shiftX == ib.shiftX &&
+    ia.scaleY == ib.scaleY && ia.shiftY == ib.shiftY && a.clipPlanes == b.clipPlanes &&
+    a.blendMode == b.blendMode && a.averageRange[0] == b.averageRange[0] &&
+    a.averageRange[1] == b.averageRange[1] && a.lit == b.lit && lighting == o.lighting &&
+    normals == o.normals;
 }
 
 bool CPUBackend::DrawPeel(const BackendFrame& frame, DrawTimes& times)
@@ -136,8 +136,8 @@ bool CPUBackend::DrawPeel(const BackendFrame& frame, DrawTimes& times)
 void CPUBackend::Composite(const BackendFrame& frame, DrawTimes& times, const float* ranges)
 {
   const TransferFunctionTables& tables = *frame.tables;
-  this->Settings = CompositeSettingsFor(*frame.plan, tables.Table(), tables.PreIntegration(),
-    tables.Intensity(), frame.UnitDistance());
+  this->Settings = CompositeSettingsFor(
+    *frame.plan, tables.Table(), tables.PreIntegration(), tables.Intensity(), frame.UnitDistance());
   this->Settings.opaqueDepth = ranges ? nullptr : this->Path.OpaqueDepth();
   this->Settings.depthRange = ranges;
   // Batch after batch, back to front, into one image: the tiles keep what earlier batches

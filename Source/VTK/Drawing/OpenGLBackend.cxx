@@ -63,8 +63,8 @@ void SetBlending(const FramePlan& plan, vtkOpenGLState* state)
       GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
     return;
   }
-  const bool extreme = plan.blendMode == BlendMode::MaximumIntensity ||
-    plan.blendMode == BlendMode::MinimumIntensity;
+  const bool extreme =
+    plan.blendMode == BlendMode::MaximumIntensity || plan.blendMode == BlendMode::MinimumIntensity;
   const GLenum equation = extreme ? GL_MAX : GL_FUNC_ADD;
   state->vtkglBlendEquationSeparate(equation, equation);
   state->vtkglBlendFuncSeparate(GL_ONE, GL_ONE, GL_ONE, GL_ONE);
@@ -112,8 +112,7 @@ vtkShaderProgram* OpenGLBackend::ReadyProgram(vtkOpenGLRenderWindow* window, boo
   std::string fragment = vtkMTPTTetrahedraFS;
   vtkShaderProgram::Substitute(fragment, "//MTPT::SegmentShared", vtkMTPTSegmentShared);
   vtkShaderProgram::Substitute(fragment, "//MTPT::Lit", lit ? "#define MTPT_LIT" : "");
-  program = window->GetShaderCache()->ReadyShaderProgram(
-    vtkMTPTTetrahedraVS, fragment.c_str(), "");
+  program = window->GetShaderCache()->ReadyShaderProgram(vtkMTPTTetrahedraVS, fragment.c_str(), "");
   if (program)
   {
     this->Triangles.Program = program;
@@ -496,8 +495,8 @@ void OpenGLBackend::Upload(const BackendFrame& frame, const Batch& batch, DrawTi
   this->VertexBuffer->SetStride(static_cast<unsigned int>(sizeof(TetVertex)));
   this->VertexBuffer->Upload(reinterpret_cast<const float*>(batch.vertices),
     count * VerticesPerTetrahedron * FloatsPerVertex, vtkOpenGLBufferObject::ArrayBuffer);
-  this->Triangles.IBO->Upload(batch.indices, count * IndicesPerTetrahedron,
-    vtkOpenGLBufferObject::ElementArrayBuffer);
+  this->Triangles.IBO->Upload(
+    batch.indices, count * IndicesPerTetrahedron, vtkOpenGLBufferObject::ElementArrayBuffer);
   this->Triangles.IBO->IndexCount = count * IndicesPerTetrahedron;
   if (frame.synchronizedTiming)
   {

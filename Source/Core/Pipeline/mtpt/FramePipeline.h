@@ -66,9 +66,9 @@ struct StageTimes
 /// What the last frame did: cell counts at each culling step and what it reused.
 struct FrameStats
 {
-  std::size_t cells = 0;            ///< cells in the mesh
-  std::size_t opacityCulled = 0;    ///< transparent over their whole scalar range
-  std::size_t leftOut = 0;          ///< visible, left out by the level of detail
+  std::size_t cells = 0;         ///< cells in the mesh
+  std::size_t opacityCulled = 0; ///< transparent over their whole scalar range
+  std::size_t leftOut = 0;       ///< visible, left out by the level of detail
   /// What the backends multiply every attenuation by: visible / drawn cells (1 without a
   /// level of detail), so that a ray keeps its expected optical depth (LevelOfDetail.h).
   double attenuationScale = 1;

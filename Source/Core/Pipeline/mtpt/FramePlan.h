@@ -77,8 +77,8 @@ struct FrameSettings
   /// vtkVolumeMapper's blend mode as set: any int (one out of range is reported).
   int blendMode = 0;
   double averageRange[2] = { -1e300, 1e300 }; ///< AverageIPScalarRange, scalar units
-  bool shade = false;              ///< the volume property's Shade: light the volume
-  bool cullInvisibleCells = true;  ///< cull transparent, out-of-view and sub-pixel cells
+  bool shade = false;                         ///< the volume property's Shade: light the volume
+  bool cullInvisibleCells = true;             ///< cull transparent, out-of-view and sub-pixel cells
   /// The fraction of the visible cells a moving frame draws (LevelOfDetail.h), and the
   /// image sample distance (ImageSampling.h), both as the level of detail set them.
   double cellFraction = 1;
@@ -93,9 +93,9 @@ struct FrameSettings
 struct FrameFacts
 {
   std::size_t points = 0, cells = 0;
-  bool vertexColours = false; ///< dependent components: the data give the colours
-  bool cellScalars = false;   ///< the scalars belong to cells (they have no gradient)
-  bool peeling = false;       ///< one peel of a depth-peeling pass (VolumetricPeel)
+  bool vertexColours = false;             ///< dependent components: the data give the colours
+  bool cellScalars = false;               ///< the scalars belong to cells (they have no gradient)
+  bool peeling = false;                   ///< one peel of a depth-peeling pass (VolumetricPeel)
   BatchTarget target = BatchTarget::Fans; ///< the chosen backend's buffers
   int viewport[2] = { 0, 0 };             ///< the viewport's size, pixels
   /// The largest side of an image the backend composites at another size than the
@@ -150,14 +150,14 @@ struct FramePlan
   ClipPlanes clipPlanes;
 
   // What is drawn.
-  double cellFraction = 1;   ///< CellFractionLevel of the visible cells (1: every cell)
+  double cellFraction = 1; ///< CellFractionLevel of the visible cells (1: every cell)
   /// The composited image: the viewport's size, or the image sample distance's; the
   /// sampled size the distance gave (the same but inside a depth-peeling pass, which
   /// composites at the viewport's size).
   ImageSize imageSize, sampledSize;
-  bool cullOpacity = true;  ///< cells the opacity table makes transparent
-  bool cullFrustum = true;  ///< cells outside the view volume
-  bool cullPixels = false;  ///< cells covering no pixel centre of the composited image
+  bool cullOpacity = true; ///< cells the opacity table makes transparent
+  bool cullFrustum = true; ///< cells outside the view volume
+  bool cullPixels = false; ///< cells covering no pixel centre of the composited image
 
   // How it is drawn.
   BatchTarget target = BatchTarget::Fans;
@@ -188,8 +188,7 @@ FramePlan PlanFrame(const FrameSettings& settings, const FrameFacts& facts);
  * are left to the caller. Pure; thread-safe.
  */
 CompositeSettings CompositeSettingsFor(const FramePlan& plan, const TransferFunctionTable& table,
-  const PreIntegrationTable& preIntegration, const IntensityTable& intensity,
-  double unitDistance);
+  const PreIntegrationTable& preIntegration, const IntensityTable& intensity, double unitDistance);
 
 /// The name of a blend mode as vtkVolumeMapper's getters spell it ("Composite", ...);
 /// "Unknown" for a value out of range.

@@ -45,7 +45,10 @@ struct FrameStatistics
 
   /// Seconds of the work that follows the cells drawn: keys, order, decomposition and
   /// lighting (the level of detail's rule, ChooseDetail).
-  double CellSeconds() const { return stages.keys + stages.order + stages.decompose + stages.light; }
+  double CellSeconds() const
+  {
+    return stages.keys + stages.order + stages.decompose + stages.light;
+  }
   /// Seconds of compositing (binning and rasterization), -1 where not measured apart
   /// (OpenGL draws; a reused image).
   double SampleSeconds() const

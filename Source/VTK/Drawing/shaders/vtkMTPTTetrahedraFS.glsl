@@ -13,7 +13,9 @@ in vec2 exactRay;
 uniform int perspectiveExact;
 
 uniform float inverseUnitDistance; // 1 / ScalarOpacityUnitDistance
-uniform int shadingMode;           // 0: VTK-compatible, 1: pre-integrated, 2: vertex colours
+// What the vertices carry (mtpt::FragmentValues, from the frame's plan): 0 the transfer
+// function's means (VTK-compatible), 1 scalars (pre-integrated, the reductions), 2 colours.
+uniform int shadingMode;
 uniform int tableSize;
 uniform sampler2D transferFunction;
 // Prefix integrals (T, E_r, E_g, E_b) at the table entries, as a float sum high + low so
@@ -186,7 +188,7 @@ struct FragmentSegment
 FragmentSegment SegmentOfFragment(bool depths)
 {
   FragmentSegment s;
-  if (shadingMode == 1 && perspectiveExact == 1)
+  if (perspectiveExact == 1) // scalars only (the plan's perspectiveExact)
   {
     // Front and back faces are planes: their 1 / depth is affine in screen space.
     s.front = 1.0 / exactFrontBack.y;

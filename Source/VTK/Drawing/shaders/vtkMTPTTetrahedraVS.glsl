@@ -19,7 +19,7 @@ uniform float scalarShift;
 uniform float entryScale;
 uniform float entryShift;
 uniform int tableSize;
-uniform int shadingMode; // 0: VTK-compatible, 1: pre-integrated, 2: vertex colours
+uniform int shadingMode; // mtpt::FragmentValues of the frame's plan: see the fragment shader
 // Perspective-exact pre-integration (mtpt::PerspectiveInterpolation): 1 / eye depth =
 // inverseDepthScale * z_ndc + inverseDepthOffset; eye ray per unit depth =
 // ((ndc.xy + rayShift) * rayScale, -1).
