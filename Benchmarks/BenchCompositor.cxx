@@ -16,15 +16,15 @@
  * alone; the frame benchmark (BenchFrames.cxx) measures whole frames against VTK's mappers.
  *
  * --floor measures instead the fragment loop's floor and the rungs above it
- * (detail::FragmentFloor; Documentation/compositor.md, "The floor"), on one thread, with every
+ * (FragmentFloor.h; Documentation/compositor.md, "The floor"), on one thread, with every
  * instruction set this processor runs, beside the frame's nanoseconds per covered fragment
  * with the same instruction set. --instruction-set runs everything with one instruction set.
  */
 #include "Camera.h"
+#include "FragmentFloor.h"
 #include "Statistics.h"
 #include "TetrahedralGrid.h"
 
-#include "detail/TileRaster.h"
 #include "mtpt/Compositor.h"
 #include "mtpt/FramePipeline.h"
 #include "mtpt/Threads.h"
@@ -234,14 +234,14 @@ std::string Join(const std::vector<std::string>& items)
 
 /**
  * --floor: per instruction set, the nanoseconds per fragment of each rung of the floor
- * (detail::FragmentFloor, 2^22 vectors, the median of 5 runs), and the frame's rasterization
+ * (FragmentFloor, 2^22 vectors, the median of 5 runs), and the frame's rasterization
  * per covered fragment at 1024x1024, all on one thread; for the frame with nothing opaque,
  * how full the fan path's vectors are, what its vectors would cost at the top rung's rate,
  * and the rest: what the fans' set-up and the triangle path cost per covered fragment.
  */
 int Floor(const mtpt::bench::TetMesh& mesh, const Options& o)
 {
-  static const char* const rungs[mtpt::detail::FragmentFloorRungs] = { "registers (the floor)",
+  static const char* const rungs[mtpt::bench::FragmentFloorRungs] = { "registers (the floor)",
     "+ memory", "+ planes", "+ lane lookups", "+ coverage" };
   constexpr int T = mtpt::TileSize;
   std::vector<float> rgba(4 * T * T, 0.0f), depth(T * T, 1.0f);
@@ -256,7 +256,7 @@ int Floor(const mtpt::bench::TetMesh& mesh, const Options& o)
   std::printf(" frame, opaque where it becomes so | frame, nothing opaque | its vectors' lanes "
               "covered | its vectors at the top rung's rate | the rest: set-up, triangle path |"
               "\n|---|---:|");
-  for (int r = 0; r <= mtpt::detail::FragmentFloorRungs + 4; ++r)
+  for (int r = 0; r <= mtpt::bench::FragmentFloorRungs + 4; ++r)
   {
     std::printf("---:|");
   }
@@ -267,18 +267,18 @@ int Floor(const mtpt::bench::TetMesh& mesh, const Options& o)
   for (const std::string& set : sets)
   {
     mtpt::Compositor::UseInstructionSet(set);
-    const std::size_t lanes = mtpt::detail::FragmentLanes();
+    const std::size_t lanes = mtpt::bench::FragmentLanes();
     std::printf("| %s | %zu |", set.c_str(), lanes);
     const std::size_t vectors = std::size_t{ 1 } << 22;
     float sink = 0;
     double top = 0;
-    for (int r = 0; r < mtpt::detail::FragmentFloorRungs; ++r)
+    for (int r = 0; r < mtpt::bench::FragmentFloorRungs; ++r)
     {
       std::vector<double> ns;
       for (int run = 0; run < 5; ++run)
       {
         const auto start = mtpt::Clock::now();
-        sink += mtpt::detail::FragmentFloor(r, vectors, rgba.data(), depth.data());
+        sink += mtpt::bench::FragmentFloor(r, vectors, rgba.data(), depth.data());
         ns.push_back(1e9 * mtpt::SecondsSince(start) / (vectors * lanes));
       }
       top = Median(ns);

@@ -163,7 +163,7 @@ def self_test(source):
         ("Core/Compositor/Compositor.cxx", '#include "mtpt/ReferenceRenderer.h"', "beside it"),
         ("Core/Stages/mtpt/DepthKeys.h", '#include "mtpt/VisibilityOrder.h"', "include cycle"),
         ("Core/Stages/Culling.cxx", '#include "mtpt/NoSuchStage.h"', "no header of Core"),
-        ("Core/Pipeline/FramePipeline.cxx", '#include "FanPath-inl.h"', "the fragment"),
+        ("Core/Pipeline/FramePipeline.cxx", '#include "detail/FanPath-inl.h"', "the fragment"),
         ("VTK/Input/MeshSource.h", '#include "Drawing/CPUBackend.h"', "above it"),
         ("VTK/Reference/vtkMTPTReferenceRenderer.cxx", '#include "Drawing/RenderBackend.h"',
          "beside it"),
@@ -175,11 +175,6 @@ def self_test(source):
         copy = os.path.join(scratch, "Source")
         shutil.copytree(os.path.join(source, "Core"), os.path.join(copy, "Core"))
         shutil.copytree(os.path.join(source, "VTK"), os.path.join(copy, "VTK"))
-        # A fragment to include from outside its room (the injected fault needs one).
-        fragment = os.path.join(copy, "Core", "Compositor", "FanPath-inl.h")
-        if not os.path.exists(fragment):
-            with open(fragment, "w", encoding="utf-8") as f:
-                f.write("// a fragment\n")
         _, clean = check(copy)
         if clean:
             print("self-test: the unchanged copy fails:\n  " + "\n  ".join(clean))

@@ -81,20 +81,6 @@ void RasterizeTile(const RasterFrame& frame, const TileTarget& tile, const Fan* 
 /// The instruction set RasterizeTile runs with here (e.g. "AVX2"), for reports.
 const char* RasterTargetName();
 
-/// The rungs of FragmentFloor: registers, memory, planes, lane lookups, coverage.
-constexpr int FragmentFloorRungs = 5;
-
-/**
- * For measurements (mtpt_bench_compositor --floor): `vectors` vectors of fragments, every
- * lane a fragment, through rung `rung` of the fragment loop's floor (FragmentFloor-inl.h),
- * over a tile (4 * TileSize^2 floats: R, G, B, A planes, and TileSize^2 of opaque depth).
- * Returns a sum of the results. Nothing on one lane (the scalar target has no fan path).
- */
-float FragmentFloor(int rung, std::size_t vectors, float* rgba, const float* depth);
-
-/// The lanes of the fragment loops' vectors with the instruction set RasterizeTile runs.
-std::size_t FragmentLanes();
-
 /**
  * opacity[i] = 1 - exp(-density[i]) computed exactly as RasterizeTile's VTK-compatible
  * fragments compute it (the SIMD approximation), for tests of its error.

@@ -1,10 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Internal: the fan path of the compositor's per-tile rasterizer. A fragment of
-// TileRaster.cxx, beside it, included inside its per-instruction-set namespace
-// (HWY_NAMESPACE) after the helpers it uses (TileRow, RowOf, OpacityOfDensity, FragmentTag,
-// MaxLanes, T and the fixed-point constants), so that it is compiled once per instruction set
-// with them; it has no include guard for that reason (foreach_target.h includes
-// TileRaster.cxx once per target).
+// Internal: the fan path of the compositor's per-tile rasterizer.
 //
 // VTK-compatible shading of a whole fan at once. The triangle path sets up every triangle of
 // a tetrahedron's fan on its own and shades its short spans, a vector each; at 512x512 a
@@ -37,6 +32,34 @@
 // folded over), that reach beyond the fixed-point range or are large (FanExtentLimit), single
 // triangles (the slot entry point's), and fans with dependent components' colours take the
 // triangle path.
+// A fragment of the per-tile rasterizer, compiled once per instruction set: whoever includes
+// it does so under Highway's per-target re-inclusion (hwy/foreach_target.h), and it includes
+// what it uses and opens its own per-target namespace, so it reads alone.
+
+// Highway's per-target include guard: once for each target.
+#if defined(MTPT_COMPOSITOR_FAN_PATH_INL_H_) == defined(HWY_TARGET_TOGGLE)
+#ifdef MTPT_COMPOSITOR_FAN_PATH_INL_H_
+#undef MTPT_COMPOSITOR_FAN_PATH_INL_H_
+#else
+#define MTPT_COMPOSITOR_FAN_PATH_INL_H_
+#endif
+
+#include "detail/Reductions-inl.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include <hwy/highway.h>
+
+HWY_BEFORE_NAMESPACE();
+namespace mtpt
+{
+namespace detail
+{
+namespace HWY_NAMESPACE
+{
+namespace hn = hwy::HWY_NAMESPACE;
 
 /// Fans at most this large (fixed point, the larger side of the bounding box) take the fan
 /// path: over the pixels it tests (the box, widened by a vector's lanes across), every edge
@@ -96,7 +119,7 @@ inline void PixelsOfBox(std::int64_t lo, std::int64_t hi, int first, int last, i
 
 /// The corners of `fan` in fixed point relative to its centre, and the tile's pixels in
 /// its box; false if the fan is beyond the fixed-point range or FanExtentLimit.
-bool PlaceFan(const RasterFrame& f, const TileTarget& tile, const Fan& fan, FanGeometry& g)
+inline bool PlaceFan(const RasterFrame& f, const TileTarget& tile, const Fan& fan, FanGeometry& g)
 {
   const int n = fan.count;
   if (!FixedCoordinate(fan.centre.x, f.width, g.cx) ||
@@ -134,7 +157,7 @@ bool PlaceFan(const RasterFrame& f, const TileTarget& tile, const Fan& fan, FanG
  * area and all turning the same way, the silhouette convex (so the centre lies strictly
  * inside it). Products of coordinates relative to the centre are exact in 64 bits.
  */
-bool FanEdges(int n, FanGeometry& g)
+inline bool FanEdges(int n, FanGeometry& g)
 {
   std::int64_t turn[MaxFanTriangles], area[MaxFanTriangles];
   for (int k = 0; k < n; ++k)
@@ -281,7 +304,7 @@ struct TableLookup
  * corner per lane: value[a] for attribute a (r, g, b, attenuation, length, z) at
  * boundary[l], and the centre's in every lane of centre[a].
  */
-void FanValues(const TableLookup& lookup, const Fan& fan, hn::Vec<CornerTag> value[6],
+inline void FanValues(const TableLookup& lookup, const Fan& fan, hn::Vec<CornerTag> value[6],
   hn::Vec<CornerTag> centre[6])
 {
   const CornerTag d;
@@ -328,7 +351,7 @@ void FanValues(const TableLookup& lookup, const Fan& fan, hn::Vec<CornerTag> val
  * (Mode::Integrated; in perspective views ReduceFanLanes finds it from the faces' 1 / w),
  * value[5] = z.
  */
-void ScalarFanValues(const RasterFrame& f, Mode mode, const Fan& fan,
+inline void ScalarFanValues(const RasterFrame& f, Mode mode, const Fan& fan,
   hn::Vec<CornerTag> value[6], hn::Vec<CornerTag> centre[6])
 {
   const CornerTag d;
@@ -340,9 +363,8 @@ void ScalarFanValues(const RasterFrame& f, Mode mode, const Fan& fan,
     c.vertex = k < MaxFanTriangles ? &fan.boundary[k < fan.count ? k : 0] : &fan.centre;
     ValueCorner(f, mode, c);
     const bool exact = mode == Mode::ExactIntegral;
-    const double v[6] = { c.values[0], exact ? c.values[1] : 1.0,
-      exact ? c.values[2] : c.values[1], exact ? c.values[3] : 1.0, exact ? 0.0 : c.values[2],
-      exact ? c.values[6] : c.values[3] };
+    const double v[6] = { c.values[0], exact ? c.values[1] : 1.0, exact ? c.values[2] : c.values[1],
+      exact ? c.values[3] : 1.0, exact ? 0.0 : c.values[2], exact ? c.values[6] : c.values[3] };
     for (int a = 0; a < 6; ++a)
     {
       (k < MaxFanTriangles ? corners[a][k] : own[a]) = static_cast<float>(v[a]);
@@ -514,8 +536,8 @@ HWY_INLINE hn::Vec<hn::RebindToSigned<D>> TriangleOfLanes(
 /// The values of the vector at tile column x, `offset` columns right of the row's first
 /// vector: each lane's from the planes of the triangle it lies in.
 template <class D>
-HWY_INLINE void FanLaneValues(D d, const FanPlanes& p, const EdgeLanes<D>* spokes, int x,
-  int offset, hn::Vec<D> value[6])
+HWY_INLINE void FanLaneValues(
+  D d, const FanPlanes& p, const EdgeLanes<D>* spokes, int x, int offset, hn::Vec<D> value[6])
 {
   const auto i = hn::Iota(d, static_cast<float>(x));
   const auto which = hn::IndicesFromVec(d, TriangleOfLanes(d, spokes, p.triangles, offset));
@@ -546,8 +568,8 @@ HWY_INLINE hn::Vec<D> ShadeFanLanes(D d, const RasterFrame& f, const TileRow& ro
  */
 template <class D>
 HWY_INLINE void LaneSegments(D d, const RasterFrame& f, const TileTarget& tile, Mode mode,
-  const hn::Vec<D> value[6], int x, int y, bool scalarsOnly, hn::Vec<D>& front,
-  hn::Vec<D>& back, hn::Vec<D>& length)
+  const hn::Vec<D> value[6], int x, int y, bool scalarsOnly, hn::Vec<D>& front, hn::Vec<D>& back,
+  hn::Vec<D>& length)
 {
   // Mode::Integrated's denominators are 1.
   front = mode == Mode::ExactIntegral ? hn::Div(value[0], value[1]) : value[0];
@@ -559,15 +581,16 @@ HWY_INLINE void LaneSegments(D d, const RasterFrame& f, const TileTarget& tile, 
     // segment between the faces' depths 1 / value[1] and 1 / value[3].
     const PerspectiveInterpolation& view = f.interpolation;
     const auto i = hn::Iota(d, static_cast<float>(x));
-    const auto ndcX = hn::MulAdd(hn::Add(i, hn::Set(d, tile.x0 + 0.5f)),
-      hn::Set(d, 2.0f / f.width), hn::Set(d, -1.0f));
+    const auto ndcX = hn::MulAdd(
+      hn::Add(i, hn::Set(d, tile.x0 + 0.5f)), hn::Set(d, 2.0f / f.width), hn::Set(d, -1.0f));
     const float ndcY = 2.0f * (y + 0.5f) / f.height - 1.0f;
     const auto rayX = hn::Mul(hn::Add(ndcX, hn::Set(d, static_cast<float>(view.shiftX))),
       hn::Set(d, static_cast<float>(view.scaleX)));
     const auto rayY = hn::Set(d, static_cast<float>((ndcY + view.shiftY) * view.scaleY));
     const auto ray = hn::Sqrt(hn::MulAdd(rayX, rayX, hn::MulAdd(rayY, rayY, hn::Set(d, 1.0f))));
-    length = hn::Mul(hn::ZeroIfNegative(hn::Sub(hn::Div(hn::Set(d, 1.0f), value[3]),
-                       hn::Div(hn::Set(d, 1.0f), value[1]))), ray);
+    length = hn::Mul(hn::ZeroIfNegative(hn::Sub(
+                       hn::Div(hn::Set(d, 1.0f), value[3]), hn::Div(hn::Set(d, 1.0f), value[1]))),
+      ray);
   }
 }
 
@@ -704,14 +727,7 @@ private:
     // the row's end (see ShadeCompatible); the edges are evaluated from the first one.
     const int start = std::min(first, T - lanes);
     EdgeLanes<FragmentTag> bounding[MaxFanTriangles], spokes[MaxFanTriangles];
-    const auto iota = hn::Iota(hn::RebindToSigned<FragmentTag>(), 0);
-    const std::int64_t sx = (tile.x0 + start) * std::int64_t{ 256 } + 128 - g.cx;
-    const std::int64_t sy = g.y0 * std::int64_t{ 256 } + 128 - g.cy;
-    for (int k = 0; k < g.triangles; ++k)
-    {
-      bounding[k].Start(g.boundA[k], g.boundB[k], g.boundC[k], sx, sy, iota);
-      spokes[k].Start(g.spokeA[k], g.spokeB[k], 0, sx, sy, iota);
-    }
+    StartEdges(g, tile.x0 + start, bounding, spokes);
     bool ready = false;
     const auto lastLane = hn::Set(d, static_cast<float>(last));
     for (int y = g.y0; y <= g.y1; ++y)
@@ -753,24 +769,7 @@ private:
           this->Planes.Row(d, y - tile.y0);
           rowReady = true;
         }
-        if (this->Reduces)
-        {
-          ReduceFanLanes(d, this->Frame, tile, this->FanMode, row, this->Planes, spokes, x, y,
-            x - start, keep);
-          continue;
-        }
-        if (!this->Integrates)
-        {
-          this->MarkOpaque(y - tile.y0, x,
-            ShadeFanLanes(d, this->Frame, row, this->Planes, spokes, x, x - start, keep));
-          continue;
-        }
-        WaitFanLanes(d, this->Frame, tile, this->FanMode, row, this->Planes, spokes, x, y,
-          x - start, keep, this->Waiting);
-        if (this->Waiting.Full())
-        {
-          ShadeWaiting(this->Frame, tile, this->Waiting);
-        }
+        this->DrawLanes(row, spokes, x, y, x - start, keep);
       }
       for (int k = 0; k < g.triangles; ++k)
       {
@@ -780,6 +779,50 @@ private:
     }
     ShadeWaiting(this->Frame, tile, this->Waiting); // before the next fan is drawn
     return true;
+  }
+
+  /// The edges of the fan's box at its first row, from window column `x` (a vector's lanes
+  /// across): its silhouette's (`bounding`) and its spokes.
+  static HWY_INLINE void StartEdges(const FanGeometry& g, int x,
+    EdgeLanes<FragmentTag> bounding[MaxFanTriangles],
+    EdgeLanes<FragmentTag> spokes[MaxFanTriangles])
+  {
+    const auto iota = hn::Iota(hn::RebindToSigned<FragmentTag>(), 0);
+    const std::int64_t sx = x * std::int64_t{ 256 } + 128 - g.cx;
+    const std::int64_t sy = g.y0 * std::int64_t{ 256 } + 128 - g.cy;
+    for (int k = 0; k < g.triangles; ++k)
+    {
+      bounding[k].Start(g.boundA[k], g.boundB[k], g.boundC[k], sx, sy, iota);
+      spokes[k].Start(g.spokeA[k], g.spokeB[k], 0, sx, sy, iota);
+    }
+  }
+
+  /// The lanes `keep` of the vector at tile column x of window row y (`column` from the box's
+  /// first vector, the spokes' origin), the fan set up: reduced, shaded, or left waiting to
+  /// be shaded, by the fan's mode.
+  HWY_INLINE void DrawLanes(const TileRow& row, const EdgeLanes<FragmentTag>* spokes, int x, int y,
+    int column, hn::Mask<FragmentTag> keep)
+  {
+    const FragmentTag d;
+    const TileTarget& tile = this->Target;
+    if (this->Reduces)
+    {
+      ReduceFanLanes(
+        d, this->Frame, tile, this->FanMode, row, this->Planes, spokes, x, y, column, keep);
+      return;
+    }
+    if (!this->Integrates)
+    {
+      this->MarkOpaque(
+        y - tile.y0, x, ShadeFanLanes(d, this->Frame, row, this->Planes, spokes, x, column, keep));
+      return;
+    }
+    WaitFanLanes(d, this->Frame, tile, this->FanMode, row, this->Planes, spokes, x, y, column, keep,
+      this->Waiting);
+    if (this->Waiting.Full())
+    {
+      ShadeWaiting(this->Frame, tile, this->Waiting);
+    }
   }
 
   /// Marks the opaque pixels among the vector's at tile row j, column x, whose alpha is `alpha`.
@@ -845,3 +888,10 @@ public:
 };
 
 #endif
+
+} // namespace HWY_NAMESPACE
+} // namespace detail
+} // namespace mtpt
+HWY_AFTER_NAMESPACE();
+
+#endif // MTPT_COMPOSITOR_FAN_PATH_INL_H_

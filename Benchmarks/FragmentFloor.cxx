@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Internal: the fragment loop's floor, for measurements (mtpt_bench_compositor --floor). A
-// fragment of TileRaster.cxx, beside it, included inside its per-instruction-set namespace
-// after FanRaster-inl.h, whose helpers it uses; no include guard for that reason.
+// The fragment loop's floor, for measurements (mtpt_bench_compositor --floor): the core's
+// fan path fragment (detail/FanPath-inl.h) and the fragments it includes, compiled once per
+// instruction set as the rasterizer compiles them, with the loops below beside them.
 //
 // A ladder of loops over one tile, each adding one cost of the fan path's fragment loop to
 // the one below, every vector's lanes all fragments (FloorRung):
@@ -15,6 +15,30 @@
 //   Coverage   the silhouette's edges and the pixels already opaque tested first (FanPath::Rows).
 // What the real loop costs beyond the top rung is the set-up per fan and the lanes a fan's
 // box leaves idle (Documentation/compositor.md, "The floor").
+#include "FragmentFloor.h"
+
+#include <cstddef>
+#include <cstdint>
+
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "FragmentFloor.cxx"
+#include <hwy/foreach_target.h> // IWYU pragma: keep
+
+#include <hwy/highway.h>
+
+#include "detail/FanPath-inl.h"
+
+HWY_BEFORE_NAMESPACE();
+namespace mtpt
+{
+namespace bench
+{
+namespace HWY_NAMESPACE
+{
+namespace hn = hwy::HWY_NAMESPACE;
+using namespace mtpt::detail::HWY_NAMESPACE;
+using mtpt::detail::RasterFrame;
+using mtpt::detail::TileTarget;
 
 /// The rungs of the floor's ladder (see above), in order.
 enum class FloorRung
@@ -253,3 +277,31 @@ std::size_t FragmentLanesImpl()
 {
   return hn::Lanes(FragmentTag());
 }
+
+} // namespace HWY_NAMESPACE
+} // namespace bench
+} // namespace mtpt
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace mtpt
+{
+namespace bench
+{
+
+HWY_EXPORT(FragmentFloorImpl);
+HWY_EXPORT(FragmentLanesImpl);
+
+float FragmentFloor(int rung, std::size_t vectors, float* rgba, const float* depth)
+{
+  return HWY_DYNAMIC_DISPATCH(FragmentFloorImpl)(rung, vectors, rgba, depth);
+}
+
+std::size_t FragmentLanes()
+{
+  return HWY_DYNAMIC_DISPATCH(FragmentLanesImpl)();
+}
+
+} // namespace bench
+} // namespace mtpt
+#endif
