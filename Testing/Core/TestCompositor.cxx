@@ -115,6 +115,35 @@ TEST_P(CompositorSimd, SharedEdgesAreCoveredExactlyOnce)
   }
 }
 
+TEST_P(CompositorSimd, VertexColoursDrawOnlyWithVTKCompatibleShading)
+{
+  // Records with the data's colours (dependent components) are drawn VTK-compatibly; the
+  // frame's plan never asks for them pre-integrated, and the compositor draws nothing when
+  // asked (it takes no decision of its own).
+  const int w = 8, h = 8;
+  const auto table = ConstantTable(1.0f, 0.5f, 0.25f, 1.0f);
+  TetVertex vertices[5];
+  std::uint32_t indices[12];
+  SquareSlot(0.5, 0.5, 7.5, 7.5, w, h, 0.5f, vertices, indices, 0);
+  const float colour[4] = { 0.25f, 0.5f, 1.0f, 1.0f };
+  for (TetVertex& v : vertices)
+  {
+    mtpt::StoreVertexColour(v, colour);
+  }
+  mtpt::PreIntegrationTable integrals;
+  auto settings = Settings(w, h, table);
+  integrals.Build(settings.transferFunction);
+  settings.vertexColours = true;
+  mtpt::Compositor compositor;
+  std::vector<float> rgba;
+  compositor.Composite(vertices, indices, 1, settings, rgba, 2);
+  EXPECT_GT(rgba[4 * (4 * w + 4) + 3], 0.0f); // drawn, with the colours' attenuation
+  EXPECT_NEAR(rgba[4 * (4 * w + 4) + 2] / rgba[4 * (4 * w + 4) + 3], 1.0f, 1e-3f);
+  settings.UsePreIntegration(integrals, mtpt::PerspectiveInterpolation{});
+  compositor.Composite(vertices, indices, 1, settings, rgba, 2);
+  EXPECT_TRUE(std::all_of(rgba.begin(), rgba.end(), [](float v) { return v == 0.0f; }));
+}
+
 TEST_P(CompositorSimd, FragmentMathMatchesTheShader)
 {
   // One triangle with different attributes at its vertices; check one pixel by hand.

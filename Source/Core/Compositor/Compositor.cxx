@@ -71,7 +71,9 @@ bool Usable(const CompositeSettings& s)
   }
   if (s.vertexColours)
   {
-    return true; // the records hold the colours: no table is read
+    // The records hold the colours: no table is read, and only VTK-compatible shading
+    // applies (the frame's plan decides so: CompositeSettingsFor).
+    return s.shading == Shading::VTKCompatible;
   }
   if (!s.transferFunction.table || s.transferFunction.size < 1)
   {
@@ -428,8 +430,7 @@ void Compositor::Rasterize(const Fan* fans, const LightFactors* lights, int thre
   frame.width = s.width;
   frame.height = s.height;
   frame.transferFunction = s.transferFunction;
-  frame.preIntegration =
-    s.shading == Shading::PreIntegrated && !s.vertexColours ? s.preIntegration : nullptr;
+  frame.preIntegration = s.shading == Shading::PreIntegrated ? s.preIntegration : nullptr;
   frame.vertexColours = s.vertexColours;
   frame.interpolation = s.interpolation;
   frame.inverseUnit = static_cast<float>(1.0 / s.unitDistance);

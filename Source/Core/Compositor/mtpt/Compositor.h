@@ -86,8 +86,9 @@ struct CompositeSettings
   PerspectiveInterpolation interpolation;
   /**
    * Dependent components: the records hold their vertex's colour (StoreVertexColour, from
-   * a decomposition with DecomposeInput::colours) instead of scalars, and shading is
-   * VTK-compatible with those colours whatever `shading` says; the table is not read.
+   * a decomposition with DecomposeInput::colours) instead of scalars, shaded VTK-compatibly
+   * with those colours; the table is not read. `shading` must then be VTKCompatible (the
+   * frame's plan decides so, CompositeSettingsFor): otherwise nothing is drawn.
    */
   bool vertexColours = false;
   /**
