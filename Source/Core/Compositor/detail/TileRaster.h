@@ -35,7 +35,7 @@ struct RasterFrame
   BlendMode blendMode = BlendMode::Composite;
   const IntensityTable* intensity = nullptr;  ///< average and additive modes
   double averageRange[2] = { 0.0, 0.0 };       ///< average mode: AverageRangeEntries
-  /// VTK-compatible fans drawn whole where they can be (FanRaster-inl.h), which gives the
+  /// VTK-compatible fans drawn whole where they can be (FanPath-inl.h), which gives the
   /// image of drawing them triangle by triangle bit for bit; false (tests) draws them so.
   bool fanPath = true;
 };

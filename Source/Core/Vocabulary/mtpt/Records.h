@@ -179,7 +179,7 @@ struct PixelRegion
 /**
  * The size in pixels of the image a frame is composited into: the viewport's at image sample
  * distance 1, else fewer (or more) pixels across the same view (ImageSampling.h). The one
- * name of this size from the mapper (BackendFrame::imageSize) down to the stages, which cull
+ * name of this size from the frame's plan (FramePlan::imageSize) down to the stages, which cull
  * the cells that cover none of its pixel centres; empty (0 x 0) culls none.
  */
 struct ImageSize
