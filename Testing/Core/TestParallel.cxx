@@ -5,9 +5,11 @@
 #include "detail/Parallel.h"
 
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <numeric>
 #include <random>
@@ -125,6 +127,63 @@ TEST(Parallel, ReductionsOfCountsAndFlagsDoNotDependOnTheTeam)
   }
 }
 
+TEST(Parallel, ReductionsHearTheFlagOfEveryThreadWhenTheThreadsFinishTogether)
+{
+  // One item per thread, each held until the whole team has arrived: the threads fold their
+  // partials at the same moment, and the one "false" must survive wherever it is.
+  for (const int threads : { 2, 3 })
+  {
+    for (int round = 0; round < 12; ++round)
+    {
+      const int odd = round % threads;
+      std::atomic<int> arrived{ 0 };
+      const bool all = detail::ParallelReduce(
+        0, threads, threads, true, [](bool a, bool b) { return a && b; },
+        [&](std::int64_t i)
+        {
+          arrived.fetch_add(1);
+          const auto start = std::chrono::steady_clock::now();
+          while (arrived.load() < threads &&
+            std::chrono::steady_clock::now() - start < std::chrono::milliseconds(100))
+          {
+          }
+          return i != odd;
+        });
+      ASSERT_FALSE(all) << threads << " threads, the false at " << odd;
+    }
+  }
+}
+
+TEST(Parallel, ThreadCountsOfZeroOrLessMeanTheDefault)
+{
+  // A default other than 1 (OpenMP's count, mtpt/Threads.h), restored at the end.
+  const int openMP = omp_get_max_threads();
+  omp_set_num_threads(3);
+  const int standard = mtpt::DefaultThreadCount();
+  EXPECT_GE(standard, 1);
+  EXPECT_EQ(detail::ResolveThreads(0), standard);
+  EXPECT_EQ(detail::ResolveThreads(-2), standard);
+  EXPECT_EQ(detail::ResolveThreads(3), 3);
+  for (const int threads : { 0, -1 })
+  {
+    std::atomic<int> blocks{ 0 };
+    detail::ForEachThreadBlock(1000, threads, [&](detail::IndexRange) { ++blocks; });
+    EXPECT_EQ(blocks.load(), standard);
+    std::atomic<int> badThread{ 0 };
+    detail::ParallelForDynamic(
+      300, threads, [&](std::int64_t, int thread) { badThread += thread >= standard ? 1 : 0; });
+    EXPECT_EQ(badThread.load(), 0);
+    detail::PerThread<int> scratch;
+    scratch.Prepare(threads, [] { return 0; });
+    EXPECT_EQ(scratch.size(), static_cast<std::size_t>(standard));
+    EXPECT_EQ(
+      detail::ParallelReduce(
+        0, 1000, threads, 0, [](int a, int b) { return a + b; }, [](std::int64_t) { return 1; }),
+      1000);
+  }
+  omp_set_num_threads(openMP);
+}
+
 TEST(Parallel, PerThreadScratchIsMadeBeforeAndKept)
 {
   detail::PerThread<std::vector<int>> scratch;
@@ -160,6 +219,19 @@ TEST(Parallel, ThePrefixByBucketPlacesEachBlockAfterTheEarlierOnes)
   EXPECT_EQ(counts, (std::vector<std::uint32_t>{ 0, 5, 9, 2, 5, 10 }));
   EXPECT_EQ(
     buckets, (std::vector<std::pair<std::size_t, std::size_t>>{ { 0, 5 }, { 5, 4 }, { 9, 1 } }));
+  // One bucket: each block's count becomes its offset (an exclusive prefix sum).
+  std::vector<std::size_t> perBlock = { 4, 0, 3, 5 };
+  std::size_t calls = 0;
+  EXPECT_EQ(detail::ExclusivePrefixByBucket(perBlock.data(), 4, 1,
+              [&](std::size_t, std::size_t first, std::size_t size)
+              {
+                ++calls;
+                EXPECT_EQ(first, 0u);
+                EXPECT_EQ(size, 12u);
+              }),
+    12u);
+  EXPECT_EQ(calls, 1u);
+  EXPECT_EQ(perBlock, (std::vector<std::size_t>{ 0, 4, 4, 7 }));
 }
 
 TEST(Parallel, CountPlaceScatterIsAStableCountingSortForAnyTeam)

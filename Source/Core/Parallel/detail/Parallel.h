@@ -150,17 +150,19 @@ void ForEachThreadBlock(std::size_t n, int threads, Body&& body)
 
 /**
  * `combine` folded over body(i) for i in [begin, end): each thread of a team of `threads`
- * folds its static chunk from `identity`, and the partial results are folded in thread order
- * on the calling thread. For an associative and commutative `combine` of integers or flags
- * (counts, "any", "all") the result does not depend on the team.
+ * folds its static chunk (as ParallelFor's) from `identity` in a local, then folds that
+ * into the result under a lock as it finishes. `combine` must be associative and
+ * commutative and exact (counts, "any", "all"; not floating-point sums): the result then
+ * does not depend on the team nor on the order the threads finish. Allocates nothing, and
+ * each thread writes only its own local until the fold, so the partials of a T packed
+ * several to a word (bool) never share memory.
  */
 template <typename T, typename Combine, typename Body>
 T ParallelReduce(
   std::int64_t begin, std::int64_t end, int threads, T identity, Combine&& combine, Body&& body)
 {
-  const int team = ResolveThreads(threads);
-  std::vector<T> partial(static_cast<std::size_t>(team), identity);
-#pragma omp parallel num_threads(team)
+  T result = identity;
+#pragma omp parallel num_threads(ResolveThreads(threads))
   {
     T mine = identity;
 #pragma omp for schedule(static) nowait
@@ -168,12 +170,8 @@ T ParallelReduce(
     {
       mine = combine(mine, body(i));
     }
-    partial[static_cast<std::size_t>(omp_get_thread_num())] = mine;
-  }
-  T result = identity;
-  for (const T& p : partial)
-  {
-    result = combine(result, p);
+#pragma omp critical(mtpt_detail_ParallelReduce)
+    result = combine(result, mine);
   }
   return result;
 }
@@ -214,7 +212,9 @@ private:
  * bucket]) taken in (bucket, block) order, in place: each count becomes its block's first
  * place in its bucket, so that blocks scattering in order keep a counting sort stable.
  * perBucket(bucket, first, count) is told each bucket's first place and size. Returns the
- * total. Serial: run it between the parallel count and scatter (CountPlaceScatter).
+ * total. With one bucket it is the exclusive prefix sum of per-block counts: each block's
+ * count becomes its offset. Serial: run it between the parallel count and scatter
+ * (CountPlaceScatter).
  */
 template <typename T, typename PerBucket>
 std::size_t ExclusivePrefixByBucket(
