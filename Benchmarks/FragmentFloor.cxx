@@ -27,6 +27,8 @@
 #include <hwy/highway.h>
 
 #include "detail/FanPath-inl.h"
+#include "detail/RasterCorners-inl.h"
+#include "detail/RasterPixels-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace mtpt

@@ -19,9 +19,14 @@
 
 #include <hwy/highway.h>
 
-// The two drawing paths, each with the fragments it uses (their headers say what each holds):
-// fans drawn whole, and fans drawn triangle by triangle.
+// The rasterizer's fragments (their headers say what each holds): the geometry and the
+// pixels every path shares, pre-integrated segments, the blend modes' reductions, and the two
+// drawing paths: fans drawn whole, and fans drawn triangle by triangle.
 #include "detail/FanPath-inl.h"
+#include "detail/RasterCorners-inl.h"
+#include "detail/RasterPixels-inl.h"
+#include "detail/Reductions-inl.h"
+#include "detail/Segments-inl.h"
 #include "detail/TrianglePath-inl.h"
 
 HWY_BEFORE_NAMESPACE();

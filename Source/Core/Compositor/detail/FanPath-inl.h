@@ -44,7 +44,12 @@
 #define MTPT_COMPOSITOR_FAN_PATH_INL_H_
 #endif
 
+#include "detail/TileRaster.h"
+
+#include "detail/RasterCorners-inl.h"
+#include "detail/RasterPixels-inl.h"
 #include "detail/Reductions-inl.h"
+#include "detail/Segments-inl.h"
 
 #include <algorithm>
 #include <cmath>

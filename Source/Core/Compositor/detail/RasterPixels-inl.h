@@ -14,6 +14,8 @@
 #define MTPT_COMPOSITOR_RASTER_PIXELS_INL_H_
 #endif
 
+#include "detail/TileRaster.h"
+
 #include "detail/RasterCorners-inl.h"
 
 #include <hwy/highway.h>

@@ -15,6 +15,10 @@
 #define MTPT_COMPOSITOR_REDUCTIONS_INL_H_
 #endif
 
+#include "detail/TileRaster.h"
+
+#include "detail/RasterCorners-inl.h"
+#include "detail/RasterPixels-inl.h"
 #include "detail/Segments-inl.h"
 
 #include <algorithm>

@@ -16,6 +16,9 @@
 #define MTPT_COMPOSITOR_SEGMENTS_INL_H_
 #endif
 
+#include "detail/TileRaster.h"
+
+#include "detail/RasterCorners-inl.h"
 #include "detail/RasterPixels-inl.h"
 
 #include <algorithm>
