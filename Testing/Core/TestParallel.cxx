@@ -176,6 +176,19 @@ TEST(Parallel, ThreadCountsOfZeroOrLessMeanTheDefault)
     detail::PerThread<int> scratch;
     scratch.Prepare(threads, [] { return 0; });
     EXPECT_EQ(scratch.size(), static_cast<std::size_t>(standard));
+    std::vector<int> items(100, 1);
+    std::atomic<int> compacted{ 0 };
+    EXPECT_EQ(detail::CompactInOrder(items.size(), threads, items.data(),
+                [&](std::size_t begin, std::size_t end, int*)
+                {
+                  ++compacted;
+                  return end - begin;
+                }),
+      100u);
+    EXPECT_EQ(compacted.load(), standard);
+    std::vector<int> keys = { 5, 3, 9, 1, 7, 2 };
+    detail::ParallelSort(keys.data(), keys.size(), threads);
+    EXPECT_EQ(keys, (std::vector<int>{ 1, 2, 3, 5, 7, 9 }));
     EXPECT_EQ(
       detail::ParallelReduce(
         0, 1000, threads, 0, [](int a, int b) { return a + b; }, [](std::int64_t) { return 1; }),

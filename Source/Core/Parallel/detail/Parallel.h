@@ -269,7 +269,7 @@ void CountPlaceScatter(
 template <typename T, typename Body>
 std::size_t CompactInOrder(std::size_t n, int threads, T* items, Body&& body)
 {
-  const int blocks = threads > 0 ? threads : 1;
+  const int blocks = ResolveThreads(threads);
   std::vector<std::size_t> kept(static_cast<std::size_t>(blocks), 0);
   ForEachBlock(blocks, blocks,
     [&](int b)
@@ -300,7 +300,7 @@ std::size_t CompactInOrder(std::size_t n, int threads, T* items, Body&& body)
 template <typename T>
 void ParallelSort(T* items, std::size_t n, int threads)
 {
-  const std::size_t blocks = static_cast<std::size_t>(threads > 1 ? threads : 1);
+  const auto blocks = static_cast<std::size_t>(ResolveThreads(threads));
   const auto bound = [&](std::size_t b) { return items + n * std::min(b, blocks) / blocks; };
   ParallelFor(0, static_cast<std::int64_t>(blocks), threads,
     [&](std::int64_t b)
