@@ -3,11 +3,19 @@
 #   scripts/ci/sanitizers.sh [fuzz-seconds]          (default 60; CI: .ci/run)
 #   scripts/ci/sanitizers.sh 3600                    (the long run: an hour of fuzzing)
 #
-# Phases (each configures and builds only the core, RelWithDebInfo, Ninja, in its own
-# build folder; every step runs under `timeout` so CI can never hang):
-#   asan  GCC, -fsanitize=address,undefined (MTPT_SANITIZER=address): the core tests.
+# Two builds of the core and its tests (RelWithDebInfo, Ninja, no VTK module, no benchmarks),
+# each in its own build folder; every step runs under `timeout` so CI can never hang:
+#   asan  Clang, -fsanitize=address,undefined with libFuzzer's coverage instrumentation
+#         (MTPT_BUILD_FUZZERS=ON, which implies MTPT_SANITIZER=address): the core tests.
 #         Out-of-bounds and use-after-free accesses, leaks, and undefined behaviour
 #         (signed overflow, misaligned or null accesses, bad shifts) abort the test.
+#         LLVM's OpenMP runtime runs without hot teams (below), so every leak is ours.
+#   fuzz  the same build's libFuzzer target mtpt_fuzz_frame (Testing/Fuzz/FuzzFrame.cxx):
+#         random and degenerate meshes and cameras through FramePipeline::Run and the
+#         Compositor, every invariant checked, for fuzz-seconds, starting from the checked-in
+#         corpus Testing/Fuzz/corpus/FuzzFrame. A failing input is written to
+#         <asan build>/artifacts/; reproduce with <asan build>/Testing/Fuzz/mtpt_fuzz_frame
+#         <artifact>.
 #   tsan  Clang, -fsanitize=thread (MTPT_SANITIZER=thread), OpenMP from LLVM's libomp
 #         (-fopenmp=libomp: GCC's libgomp is not instrumented, so TSan would not see its
 #         barriers and would report false races) with the Archer OMPT tool, which tells
@@ -15,30 +23,29 @@
 #         TSAN_OPTIONS=ignore_noninstrumented_modules=1 as Archer's documentation asks).
 #         The core tests run with OMP_NUM_THREADS=4 (more threads than cores, so threads
 #         interleave). Data races between OpenMP threads fail the test.
-#   fuzz  Clang libFuzzer target mtpt_fuzz_frame (MTPT_BUILD_FUZZERS=ON: -fsanitize=fuzzer,
-#         address,undefined; Testing/Fuzz/FuzzFrame.cxx): random and degenerate meshes and
-#         cameras through FramePipeline::Run and the Compositor, every invariant checked,
-#         for fuzz-seconds, starting from the checked-in corpus Testing/Fuzz/corpus/FuzzFrame.
-#         A failing input is written to <fuzz build>/artifacts/; reproduce with
-#         <fuzz build>/Testing/Fuzz/mtpt_fuzz_frame <artifact>.
 #
-# Build folders: build-asan, build-tsan, build-fuzz under the repository (ignored by git),
-# or MTPT_SANITIZER_BUILD_ROOT/{asan,tsan,fuzz}, or ASAN_BUILD_DIR, TSAN_BUILD_DIR,
-# FUZZ_BUILD_DIR each. MTPT_JOBS: build jobs (default 2). MTPT_SANITIZER_PHASES: the phases
-# to run (default "asan tsan fuzz"). MTPT_TSAN_EXCLUDE: a ctest -E regex of tests to leave
-# out of the TSan run (default none: the whole core suite takes about 15 s under TSan).
+# The grid is smaller than the release build's, where the sanitizers cost most:
+#   - instruction sets: both builds target x86-64-v2 (-march=x86-64-v2), so Highway compiles
+#     the compositor for AVX3, AVX2 and SSE4 (16, 8 and 4 lanes) but not for SSSE3 (4 lanes,
+#     as SSE4) and the scalar fallback (which no x86-64 processor of the last 15 years runs);
+#     the per-target tests run for those three. The instrumented compositor is most of each
+#     build's time and its per-target tests most of the tests' time. The release builds
+#     (scripts/test.sh, bookworm and unstable) test every target.
+#   - tests: the tests of compiled code only; the checks that are scripts (the layer and
+#     function-length checks, the results tables) read the sources and run in scripts/test.sh.
+#
+# Build folders: build-asan and build-tsan under the repository (ignored by git), or
+# MTPT_SANITIZER_BUILD_ROOT/{asan,tsan}, or ASAN_BUILD_DIR, TSAN_BUILD_DIR each (FUZZ_BUILD_DIR:
+# the fuzzer's, by default the asan build). MTPT_JOBS: build jobs (default 2).
+# MTPT_SANITIZER_PHASES: the phases to run (default "asan fuzz tsan"). MTPT_TSAN_EXCLUDE: a
+# ctest -E regex of tests to leave out of the TSan run (default none).
 # Every phase runs even if an earlier one failed; the exit status is non-zero if any did.
 #
-# Measured on the 2-core machine (RelWithDebInfo, -j2, clean build folders, 64 core tests):
-# asan 80 s to build and 30 s to test, tsan 40 s and 15 s, fuzz 32 s to build and about
-# 5,000 executions per second (about 300,000 in 60 s); the whole script with 60 s of fuzzing
-# takes about 4.5 minutes, well inside CI's 10 (7 minutes with the machine loaded 4-fold).
-#
-# The long run, `scripts/ci/sanitizers.sh 3600`, fuzzes for an hour (about 15-20 million
-# executions) after the same asan and tsan phases; it stops at the first failing input
+# The long run, `scripts/ci/sanitizers.sh 3600`, fuzzes for an hour (about 400,000
+# executions on the 2-core host) after the same asan and tsan phases; it stops at the first failing input
 # unless MTPT_FUZZ_FLAGS="-fork=2 -ignore_crashes=1" asks libFuzzer to go on and collect
 # every distinct one in the artifacts folder. Its work corpus (<fuzz build>/corpus) is kept
-# and resumed by the next run. See README.md, "Sanitizers and fuzzing".
+# and resumed by the next run. See Documentation/testing.md, "Sanitizers and fuzzing".
 set -uo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
@@ -48,14 +55,13 @@ if ! [[ "$fuzz_seconds" =~ ^[0-9]+$ ]]; then
   exit 2
 fi
 jobs="${MTPT_JOBS:-2}"
-phases="${MTPT_SANITIZER_PHASES:-asan tsan fuzz}"
+phases="${MTPT_SANITIZER_PHASES:-asan fuzz tsan}"
 root="${MTPT_SANITIZER_BUILD_ROOT:-}"
 asan_dir="${ASAN_BUILD_DIR:-${root:+$root/asan}}"
 tsan_dir="${TSAN_BUILD_DIR:-${root:+$root/tsan}}"
-fuzz_dir="${FUZZ_BUILD_DIR:-${root:+$root/fuzz}}"
 asan_dir="${asan_dir:-$here/build-asan}"
 tsan_dir="${tsan_dir:-$here/build-tsan}"
-fuzz_dir="${fuzz_dir:-$here/build-fuzz}"
+fuzz_dir="${FUZZ_BUILD_DIR:-$asan_dir}"
 
 "$here/scripts/install/install-deps.sh" || exit 1
 
@@ -89,13 +95,43 @@ finish() {
   fi
 }
 
-# configure DIR CC CXX CMAKE-ARGS...: the core only (no VTK module, no benchmarks).
+# configure DIR CC CXX CMAKE-ARGS...: the core only (no VTK module, no benchmarks), for
+# x86-64-v2 (the smaller grid of instruction sets, above).
 configure() {
   local dir="$1" cc="$2" cxx="$3"
   shift 3
   step configure 300 env CC="$cc" CXX="$cxx" cmake -S "$here" -B "$dir" -G Ninja \
     -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMTPT_BUILD_VTK_MODULE=OFF \
-    -DMTPT_BUILD_BENCHMARKS=OFF "$@"
+    -DMTPT_BUILD_BENCHMARKS=OFF -DCMAKE_C_FLAGS=-march=x86-64-v2 \
+    -DCMAKE_CXX_FLAGS=-march=x86-64-v2 "$@"
+}
+
+# configure_asan DIR: Clang, ASan + UBSan and libFuzzer's instrumentation, the tests and the
+# fuzz target.
+configure_asan() {
+  configure "$1" clang clang++ -DMTPT_BUILD_FUZZERS=ON -DMTPT_SANITIZER=address \
+    -DMTPT_BUILD_TESTING=ON
+}
+
+# compiled_tests DIR [EXCLUDE]: sets `selected` to ctest's arguments for the core tests of DIR
+# that run a program built there, leaving out those that run a script (python3, bash) and
+# those that the regex EXCLUDE matches.
+compiled_tests() {
+  local scripts
+  scripts="$(ctest --test-dir "$1" -L core --show-only=json-v1 | python3 -c '
+import json, os, sys
+build = os.path.realpath(sys.argv[1])
+names = [t["name"] for t in json.load(sys.stdin)["tests"]
+         if not os.path.realpath(t["command"][0]).startswith(build + os.sep)]
+print("|".join(names))' "$1")" || return 1
+  local exclude="${scripts:+^($scripts)\$}"
+  if [ -n "${2:-}" ]; then
+    exclude="${exclude:+$exclude|}$2"
+  fi
+  selected=(-L core)
+  if [ -n "$exclude" ]; then
+    selected+=(-E "$exclude")
+  fi
 }
 
 run_asan() {
@@ -104,15 +140,22 @@ run_asan() {
   : >"$log"
   local t0 t1 t2
   t0=$(now)
-  if ! configure "$asan_dir" gcc g++ -DMTPT_SANITIZER=address -DMTPT_BUILD_FUZZERS=OFF ||
-    ! step build 1200 cmake --build "$asan_dir" --parallel "$jobs"; then
+  local selected=()
+  if ! configure_asan "$asan_dir" ||
+    ! step build 1200 cmake --build "$asan_dir" --parallel "$jobs" ||
+    ! compiled_tests "$asan_dir"; then
     finish asan FAIL "build failed after $(($(now) - t0)) s"
     return
   fi
   t1=$(now)
-  ASAN_OPTIONS="detect_leaks=1:detect_stack_use_after_return=1:strict_init_order=1" \
+  # KMP_HOT_TEAMS_MAX_LEVEL=0: LLVM's OpenMP runtime (libomp, which Clang's -fopenmp links)
+  # keeps the thread teams of past parallel regions ("hot teams") for reuse and does not
+  # free them at exit, which LeakSanitizer reports as leaks from inside libomp; without hot
+  # teams it frees each team, so every leak reported is ours.
+  KMP_HOT_TEAMS_MAX_LEVEL=0 \
+    ASAN_OPTIONS="detect_leaks=1:detect_stack_use_after_return=1:strict_init_order=1" \
     UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1" \
-    step test 600 ctest --test-dir "$asan_dir" -L core --output-on-failure \
+    step test 600 ctest --test-dir "$asan_dir" "${selected[@]}" --output-on-failure \
     --parallel "$jobs" --timeout 300
   local rc=$?
   t2=$(now)
@@ -136,8 +179,10 @@ run_tsan() {
     finish tsan FAIL "libarcher.so not found next to $(command -v clang++) (package libomp-dev)"
     return
   fi
+  local selected=()
   if ! configure "$tsan_dir" clang clang++ -DMTPT_SANITIZER=thread -DMTPT_BUILD_FUZZERS=OFF ||
-    ! step build 1200 cmake --build "$tsan_dir" --parallel "$jobs"; then
+    ! step build 1200 cmake --build "$tsan_dir" --parallel "$jobs" ||
+    ! compiled_tests "$tsan_dir" "${MTPT_TSAN_EXCLUDE:-}"; then
     finish tsan FAIL "build failed after $(($(now) - t0)) s"
     return
   fi
@@ -152,13 +197,10 @@ run_tsan() {
     prefix=(setarch "$(uname -m)" -R)
     echo "== TSan cannot start with ASLR on: running under ${prefix[*]}" >>"$log"
   fi
-  local exclude=()
-  if [ -n "${MTPT_TSAN_EXCLUDE:-}" ]; then
-    exclude=(-E "$MTPT_TSAN_EXCLUDE")
-  fi
   # -V keeps every test's output in the log: Archer announces itself there (verbose=1).
   step test 600 "${prefix[@]}" "${tsan_env[@]}" ARCHER_OPTIONS=verbose=1 \
-    ctest --test-dir "$tsan_dir" -L core "${exclude[@]}" -V --parallel "$jobs" --timeout 300
+    ctest --test-dir "$tsan_dir" "${selected[@]}" -V --parallel "$jobs" \
+    --timeout 300
   local rc=$?
   t2=$(now)
   local tests races archer_runs
@@ -182,8 +224,8 @@ run_fuzz() {
   : >"$log"
   local t0 t1 t2
   t0=$(now)
-  if ! configure "$fuzz_dir" clang clang++ -DMTPT_BUILD_FUZZERS=ON -DMTPT_SANITIZER=address \
-    -DMTPT_BUILD_TESTING=OFF ||
+  # The asan phase's build, unless FUZZ_BUILD_DIR names another (then built here).
+  if ! configure_asan "$fuzz_dir" ||
     ! step build 1200 cmake --build "$fuzz_dir" --parallel "$jobs" --target mtpt_fuzz_frame; then
     finish fuzz FAIL "build failed after $(($(now) - t0)) s"
     return
