@@ -49,7 +49,9 @@ shards="$(nproc)"
 
 status=0
 for order in reversed storage; do
-  # The test program fails, as it must: its output is what counts.
+  # The test program fails, as it must: its output is what counts. Logs of an earlier run
+  # (another shard count) go first.
+  rm -f "$build"/mutation-"$order"-*.log
   pids=()
   for shard in $(seq 0 $((shards - 1))); do
     MTPT_TESTING_ORDER="$order" GTEST_TOTAL_SHARDS="$shards" GTEST_SHARD_INDEX="$shard" \
