@@ -62,10 +62,11 @@ for order in reversed storage; do
   for pid in "${pids[@]}"; do wait "$pid" || true; done
   logs=("$build"/mutation-"$order"-*.log)
   failed="$(cat "${logs[@]}" | grep -E '^\[  FAILED  \] [A-Za-z]' |
-    sed -E 's/^\[  FAILED  \] //; s/ \([0-9]+ ms\)$//; s/, where GetParam.*$//' | sort -u)"
+    sed -E 's/^\[  FAILED  \] //; s/ \([0-9]+ ms\)$//; s/, where GetParam.*$//' | sort -u ||
+    true)"
   count="$(printf '%s' "$failed" | grep -c . || true)"
   ran="$(cat "${logs[@]}" | grep -oE '^\[==========\] [0-9]+ tests?' | grep -oE '[0-9]+' |
-    awk '{ s += $1 } END { print s + 0 }')"
+    awk '{ s += $1 } END { print s + 0 }' || true)"
   echo "mutation-check: order '$order': $count of ${ran:-0} tests failed"
   if [ "$mode" = all ]; then
     printf '%s\n' "$failed" | sed 's/^/  /'
