@@ -18,6 +18,7 @@
 # Usage: scripts/ci/mutation-check.sh [build-dir] [all]   (default: build; from scripts/test.sh)
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+. "$here/scripts/ci/gtest-shards.sh"
 build="${1:-$here/build}"
 mode="${2:-sample}"
 tests="$build/Testing/Rendering/mtpt_rendering_tests"
@@ -49,17 +50,9 @@ shards="$(nproc)"
 
 status=0
 for order in reversed storage; do
-  # The test program fails, as it must: its output is what counts. Logs of an earlier run
-  # (another shard count) go first.
-  rm -f "$build"/mutation-"$order"-*.log
-  pids=()
-  for shard in $(seq 0 $((shards - 1))); do
-    MTPT_TESTING_ORDER="$order" GTEST_TOTAL_SHARDS="$shards" GTEST_SHARD_INDEX="$shard" \
-      timeout 900 "$here/Testing/xvfb-launch.sh" "$tests" --gtest_brief=1 \
-      --gtest_filter="$filter" >"$build/mutation-$order-$shard.log" 2>&1 &
-    pids+=($!)
-  done
-  for pid in "${pids[@]}"; do wait "$pid" || true; done
+  # The test program fails, as it must: its output is what counts.
+  run_gtest_shards "$shards" "$build/mutation-$order" env MTPT_TESTING_ORDER="$order" \
+    timeout 900 "$here/Testing/xvfb-launch.sh" "$tests" --gtest_brief=1 --gtest_filter="$filter"
   logs=("$build"/mutation-"$order"-*.log)
   failed="$(cat "${logs[@]}" | grep -E '^\[  FAILED  \] [A-Za-z]' |
     sed -E 's/^\[  FAILED  \] //; s/ \([0-9]+ ms\)$//; s/, where GetParam.*$//' | sort -u ||

@@ -14,6 +14,7 @@
 #        (default: build, 1 run, K = nproc)
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+. "$here/scripts/ci/gtest-shards.sh"
 build="$here/build"
 runs=1
 seed=""
@@ -40,21 +41,14 @@ for run in $(seq "$runs"); do
     echo "shuffled-tests: run $run of $runs: $name --gtest_shuffle --gtest_random_seed=$s" \
       "in $shards shards"
     started=$(date +%s)
-    pids=()
+    run_gtest_shards "$shards" "$build/shuffled-$name" "$here/Testing/xvfb-launch.sh" \
+      "$program" --gtest_shuffle --gtest_random_seed="$s" --gtest_brief=1
     for shard in $(seq 0 $((shards - 1))); do
-      GTEST_TOTAL_SHARDS="$shards" GTEST_SHARD_INDEX="$shard" \
-        "$here/Testing/xvfb-launch.sh" "$program" --gtest_shuffle --gtest_random_seed="$s" \
-        --gtest_brief=1 >"$build/shuffled-$name-$shard.log" 2>&1 &
-      pids+=($!)
-    done
-    failed=()
-    for shard in $(seq 0 $((shards - 1))); do
-      wait "${pids[$shard]}" || failed+=("$shard")
       echo "  shard $shard: $(grep -E '^\[  (PASSED|FAILED)  \] [0-9]+ tests?' \
         "$build/shuffled-$name-$shard.log" | tr '\n' ' ')"
     done
-    if [ ${#failed[@]} -gt 0 ]; then
-      for shard in "${failed[@]}"; do
+    if [ ${#failed_shards[@]} -gt 0 ]; then
+      for shard in "${failed_shards[@]}"; do
         log="$build/shuffled-$name-$shard.log"
         grep -E '^\[  FAILED  \] [A-Za-z]' "$log" | sort -u || tail -n 20 "$log"
         echo "shuffled-tests: $name shard $shard of $shards FAILED with seed $s (log: $log;" \
