@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cstdint>
 #include <numeric>
+#include <new>
 #include <random>
 #include <utility>
 #include <vector>
@@ -352,6 +353,56 @@ TEST(Parallel, FetchAddGivesEveryCallerItsOwnValue)
       ASSERT_EQ(got[i], i);
     }
   }
+}
+
+TEST(Parallel, AnExceptionOnAWorkerThreadReachesTheCaller)
+{
+  // A body that fails on a thread other than the caller's (std::bad_alloc, as an allocation
+  // where memory runs out): the exception must come out of the primitive on the calling
+  // thread, not end the process inside the region. Teams of 4 have workers on any host, and
+  // the static schedules give each of them its own items.
+  const auto onWorker = []
+  {
+    if (omp_get_thread_num() != 0 || omp_get_num_threads() == 1) // a team of 1: its only thread
+    {
+      throw std::bad_alloc();
+    }
+  };
+  const std::int64_t n = 1000;
+  EXPECT_THROW(detail::ParallelFor(0, n, 4, [&](std::int64_t) { onWorker(); }), std::bad_alloc);
+  // The dynamic schedule hands items to whichever thread is free (the calling thread may
+  // take them all): every item fails there.
+  EXPECT_THROW(detail::ParallelForDynamic(n, 4, [&](std::int64_t, int) { throw std::bad_alloc(); }),
+    std::bad_alloc);
+  EXPECT_THROW(detail::ForEachBlock(8, 4, [&](int) { onWorker(); }), std::bad_alloc);
+  EXPECT_THROW(
+    detail::ForEachThreadBlock(n, 4, [&](detail::IndexRange) { onWorker(); }), std::bad_alloc);
+  EXPECT_THROW(detail::ParallelReduce(
+                 std::int64_t{ 0 }, n, 4, 0, [](int a, int b) { return a + b; },
+                 [&](std::int64_t)
+                 {
+                   onWorker();
+                   return 1;
+                 }),
+    std::bad_alloc);
+  std::vector<int> items(n, 1);
+  EXPECT_THROW(detail::CompactInOrder(items.size(), 4, items.data(),
+                 [&](std::size_t, std::size_t, int*) -> std::size_t
+                 {
+                   onWorker();
+                   return 0;
+                 }),
+    std::bad_alloc);
+  EXPECT_THROW(detail::CountPlaceScatter(
+                 items.size(), 4, 4, [&](int, detail::IndexRange) { onWorker(); },
+                 [] { return true; }, [](int, detail::IndexRange) {}),
+    std::bad_alloc);
+  // The first exception of several is the one thrown; the primitives work afterwards.
+  EXPECT_THROW(
+    detail::ParallelFor(0, n, 4, [](std::int64_t) { throw std::bad_alloc(); }), std::bad_alloc);
+  std::atomic<std::int64_t> visited{ 0 };
+  detail::ParallelFor(0, n, 4, [&](std::int64_t) { ++visited; });
+  EXPECT_EQ(visited.load(), n);
 }
 
 } // namespace

@@ -15,10 +15,13 @@
  * - Determinism: each primitive says what of its result may depend on the team. The core's
  *   results are the same for any thread count; a primitive whose work per item is
  *   independent (ParallelFor) gives that by itself, the others by how they are used.
- * - No primitive allocates inside its parallel region, so a std::bad_alloc is thrown on the
- *   calling thread, never inside a region (where it would end the process): scratch a body
- *   needs is made beforehand (PerThread), and what a step sizes from counts is sized between
- *   regions (CountPlaceScatter's place).
+ * - Exceptions: an exception that leaves an OpenMP region ends the process, so no primitive
+ *   lets one out. A body that throws (std::bad_alloc) has its first exception kept and
+ *   thrown again on the calling thread once the region has ended (RegionFailure); what the
+ *   other items computed is then unspecified. The primitives themselves allocate nothing
+ *   inside their regions, and neither should bodies: scratch a body needs is made
+ *   beforehand (PerThread), and what a step sizes from counts is sized between regions
+ *   (CountPlaceScatter's place).
  * Each primitive has unit tests in Testing/Core/TestParallel.cxx.
  */
 #ifndef mtpt_detail_Parallel_h
@@ -33,6 +36,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <exception>
 #include <vector>
 
 namespace mtpt
@@ -67,6 +71,45 @@ inline IndexRange BlockOf(std::size_t n, std::size_t block, std::size_t blocks)
 }
 
 /**
+ * The first exception thrown inside a parallel region, kept to be thrown again on the
+ * calling thread after it: Run(body) inside the region, Rethrow() after. Thread-safe.
+ */
+class RegionFailure
+{
+public:
+  template <typename Body>
+  void Run(Body&& body) noexcept
+  {
+    try
+    {
+      body();
+    }
+    catch (...)
+    {
+      this->Keep(std::current_exception());
+    }
+  }
+  void Rethrow() const
+  {
+    if (this->First)
+    {
+      std::rethrow_exception(this->First);
+    }
+  }
+
+private:
+  void Keep(std::exception_ptr failure) noexcept
+  {
+#pragma omp critical(mtpt_detail_RegionFailure)
+    if (!this->First)
+    {
+      this->First = std::move(failure);
+    }
+  }
+  std::exception_ptr First;
+};
+
+/**
  * body(i) for every i in [begin, end), in contiguous chunks, one per thread of a team of
  * `threads` (OpenMP's static schedule). Each i runs once; bodies of different i must not
  * write the same memory, and then the result does not depend on the team.
@@ -74,11 +117,13 @@ inline IndexRange BlockOf(std::size_t n, std::size_t block, std::size_t blocks)
 template <typename Body>
 void ParallelFor(std::int64_t begin, std::int64_t end, int threads, Body&& body)
 {
+  RegionFailure failure;
 #pragma omp parallel for num_threads(ResolveThreads(threads)) schedule(static)
   for (std::int64_t i = begin; i < end; ++i)
   {
-    body(i);
+    failure.Run([&] { body(i); });
   }
+  failure.Rethrow();
 }
 
 /**
@@ -90,15 +135,17 @@ void ParallelFor(std::int64_t begin, std::int64_t end, int threads, Body&& body)
 template <typename Body>
 void ParallelForDynamic(std::int64_t n, int threads, Body&& body, int chunk = 1)
 {
+  RegionFailure failure;
 #pragma omp parallel num_threads(ResolveThreads(threads))
   {
     const int thread = omp_get_thread_num();
 #pragma omp for schedule(dynamic, chunk)
     for (std::int64_t i = 0; i < n; ++i)
     {
-      body(i, thread);
+      failure.Run([&] { body(i, thread); });
     }
   }
+  failure.Rethrow();
 }
 
 /// `value` += `add` as one atomic step, from any thread of a parallel body; returns the
@@ -125,13 +172,15 @@ template <typename Body>
 void ForEachBlock(int blocks, int threads, Body&& body)
 {
   const int team = std::max(1, std::min(blocks, ResolveThreads(threads)));
+  RegionFailure failure;
 #pragma omp parallel num_threads(team)
   {
     for (int b = omp_get_thread_num(); b < blocks; b += omp_get_num_threads())
     {
-      body(b);
+      failure.Run([&] { body(b); });
     }
   }
+  failure.Rethrow();
 }
 
 /**
@@ -162,17 +211,19 @@ T ParallelReduce(
   std::int64_t begin, std::int64_t end, int threads, T identity, Combine&& combine, Body&& body)
 {
   T result = identity;
+  RegionFailure failure;
 #pragma omp parallel num_threads(ResolveThreads(threads))
   {
     T mine = identity;
 #pragma omp for schedule(static) nowait
     for (std::int64_t i = begin; i < end; ++i)
     {
-      mine = combine(mine, body(i));
+      failure.Run([&] { mine = combine(mine, body(i)); });
     }
 #pragma omp critical(mtpt_detail_ParallelReduce)
     result = combine(result, mine);
   }
+  failure.Rethrow();
   return result;
 }
 
