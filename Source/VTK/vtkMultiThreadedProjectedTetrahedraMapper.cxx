@@ -9,6 +9,7 @@
 #include "Input/TransferFunctionTables.h"
 #include "Input/VolumeInput.h"
 
+#include "mtpt/Faults.h"
 #include "mtpt/FramePipeline.h"
 #include "mtpt/Gradients.h"
 #include "mtpt/ImageSampling.h"
@@ -67,13 +68,20 @@ mtpt::OrderMutation OrderMutationFromEnvironment()
   return mtpt::OrderMutation::None;
 }
 
-/// Testing only: MTPT_TESTING_FAULT=allocation makes the frame's first allocation after the
-/// memory check fail (std::bad_alloc), as one the check did not foresee would (see the
-/// robustness tests).
-bool AllocationFaultInjected()
+/// Testing only: MTPT_TESTING_FAULT=allocation:SITE makes the frame's allocation at SITE
+/// fail (std::bad_alloc; mtpt/Faults.h names the sites: transform, culling,
+/// level-of-detail, depth-keys, near-plane, order, decomposition, tiles), as one would where
+/// memory runs out partway through a frame (see the robustness tests).
+mtpt::AllocationSite AllocationFaultFromEnvironment()
 {
   const char* fault = std::getenv("MTPT_TESTING_FAULT");
-  return fault && std::strcmp(fault, "allocation") == 0;
+  const std::string prefix = "allocation:";
+  mtpt::AllocationSite site = mtpt::AllocationSite::None;
+  if (fault && std::strncmp(fault, prefix.c_str(), prefix.size()) == 0)
+  {
+    mtpt::AllocationSiteNamed(fault + prefix.size(), site);
+  }
+  return site;
 }
 
 /// Fraction of a frame's progress reached at the end of each pipeline stage; the backend's
@@ -264,12 +272,19 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::FitsInMemory(const mtpt::FramePl
   {
     return true;
   }
-  const auto mib = [](std::size_t b) { return (b + (1u << 20) - 1) >> 20; };
+  // MiB (rounded up), or bytes where the limit is less than one: each figure then says
+  // what it is.
+  const bool bytes = verdict.limit < (std::size_t{ 1 } << 20);
+  const auto size = [bytes](std::size_t b)
+  {
+    return bytes ? std::to_string(b) + " bytes"
+                 : std::to_string((b + (std::size_t{ 1 } << 20) - 1) >> 20) + " MiB";
+  };
   std::ostringstream text;
   text << "drawing " << need.cells << " tetrahedra (" << need.points << " points) needs up to "
-       << mib(verdict.bytes) << " MiB of buffers, over "
+       << size(verdict.bytes) << " of buffers, over "
        << (this->MemoryLimit > 0 ? "the memory limit of " : "the memory available, ")
-       << mib(verdict.limit) << " MiB" << (this->MemoryLimit > 0 ? " (SetMemoryLimit)" : "")
+       << size(verdict.limit) << (this->MemoryLimit > 0 ? " (SetMemoryLimit)" : "")
        << "; nothing was drawn. A smaller batch size (SetBatchSize, now " << this->BatchSize
        << "), a larger limit or fewer cells may fit";
   vtkErrorMacro(<< text.str()); // every frame: each draws nothing
@@ -697,14 +712,18 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
   const auto start = mtpt::Clock::now();
   in.AnalysisSeconds = 0;
   bool drawn = false;
+  // A fault injected for a test holds for this frame only, whether it comes to its site.
+  mtpt::InjectAllocationFault(AllocationFaultFromEnvironment());
   try
   {
     drawn = this->DrawPrepared(renderer, volume, window, frame);
+    mtpt::InjectAllocationFault(mtpt::AllocationSite::None);
   }
   catch (const std::bad_alloc&)
   {
     // An allocation the memory check did not foresee (other programs took the memory since):
     // no frame, no buffers kept, and the next frame starts afresh.
+    mtpt::InjectAllocationFault(mtpt::AllocationSite::None);
     in.Pipeline.Release();
     vtkErrorMacro(<< "ran out of memory drawing " << frame.cells.cellCount
                   << " tetrahedra; nothing was drawn and the buffers were freed. A smaller "
@@ -795,10 +814,6 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::DrawPrepared(
   if (!this->FitsInMemory(in.Plan))
   {
     return false;
-  }
-  if (AllocationFaultInjected())
-  {
-    throw std::bad_alloc();
   }
   // The level of detail's importance order (once per mesh), after the memory check, which
   // counts it.

@@ -35,6 +35,7 @@
 #include <limits>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace
@@ -199,13 +200,20 @@ TEST_F(MapperRobustness, AMeshOverTheMemoryLimitIsReportedAndNotDrawn)
   const auto image = Render(SceneOf(this->Box), this->MapperUnderTest, 2);
   // Two frames and the render of the read-back: an error for each.
   ASSERT_EQ(this->Observer->errors.size(), 3u);
+  // A limit under 1 MiB is given in bytes, and so is the need beside it.
   for (const std::string& error : this->Observer->errors)
   {
-    EXPECT_NE(error.find("needs up to 1 MiB of buffers, over the memory limit of 1 MiB "
-                         "(SetMemoryLimit); nothing was drawn. A smaller batch size "
-                         "(SetBatchSize, now 1048576), a larger limit or fewer cells may fit"),
-      std::string::npos)
-      << error;
+    const std::string needs = "needs up to ";
+    const std::size_t at = error.find(needs);
+    ASSERT_NE(at, std::string::npos) << error;
+    std::size_t digits = 0;
+    const unsigned long long bytes = std::stoull(error.substr(at + needs.size()), &digits);
+    EXPECT_GT(bytes, 1024u) << error;
+    // VTK's error macro ends the message with its own line breaks.
+    const std::string rest = " bytes of buffers, over the memory limit of 1024 bytes "
+                             "(SetMemoryLimit); nothing was drawn. A smaller batch size "
+                             "(SetBatchSize, now 1048576), a larger limit or fewer cells may fit";
+    EXPECT_EQ(error.compare(at + needs.size() + digits, rest.size(), rest), 0) << error;
   }
   EXPECT_LT(CoveredFraction(image, Background), 0.001);
   EXPECT_EQ(this->MapperUnderTest->GetMemoryBytes(), 0);
@@ -222,28 +230,107 @@ TEST_F(MapperRobustness, AMeshOverTheMemoryLimitIsReportedAndNotDrawn)
   EXPECT_GT(this->MapperUnderTest->GetMemoryBytes(), 0);
 }
 
-TEST_F(MapperRobustness, AFailedAllocationIsReportedAndTheNextFrameIsWhole)
+/**
+ * An allocation that fails partway through a frame (MTPT_TESTING_FAULT=allocation:SITE, at
+ * each site of mtpt/Faults.h, with each backend that reaches it): reported once, nothing
+ * drawn, no buffer kept, and the next frame, from the view the frame before drew, is a fresh
+ * mapper's. The failing frame turns the view and comes after the data were modified, so
+ * that every stage computes anew, and fails with some stages done and the rest not; the
+ * near-plane site's frames look from inside the box, so that the near plane cuts cells; the
+ * level of detail's draw half of the cells.
+ */
+class MapperAllocationFaults
+  : public MapperRobustness
+  , public ::testing::WithParamInterface<std::tuple<std::string, int>>
 {
-  // MTPT_TESTING_FAULT=allocation throws std::bad_alloc where the frame's buffers are first
-  // allocated: the mapper reports it, draws nothing, frees its buffers, and draws the next
-  // frame as a fresh mapper does.
-  setenv("MTPT_TESTING_FAULT", "allocation", 1);
-  const Stage stage = RenderStage(SceneOf(this->Box), this->MapperUnderTest);
-  const auto image = Grab(stage.window, false);
+protected:
+  void SetUpMapper(Mapper* mapper) const
+  {
+    const auto& [site, backend] = this->GetParam();
+    mapper->SetBackend(backend);
+    if (site == "level-of-detail")
+    {
+      mapper->AutoAdjustCellFractionOff();
+      mapper->SetCellFraction(0.5f);
+    }
+  }
+  /// From outside the box at `azimuth` degrees, or from inside it for the near plane.
+  void Look(vtkRenderer* renderer, double azimuth) const
+  {
+    // From one view each time: Azimuth and Elevation turn the camera from where it is.
+    vtkCamera* camera = renderer->GetActiveCamera();
+    camera->SetFocalPoint(0, 0, 0);
+    camera->SetPosition(0, 0, 1);
+    camera->SetViewUp(0, 1, 0);
+    renderer->ResetCamera();
+    camera->Azimuth(azimuth);
+    camera->Elevation(20);
+    if (std::get<0>(this->GetParam()) == "near-plane")
+    {
+      double bounds[6];
+      this->Box->GetBounds(bounds);
+      const double centre[3] = { 0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]),
+        0.5 * (bounds[4] + bounds[5]) };
+      camera->SetFocalPoint(centre);
+      camera->SetPosition(centre[0] + 0.1 * (bounds[1] - bounds[0]), centre[1],
+        centre[2] + 0.2 * (bounds[5] - bounds[4]));
+      camera->Azimuth(azimuth);
+      camera->SetClippingRange(0.01 * (bounds[1] - bounds[0]), 10 * (bounds[1] - bounds[0]));
+    }
+  }
+  vtkSmartPointer<vtkImageData> Frame(const Stage& stage, double azimuth) const
+  {
+    this->Look(stage.renderer, azimuth);
+    stage.window->Render();
+    return Grab(stage.window, false);
+  }
+};
+
+TEST_P(MapperAllocationFaults, AreReportedAndTheNextFrameIsWhole)
+{
+  const std::string site = std::get<0>(this->GetParam());
+  this->SetUpMapper(this->MapperUnderTest);
+  const Stage stage = MakeStage(this->Box, this->Property, this->MapperUnderTest, 200, 200);
+  this->Frame(stage, 30);
+  ASSERT_TRUE(this->Observer->errors.empty());
+  this->Box->Modified();
+  setenv("MTPT_TESTING_FAULT", ("allocation:" + site).c_str(), 1);
+  const auto failed = this->Frame(stage, 75);
   unsetenv("MTPT_TESTING_FAULT");
-  this->MapperUnderTest->ReleaseGraphicsResources(stage.window);
-  ASSERT_EQ(this->Observer->errors.size(), 1u);
+  ASSERT_EQ(this->Observer->errors.size(), 1u) << "the fault at " << site << " reported once";
   EXPECT_TRUE(AnyContains(this->Observer->errors,
-    "ran out of memory drawing 2560 tetrahedra; nothing was drawn and the buffers were freed"))
+    "ran out of memory drawing 2560 tetrahedra; "
+    "nothing was drawn and the buffers were freed"))
     << this->Observer->errors[0];
-  EXPECT_LT(CoveredFraction(image, Background), 0.001);
+  EXPECT_LT(CoveredFraction(failed, Background), 0.001);
   EXPECT_EQ(this->MapperUnderTest->GetMemoryBytes(), 0);
-  this->MapperUnderTest->SetCellFraction(1.0f);
-  this->MapperUnderTest->AutoAdjustCellFractionOn();
-  this->Observer->Clear();
-  this->ExpectRecovers();
-  EXPECT_TRUE(this->Observer->errors.empty());
+  const auto again = this->Frame(stage, 30);
+  this->MapperUnderTest->ReleaseGraphicsResources(stage.window);
+  vtkNew<Mapper> fresh;
+  this->SetUpMapper(fresh);
+  const Stage freshStage = MakeStage(this->Box, this->Property, fresh, 200, 200);
+  const auto expected = this->Frame(freshStage, 30);
+  fresh->ReleaseGraphicsResources(freshStage.window);
+  EXPECT_GT(CoveredFraction(expected, Background), 0.05);
+  EXPECT_EQ(Compare(again, expected).worst, 0.0) << "after a fault at " << site;
+  EXPECT_EQ(this->Observer->errors.size(), 1u);
 }
+
+std::string SiteName(const ::testing::TestParamInfo<std::tuple<std::string, int>>& info)
+{
+  std::string name = std::get<0>(info.param) + "_" + ShortBackendName(std::get<1>(info.param));
+  std::replace(name.begin(), name.end(), '-', '_');
+  return name;
+}
+
+INSTANTIATE_TEST_SUITE_P(EverySite, MapperAllocationFaults,
+  ::testing::Combine(::testing::Values("transform", "culling", "level-of-detail", "depth-keys",
+                       "near-plane", "order", "decomposition"),
+    ::testing::Values(Mapper::CPU_BACKEND, Mapper::OPENGL_BACKEND)),
+  SiteName);
+INSTANTIATE_TEST_SUITE_P(CPUCompositor, MapperAllocationFaults,
+  ::testing::Values(std::make_tuple(std::string("tiles"), static_cast<int>(Mapper::CPU_BACKEND))),
+  SiteName);
 
 TEST_F(MapperRobustness, NaNScalarsAreReportedAndTheirCellsSkipped)
 {

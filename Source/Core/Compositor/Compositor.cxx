@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "mtpt/Compositor.h"
+#include "mtpt/Faults.h"
 
 #include "detail/Parallel.h"
 #include "detail/Streaming.h"
@@ -324,6 +325,7 @@ void Compositor::Bin(const Fan* fans, std::size_t count, int threads)
 
 void Compositor::PrepareBins(std::size_t count, int blocks)
 {
+  AllocationPoint(AllocationSite::Tiles); // the image begun already: halfway through
   const std::size_t tiles = static_cast<std::size_t>(this->TilesX) * this->TilesY;
   this->Counts.assign(static_cast<std::size_t>(blocks) * tiles, 0);
   if (this->Ranges.size() < count)

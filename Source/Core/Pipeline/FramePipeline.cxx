@@ -115,6 +115,23 @@ DecompositionKey DecompositionKeyOf(
 } // namespace
 
 template <typename Body>
+auto FramePipeline::ForgettingOnFailure(Body&& body)
+{
+  try
+  {
+    return body();
+  }
+  catch (...)
+  {
+    // A failure partway (an allocation: std::bad_alloc) may leave a stage's buffers half
+    // written: no result of the pipeline may serve again.
+    this->ForgetFrom(0);
+    this->SortedSize = this->BatchCount = this->FanBatchCount = 0;
+    throw;
+  }
+}
+
+template <typename Body>
 bool FramePipeline::Timed(double& seconds, Body&& stage)
 {
   const auto start = Clock::now();
@@ -216,6 +233,11 @@ MemoryVerdict CheckMemory(const MemoryNeed& need, std::size_t limit, std::size_t
 
 BatchesDrawn FramePipeline::DrawBatches(const FramePlan& plan, const BatchDrawer& draw)
 {
+  return this->ForgettingOnFailure([&] { return this->DrawBatchesInOrder(plan, draw); });
+}
+
+BatchesDrawn FramePipeline::DrawBatchesInOrder(const FramePlan& plan, const BatchDrawer& draw)
+{
   BatchesDrawn drawn;
   const std::size_t total = this->SortedSize;
   const std::size_t batch =
@@ -291,6 +313,11 @@ bool FramePipeline::Run(const FrameInput& input, int threads)
 
 void FramePipeline::PrepareLevelOfDetail(const FrameInput& input, int threads)
 {
+  this->ForgettingOnFailure([&] { this->PrepareImportance(input, threads); });
+}
+
+void FramePipeline::PrepareImportance(const FrameInput& input, int threads)
+{
   const std::size_t n = input.cells.cellCount;
   if (n > MaxTetrahedra() ||
     CellSelectionStage::KeepsEveryCell(ImportanceThreshold(input.cellFraction, n), n))
@@ -303,6 +330,11 @@ void FramePipeline::PrepareLevelOfDetail(const FrameInput& input, int threads)
 }
 
 bool FramePipeline::Prepare(const FrameInput& input, int threads)
+{
+  return this->ForgettingOnFailure([&] { return this->PrepareStages(input, threads); });
+}
+
+bool FramePipeline::PrepareStages(const FrameInput& input, int threads)
 {
   const std::size_t n = input.cells.cellCount;
   threads = ThreadsForWork(std::max(n, input.points.count), detail::CellsPerThread, threads);

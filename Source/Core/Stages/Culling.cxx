@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "mtpt/Culling.h"
+#include "mtpt/Faults.h"
 
 #include "detail/MeshAccess.h"
 #include "detail/Parallel.h"
@@ -246,6 +247,7 @@ bool CullingStage::Update(const Key& key, const CellsView& cells, std::size_t po
       cells, pointCount, scalars, this->List.data(), this->List.size(), threads);
   if (!same)
   {
+    AllocationPoint(AllocationSite::Culling);
     this->List.resize(n);
     this->List.resize(
       this->Opacity.SelectVisibleCells(cells, pointCount, scalars, this->List.data(), threads));

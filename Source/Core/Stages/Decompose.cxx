@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "mtpt/Decompose.h"
+#include "mtpt/Faults.h"
 
 #include "detail/DecomposeBatch.h"
 #include "detail/MeshAccess.h"
@@ -1100,6 +1101,7 @@ bool SlotStage::Update(const Key& key, const DecomposeInput& input, const std::u
     [&](const DecomposeInput& in, std::size_t first, std::size_t n, ProjectionClass* classes,
       int team)
     {
+      AllocationPoint(AllocationSite::Decomposition);
       if (this->VertexBuffer.size() < VerticesPerTetrahedron * n)
       {
         this->VertexBuffer.resize(VerticesPerTetrahedron * n);
@@ -1141,6 +1143,7 @@ bool FanStage::Update(const Key& key, const DecomposeInput& input, const std::ui
     [&](const DecomposeInput& in, std::size_t first, std::size_t n, ProjectionClass* classes,
       int team)
     {
+      AllocationPoint(AllocationSite::Decomposition);
       if (this->FanBuffer.size() < n)
       {
         this->FanBuffer.resize(n);

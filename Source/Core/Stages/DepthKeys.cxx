@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "mtpt/DepthKeys.h"
+#include "mtpt/Faults.h"
 
 #include "detail/KeyBatch.h"
 #include "detail/MeshAccess.h"
@@ -163,6 +164,7 @@ bool DepthKeyStage::Update(const Key& key, const ProjectedPoint* points, std::si
   {
     return false;
   }
+  AllocationPoint(AllocationSite::DepthKeys);
   this->Kept.resize(list ? listCount : cells.cellCount);
   this->Count = ComputeVisibleDepthKeys(points, pointCount, cells, list, listCount, key.perspective,
     key.culling, this->Kept.data(), threads);

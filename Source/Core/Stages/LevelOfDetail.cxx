@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "mtpt/LevelOfDetail.h"
+#include "mtpt/Faults.h"
 
 #include "detail/MeshAccess.h"
 #include "detail/Parallel.h"
@@ -221,6 +222,7 @@ bool CellSelectionStage::Update(const Key& key, const PointsView& points, const 
   const int nthreads = detail::ResolveThreads(threads);
   this->PrepareImportance(key.mesh, points, cells, nthreads);
   const std::size_t candidates = visible ? visibleCount : n;
+  AllocationPoint(AllocationSite::LevelOfDetail);
   if (this->List.size() < candidates)
   {
     this->List.resize(candidates);
@@ -253,6 +255,7 @@ bool CellSelectionStage::PrepareImportance(
   {
     return false;
   }
+  AllocationPoint(AllocationSite::LevelOfDetail);
   if (this->Importance.size() < cells.cellCount)
   {
     this->Importance.resize(cells.cellCount);

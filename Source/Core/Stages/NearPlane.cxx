@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "mtpt/NearPlane.h"
+#include "mtpt/Faults.h"
 
 #include "detail/MeshAccess.h"
 #include "detail/Parallel.h"
@@ -294,6 +295,10 @@ void NearPlaneStage::CutCrossing(const std::vector<SortKey>& keys, const Project
           const std::int64_t tuple = cellScalars ? static_cast<std::int64_t>(cell) : ids[i];
           values[i] = cellScalars ? cellScalars[cell] : corners[i]->scalar;
           rgba[i] = colours ? colours + 4 * tuple : nullptr;
+        }
+        if (!this->Made.empty())
+        {
+          AllocationPoint(AllocationSite::NearPlane); // pieces made already: halfway through
         }
         const std::size_t before = this->Made.size();
         CutTetrahedron(corners, values, plane, projection, this->Made, colours ? rgba : nullptr);

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "mtpt/Transform.h"
+#include "mtpt/Faults.h"
 
 #include "detail/Parallel.h"
 
@@ -94,6 +95,7 @@ bool TransformStage::Update(
   {
     return false;
   }
+  AllocationPoint(AllocationSite::Transform);
   if (this->Projected.size() < points.count)
   {
     this->Projected.resize(points.count); // grow-only: frames that shrink keep the memory

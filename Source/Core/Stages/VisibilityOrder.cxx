@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "mtpt/VisibilityOrder.h"
+#include "mtpt/Faults.h"
 
 #include "detail/Parallel.h"
 
@@ -331,6 +332,7 @@ bool OrderStage::Update(const Key& key, const Cells& cells, bool fromPrevious, D
   // taken from the key stage, whose buffer is this update's scratch from here on.
   const std::size_t previousCount = this->Sorted.size();
   std::vector<SortKey>& scratch = keys.Consume();
+  AllocationPoint(AllocationSite::Order); // the keys given to the order already
   if (!nearPlane.CutsAny())
   {
     this->Sorted.swap(scratch);

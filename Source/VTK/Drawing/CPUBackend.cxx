@@ -45,6 +45,9 @@ bool CPUBackend::Draw(const BackendFrame& frame, DrawTimes& times)
   }
   else
   {
+    // The compositor's image is this frame's from here: never the kept one, should
+    // compositing fail partway (an allocation: std::bad_alloc).
+    this->HaveImage = false;
     this->Composite(frame, times);
     this->LastStats = this->Compositing.Stats();
     // A stopped frame's image is incomplete: never reused.

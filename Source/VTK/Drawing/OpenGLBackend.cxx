@@ -70,6 +70,17 @@ void SetBlending(const FramePlan& plan, vtkOpenGLState* state)
   state->vtkglBlendFuncSeparate(GL_ONE, GL_ONE, GL_ONE, GL_ONE);
 }
 
+/// Runs its function when the scope ends, however it ends: OpenGL state a frame changed is put
+/// back even when the pipeline throws (an allocation that fails, std::bad_alloc).
+template <typename Function>
+struct AtScopeEnd
+{
+  Function function;
+  ~AtScopeEnd() { this->function(); }
+};
+template <typename Function>
+AtScopeEnd(Function) -> AtScopeEnd<Function>;
+
 } // namespace
 
 OpenGLBackend::OpenGLBackend() = default;
@@ -275,12 +286,14 @@ bool OpenGLBackend::DrawPeel(const BackendFrame& frame, DrawTimes& times)
   this->PeelTargetUsed = true;
   frame.peel->Ranges(0)->Activate();
   frame.peel->Ranges(1)->Activate();
-  const bool drawn = this->DrawBatches(frame, program, times);
-  frame.peel->Ranges(0)->Deactivate();
-  frame.peel->Ranges(1)->Deactivate();
-  this->PeelTargetUsed = false;
-  frame.peel->UnbindColourTarget(frame.window);
-  return drawn;
+  AtScopeEnd unbind{ [&]
+    {
+      frame.peel->Ranges(0)->Deactivate();
+      frame.peel->Ranges(1)->Deactivate();
+      this->PeelTargetUsed = false;
+      frame.peel->UnbindColourTarget(frame.window);
+    } };
+  return this->DrawBatches(frame, program, times);
 }
 
 bool OpenGLBackend::Draw(const BackendFrame& frame, DrawTimes& times)
@@ -305,7 +318,20 @@ bool OpenGLBackend::Draw(const BackendFrame& frame, DrawTimes& times)
     return this->DrawReduced(frame, program, times);
   }
   this->BindTarget(frame, frame.floatFramebuffer);
-  const bool drawn = this->DrawBatches(frame, program, times);
+  bool drawn = false;
+  try
+  {
+    drawn = this->DrawBatches(frame, program, times);
+  }
+  catch (...)
+  {
+    // The window's framebuffer again, not the target's, for whatever VTK draws next.
+    if (this->SampledTargetUsed || this->FloatTargetUsed)
+    {
+      (this->SampledTargetUsed ? this->SampledTarget : this->Target).Restore(window);
+    }
+    throw;
+  }
   return this->WriteTarget(frame, drawn, times) && drawn;
 }
 
@@ -328,8 +354,11 @@ bool OpenGLBackend::DrawReduced(
     frame.plan->blendMode == BlendMode::MinimumIntensity;
   const float neutral[4] = { extreme ? -1e30f : 0.0f, 0.0f, 0.0f, 0.0f };
   BlendTarget::ClearColour(window, neutral);
-  const bool drawn = this->DrawBatches(frame, program, times);
-  target.Restore(window);
+  bool drawn = false;
+  {
+    AtScopeEnd restore{ [&] { target.Restore(window); } };
+    drawn = this->DrawBatches(frame, program, times);
+  }
   const auto start = Clock::now();
   const bool resolved = drawn && this->ResolveReduced(frame, target.Colour());
   const double seconds = SecondsSince(start);
@@ -452,6 +481,15 @@ bool OpenGLBackend::DrawBatches(
   this->IntegralsHigh->Activate();
   this->IntegralsLow->Activate();
   this->IntensityPrefix->Activate();
+  AtScopeEnd deactivate{ [&]
+    {
+      this->TransferFunction->Deactivate();
+      this->IntegralsHigh->Deactivate();
+      this->IntegralsLow->Deactivate();
+      this->IntensityPrefix->Deactivate();
+      state->vtkglBlendEquationSeparate(
+        static_cast<GLenum>(equation[0]), static_cast<GLenum>(equation[1]));
+    } };
   this->SetUniforms(frame, program);
 
   // Batch after batch, as the pipeline decomposes them: upload, draw. Draw calls return
@@ -475,12 +513,6 @@ bool OpenGLBackend::DrawBatches(
                                return OpenGLSucceeded("drawing the tetrahedra", this->ErrorMessage);
                              }),
     times);
-  this->TransferFunction->Deactivate();
-  this->IntegralsHigh->Deactivate();
-  this->IntegralsLow->Deactivate();
-  this->IntensityPrefix->Deactivate();
-  state->vtkglBlendEquationSeparate(
-    static_cast<GLenum>(equation[0]), static_cast<GLenum>(equation[1]));
   return drawn;
 }
 

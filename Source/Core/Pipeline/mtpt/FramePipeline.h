@@ -247,7 +247,9 @@ public:
    * Stages 1 to 4 and the order's inverse: transform, culling, keys (with the near plane),
    * order. Returns false (and sorts nothing) if the mesh is too large for 32-bit indices or
    * the stage callback stopped the frame (Stopped() tells which). Then decompose with
-   * DecomposeBatch, or use Run for the whole order at once.
+   * DecomposeBatch, or use Run for the whole order at once. Where an allocation fails
+   * (std::bad_alloc) it goes on to the caller, and every stage has forgotten its result:
+   * the next frame computes all of them anew. So do PrepareLevelOfDetail and DrawBatches.
    */
   bool Prepare(const FrameInput& input, int threads);
   /**
@@ -348,6 +350,14 @@ private:
   FramePipeline(const FramePipeline&) = delete;
   void operator=(const FramePipeline&) = delete;
 
+  /// body()'s result; when it throws, every stage forgets its result first (a failure
+  /// partway may leave buffers half written), and the exception goes on.
+  template <typename Body>
+  auto ForgettingOnFailure(Body&& body);
+  /// Prepare, PrepareLevelOfDetail and DrawBatches inside ForgettingOnFailure.
+  bool PrepareStages(const FrameInput& input, int threads);
+  void PrepareImportance(const FrameInput& input, int threads);
+  BatchesDrawn DrawBatchesInOrder(const FramePlan& plan, const BatchDrawer& draw);
   /// Runs `stage`, adds its seconds to `seconds` when it computed, and returns whether it did.
   template <typename Body>
   static bool Timed(double& seconds, Body&& stage);
