@@ -156,6 +156,8 @@ public:
   /// The seconds the level of detail's analysis of the input took in the last frame: not
   /// part of its time.
   double AnalysisSeconds = 0;
+  /// The bound the last frame's buffers were checked against (FitsInMemory), bytes.
+  std::size_t MemoryBound = 0;
 
   /**
    * Whether `message` about `cause` is new: each message is reported once per modification
@@ -268,6 +270,7 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::FitsInMemory(const mtpt::FramePl
       system.RunMemoryCheck();
       return static_cast<std::size_t>(system.GetAvailablePhysicalMemory()) << 20;
     });
+  this->Internal->MemoryBound = verdict.bytes;
   if (verdict.fits)
   {
     return true;
@@ -507,6 +510,11 @@ int vtkMultiThreadedProjectedTetrahedraMapper::GetLastFrameReuse()
 vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetMemoryBytes()
 {
   return static_cast<vtkIdType>(this->Internal->Pipeline.MemoryBytes());
+}
+
+vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetMemoryBytesBound()
+{
+  return static_cast<vtkIdType>(this->Internal->MemoryBound);
 }
 
 double* vtkMultiThreadedProjectedTetrahedraMapper::GetBounds()
@@ -831,6 +839,18 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::DrawPrepared(
     }
     return false;
   }
+  // The near plane's pieces are known now that the stages have cut the cells: where they
+  // are more than the last frame's, the bound again with them, before the batches allocate.
+  // A frame over the limit then gives its buffers back.
+  if (in.Pipeline.Stats().nearPieces > in.Plan.memory.pieces)
+  {
+    in.Plan.memory.pieces = in.Pipeline.Stats().nearPieces;
+    if (!this->FitsInMemory(in.Plan))
+    {
+      in.Pipeline.Release();
+      return false;
+    }
+  }
   in.Tetrahedra = static_cast<vtkIdType>(in.Pipeline.SortedCount());
   if (in.Tetrahedra > 0) // else everything is culled: transparent or out of view
   {
@@ -937,6 +957,7 @@ mtpt::FrameFacts vtkMultiThreadedProjectedTetrahedraMapper::FrameFactsOf(vtkRend
   facts.centresOnly = backend->SamplesPixelCentresOnly(false, draw.floatFramebuffer);
   facts.sampledCentresOnly = backend->SamplesPixelCentresOnly(true, draw.floatFramebuffer);
   facts.projection = frame.projection;
+  facts.nearPieces = in.Pipeline.Stats().nearPieces;
   int ignored = 0;
   facts.clipPlanes = mtpt::EyeClipPlanes(this, renderer, ignored);
   if (ignored > 0 && in.Report(this->ClippingPlanes, "too many clipping planes"))

@@ -410,6 +410,12 @@ public:
 
   /// Bytes held by the mapper's CPU buffers (points, keys, order, one batch's buffers).
   vtkIdType GetMemoryBytes();
+  /**
+   * The bound the last frame's buffers were checked against (SetMemoryLimit): the most they
+   * may take, with the near plane's pieces that frame cut. GetMemoryBytes() never exceeds
+   * the largest bound of the frames drawn since the buffers were last freed.
+   */
+  vtkIdType GetMemoryBytesBound();
 
   /// Whether the mapper can render into this window (an OpenGL2 window).
   static bool IsSupported(vtkRenderWindow* window);

@@ -230,6 +230,62 @@ TEST_F(MapperRobustness, AMeshOverTheMemoryLimitIsReportedAndNotDrawn)
   EXPECT_GT(this->MapperUnderTest->GetMemoryBytes(), 0);
 }
 
+TEST_F(MapperRobustness, TheMemoryBoundHoldsTheNearPlanesPieces)
+{
+  // From inside the box the near plane cuts cells into pieces, which the frame allocates
+  // beside the mesh's buffers. The bound the frame is checked against includes them (known
+  // once the cells are cut), so it holds what the buffers take; a limit between the bound
+  // without them and the bound with them refuses the frame, with the error, and frees the
+  // buffers. From outside, no pieces: the smaller bound.
+  for (const int backend : Backends)
+  {
+    vtkNew<Mapper> mapper;
+    mapper->SetBackend(backend);
+    mapper->AddObserver(vtkCommand::ErrorEvent, this->Observer);
+    mapper->AddObserver(vtkCommand::WarningEvent, this->Observer);
+    const Stage stage = MakeStage(this->Box, this->Property, mapper, 200, 200);
+    double bounds[6];
+    this->Box->GetBounds(bounds);
+    const double centre[3] = { 0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]),
+      0.5 * (bounds[4] + bounds[5]) };
+    const double side = bounds[1] - bounds[0];
+    const auto inside = [&](const Stage& on)
+    {
+      vtkCamera* camera = on.renderer->GetActiveCamera();
+      camera->SetFocalPoint(centre);
+      camera->SetPosition(centre[0] + 0.1 * side, centre[1], centre[2] + 0.2 * side);
+      camera->SetViewUp(0, 1, 0);
+      camera->SetClippingRange(0.01 * side, 10 * side);
+      on.window->Render();
+    };
+    stage.window->Render(); // from outside
+    const vtkIdType outside = mapper->GetMemoryBytesBound();
+    EXPECT_GT(outside, 0);
+    EXPECT_LE(mapper->GetMemoryBytes(), outside);
+    inside(stage);
+    const vtkIdType cut = mapper->GetMemoryBytesBound();
+    EXPECT_GT(mapper->GetNumberOfNearClippedCells(), 0) << BackendName(backend);
+    EXPECT_GT(cut, outside) << BackendName(backend);
+    EXPECT_LE(mapper->GetMemoryBytes(), cut) << BackendName(backend);
+    ASSERT_TRUE(this->Observer->errors.empty());
+
+    vtkNew<Mapper> limited;
+    limited->SetBackend(backend);
+    limited->SetMemoryLimit((outside + cut) / 2);
+    limited->AddObserver(vtkCommand::ErrorEvent, this->Observer);
+    limited->AddObserver(vtkCommand::WarningEvent, this->Observer);
+    const Stage limitedStage = MakeStage(this->Box, this->Property, limited, 200, 200);
+    inside(limitedStage);
+    ASSERT_EQ(this->Observer->errors.size(), 1u) << BackendName(backend);
+    EXPECT_TRUE(AnyContains(this->Observer->errors, "over the memory limit"));
+    EXPECT_EQ(limited->GetMemoryBytes(), 0) << BackendName(backend);
+    EXPECT_EQ(limited->GetMemoryBytesBound(), cut) << BackendName(backend);
+    this->Observer->Clear();
+    mapper->ReleaseGraphicsResources(stage.window);
+    limited->ReleaseGraphicsResources(limitedStage.window);
+  }
+}
+
 /**
  * An allocation that fails partway through a frame (MTPT_TESTING_FAULT=allocation:SITE, at
  * each site of mtpt/Faults.h, with each backend that reaches it): reported once, nothing

@@ -154,6 +154,7 @@ void PlanBatches(const FrameSettings& s, const FrameFacts& f, FramePlan& plan)
   need.fans = !need.slots;
   need.levelOfDetail = plan.cellFraction < 1 || s.autoAdjustCellFraction;
   need.threads = s.threads;
+  need.pieces = f.nearPieces;
 }
 
 } // namespace

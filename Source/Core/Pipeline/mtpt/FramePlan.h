@@ -106,6 +106,10 @@ struct FrameFacts
   bool centresOnly = false, sampledCentresOnly = false;
   Matrix4 projection = IdentityMatrix(); ///< eye to clip coordinates
   ClipPlanes clipPlanes;                 ///< the mapper's, in eye coordinates
+  /// The near plane's pieces of the last frame (FrameStats::nearPieces): this frame's are
+  /// known only once its stages have cut the cells (the caller then checks the bound again
+  /// with them), and a moving view's change little from frame to frame.
+  std::size_t nearPieces = 0;
 };
 
 /// What the plan changed from what was asked, for the caller to report once.
