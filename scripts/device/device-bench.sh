@@ -3,6 +3,8 @@
 # MTPT on a machine with a GPU and many cores, from the kit alone, in at most 8 minutes.
 #
 # Usage: device-bench.sh [--smoke] OUTDIR
+#        device-bench.sh --check-libraries   (step 0 alone: exit status 1 when it fails)
+#   0. Every library the kit's programs and its Mesa load resolves inside the kit's lib/.
 #   1. OpenGL's vendor and renderer (machine.txt). Without --smoke the run fails unless
 #      they are NVIDIA's: the GPU steps are then skipped and the CPU step still runs.
 #   2. Whole frames (frames.csv): MTPT's OpenGL backend, its CPU backend and VTK's PT at
@@ -20,13 +22,53 @@
 # pass the overall deadline is cut short (timeout) and counts as failed.
 set -uo pipefail
 kit="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+
+# check_libraries: every library the programs of libexec/ and the kit's Mesa (loaded by
+# glvnd and the X server at run time) depend on, as the kit's loader resolves it for the
+# launchers, is a file of the kit's lib/: a library the kit lacks would otherwise be taken
+# from the machine where it has one (a different version) and be missing where it has none.
+# Prints each that is not, and returns 1 then.
+check_libraries() {
+  local object listing line name target bad=0
+  for object in "$kit"/libexec/* "$kit/lib/libGLX_mesa.so.0" "$kit/lib/dri/swrast_dri.so"; do
+    listing="$("$kit/lib/ld-linux-x86-64.so.2" --library-path "$kit/lib" --list "$object" 2>&1)"
+    if ! grep -q ' => ' <<<"$listing"; then # never a pass for a listing that did not run
+      echo "device-bench: the kit's loader listed no library of $(basename "$object"): $listing"
+      bad=1
+      continue
+    fi
+    while IFS= read -r line; do
+      case "$line" in
+      *" => "*) ;;
+      *) continue ;; # the loader itself and the kernel's vDSO
+      esac
+      name="${line%% => *}"
+      name="${name//[[:space:]]/}"
+      target="${line#* => }"
+      target="${target% (0x*}"
+      case "$target" in
+      "$kit/lib/"*) ;;
+      *)
+        echo "device-bench: $(basename "$object") loads $name from outside the kit: $target"
+        bad=1
+        ;;
+      esac
+    done <<<"$listing"
+  done
+  return $bad
+}
+if [ "${1:-}" = --check-libraries ]; then
+  check_libraries && echo "device-bench: every library resolves inside the kit"
+  exit
+fi
+
 smoke=0
 if [ "${1:-}" = --smoke ]; then
   smoke=1
   shift
 fi
 if [ $# -ne 1 ]; then
-  sed -n '2,21p' "$0" | sed 's/^# \{0,1\}//' >&2
+  sed -n '2,23p' "$0" | sed 's/^# \{0,1\}//' >&2
   exit 2
 fi
 mkdir -p "$1" || exit 1
@@ -89,6 +131,10 @@ step() {
   command -v nvidia-smi >/dev/null && nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader
 } >"$out/machine.txt" 2>&1
 
+# --- 0. The kit's libraries -------------------------------------------------------------------
+say "libraries"
+check_libraries || fail "libraries outside the kit (above)"
+
 # --- The display: the kit's Xvfb, its GLX on the kit's Mesa ---------------------------------
 export PATH="$kit/bin:$PATH" # xkbcomp, for Xvfb's keymap
 LIBGL_DRIVERS_PATH="$kit/lib/dri" "$kit/bin/Xvfb" -displayfd 3 -screen 0 2048x1200x24 \
@@ -116,7 +162,9 @@ opengl() { "$kit/bin/mtpt_bench_frames" --opengl-info 2>&1; }
 gpu=1
 if [ "$smoke" = 0 ]; then
   nvidia=""
-  for dir in $(ldconfig -p 2>/dev/null | awk '/libGLX_nvidia\.so\.0/ { sub(/\/[^\/]*$/, "", $NF); print $NF }') \
+  # ldconfig may list a 32-bit copy first: only the x86-64 one serves the kit's programs.
+  for dir in $(ldconfig -p 2>/dev/null |
+    awk '/libGLX_nvidia\.so\.0 \(libc6,x86-64/ { sub(/\/[^\/]*$/, "", $NF); print $NF }') \
     /usr/local/nvidia/lib64 /usr/local/nvidia/lib /usr/lib/x86_64-linux-gnu /usr/lib64; do
     [ -e "$dir/libGLX_nvidia.so.0" ] && { nvidia="$dir"; break; }
   done
@@ -135,6 +183,11 @@ if [ "$smoke" = 0 ]; then
   if ! grep -q '^OpenGL vendor: NVIDIA' <<<"$info"; then
     fail "OpenGL is not the NVIDIA GPU's (above); the GPU steps are skipped"
     gpu=0
+    # The CPU step draws with the kit's Mesa (llvmpipe), as --smoke does: not through the
+    # NVIDIA settings that just failed.
+    unset MTPT_KIT_HOST_LIBRARIES __GLX_VENDOR_LIBRARY_NAME __NV_PRIME_RENDER_OFFLOAD
+    echo "device-bench: the CPU step runs on the kit's Mesa:"
+    opengl | tee -a "$out/machine.txt"
   fi
 else
   say "OpenGL"

@@ -9,7 +9,9 @@
 #   unpacks it in a bare Debian chroot (debootstrap minbase: no VTK, no X, no Mesa; a newer
 #   glibc than the kit's) and runs `device-bench.sh --smoke` there with Mesa's software
 #   renderer; its outputs land in build/device-kit-smoke/. Fails when the archive is larger
-#   than its budget or any step of the smoke run fails.
+#   than its budget or any step of the smoke run fails, or when a copy of the kit without
+#   zlib (which the chroot has) passes the smoke run's check that every library the kit's
+#   programs load is the kit's own.
 #
 # What the kit holds, under mtpt-device-kit/:
 #   libexec/   mtpt_render and the benchmark programs it runs; Xvfb and xkbcomp
@@ -31,7 +33,7 @@ smoke=0
 case "${1:-}" in
 --smoke-test) smoke=1 ;;
 "") ;;
-*) sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//' >&2; exit 2 ;;
+*) sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//' >&2; exit 2 ;;
 esac
 log() { echo "device-kit: $*" >&2; }
 started=$(date +%s)
@@ -148,6 +150,20 @@ chroot_run "$chroot_root" "$inside/unpacked here/mtpt-device-kit/device-bench.sh
   "$inside/out" 9>&- || status=$?
 rm -rf "$build/device-kit-smoke"
 cp -r "$work/out" "$build/device-kit-smoke"
+# The library check must see a library the kit lacks, even one the chroot has (zlib, which
+# dpkg needs): a kit without it must fail the check.
+broken="$work/kit without zlib"
+cp -r "$work/unpacked here/mtpt-device-kit" "$broken"
+rm "$broken/lib/libz.so.1"
+if ! chroot_run "$chroot_root" test -e /usr/lib/x86_64-linux-gnu/libz.so.1 9>&-; then
+  log "FAILED: the bare chroot has no zlib: the check of a kit without it shows nothing"
+  status=1
+elif chroot_run "$chroot_root" "${broken#"$chroot_root"}/device-bench.sh" --check-libraries 9>&-; then
+  log "FAILED: a kit without libz.so.1 passed the library check in a chroot that has it"
+  status=1
+else
+  log "a kit without libz.so.1 fails the library check, as it must"
+fi
 log "smoke run $( [ $status = 0 ] && echo passed || echo "FAILED ($status)"); outputs in" \
   "$build/device-kit-smoke; $(($(date +%s) - started)) s in all"
 exit $status
