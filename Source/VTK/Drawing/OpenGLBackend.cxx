@@ -326,9 +326,9 @@ bool OpenGLBackend::Draw(const BackendFrame& frame, DrawTimes& times)
   catch (...)
   {
     // The window's framebuffer again, not the target's, for whatever VTK draws next.
-    if (this->SampledTargetUsed || this->FloatTargetUsed)
+    if (BlendTarget* target = this->BoundTarget())
     {
-      (this->SampledTargetUsed ? this->SampledTarget : this->Target).Restore(window);
+      target->Restore(window);
     }
     throw;
   }
@@ -340,7 +340,8 @@ bool OpenGLBackend::DrawReduced(
 {
   vtkOpenGLRenderWindow* window = frame.window;
   this->BindTarget(frame, true);
-  if (!this->SampledTargetUsed && !this->FloatTargetUsed)
+  BlendTarget* target = this->BoundTarget();
+  if (!target)
   {
     this->ErrorMessage = "blend modes other than composite need a float target, which this "
                          "context cannot make" +
@@ -348,7 +349,6 @@ bool OpenGLBackend::DrawReduced(
     this->WarningMessage.clear();
     return false;
   }
-  BlendTarget& target = this->SampledTargetUsed ? this->SampledTarget : this->Target;
   // The target keeps the window's depth; its colour starts at the mode's neutral value.
   const bool extreme = frame.plan->blendMode == BlendMode::MaximumIntensity ||
     frame.plan->blendMode == BlendMode::MinimumIntensity;
@@ -356,11 +356,11 @@ bool OpenGLBackend::DrawReduced(
   BlendTarget::ClearColour(window, neutral);
   bool drawn = false;
   {
-    AtScopeEnd restore{ [&] { target.Restore(window); } };
+    AtScopeEnd restore{ [&] { target->Restore(window); } };
     drawn = this->DrawBatches(frame, program, times);
   }
   const auto start = Clock::now();
-  const bool resolved = drawn && this->ResolveReduced(frame, target.Colour());
+  const bool resolved = drawn && this->ResolveReduced(frame, target->Colour());
   const double seconds = SecondsSince(start);
   times.draw += seconds;
   times.viewport += seconds;

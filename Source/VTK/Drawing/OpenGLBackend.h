@@ -84,6 +84,12 @@ private:
   {
     return this->SampledTargetUsed || this->FloatTargetUsed || this->PeelTargetUsed;
   }
+  /// The blend target BindTarget bound (the sampled image's or the float one), or null.
+  BlendTarget* BoundTarget()
+  {
+    return this->SampledTargetUsed ? &this->SampledTarget
+                                   : (this->FloatTargetUsed ? &this->Target : nullptr);
+  }
   /// The pixels DrawBatches draws into: its own target's, or the window's viewport.
   PixelRegion DrawnPixels(const BackendFrame& frame) const;
   /// Each fragment's eye ray (depth peeling, clipping planes) and the clipping planes.
