@@ -92,6 +92,21 @@ protected:
     fresh->ReleaseGraphicsResources(stage.window);
     return image;
   }
+  /// The camera inside the box, looking at its centre from a tenth of its width and a fifth
+  /// of its depth away, turned by `azimuth` degrees: the near plane cuts cells.
+  void LookFromInsideTheBox(vtkCamera* camera, double azimuth) const
+  {
+    double bounds[6];
+    this->Box->GetBounds(bounds);
+    const double centre[3] = { 0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]),
+      0.5 * (bounds[4] + bounds[5]) };
+    camera->SetFocalPoint(centre);
+    camera->SetPosition(centre[0] + 0.1 * (bounds[1] - bounds[0]), centre[1],
+      centre[2] + 0.2 * (bounds[5] - bounds[4]));
+    camera->SetViewUp(0, 1, 0);
+    camera->Azimuth(azimuth);
+    camera->SetClippingRange(0.01 * (bounds[1] - bounds[0]), 10 * (bounds[1] - bounds[0]));
+  }
   /// After bad input, the same mapper must render the valid box exactly as a fresh one.
   void ExpectRecovers()
   {
@@ -244,18 +259,9 @@ TEST_F(MapperRobustness, TheMemoryBoundHoldsTheNearPlanesPieces)
     mapper->AddObserver(vtkCommand::ErrorEvent, this->Observer);
     mapper->AddObserver(vtkCommand::WarningEvent, this->Observer);
     const Stage stage = MakeStage(this->Box, this->Property, mapper, 200, 200);
-    double bounds[6];
-    this->Box->GetBounds(bounds);
-    const double centre[3] = { 0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]),
-      0.5 * (bounds[4] + bounds[5]) };
-    const double side = bounds[1] - bounds[0];
     const auto inside = [&](const Stage& on)
     {
-      vtkCamera* camera = on.renderer->GetActiveCamera();
-      camera->SetFocalPoint(centre);
-      camera->SetPosition(centre[0] + 0.1 * side, centre[1], centre[2] + 0.2 * side);
-      camera->SetViewUp(0, 1, 0);
-      camera->SetClippingRange(0.01 * side, 10 * side);
+      this->LookFromInsideTheBox(on.renderer->GetActiveCamera(), 0);
       on.window->Render();
     };
     stage.window->Render(); // from outside
@@ -323,15 +329,7 @@ protected:
     camera->Elevation(20);
     if (std::get<0>(this->GetParam()) == "near-plane")
     {
-      double bounds[6];
-      this->Box->GetBounds(bounds);
-      const double centre[3] = { 0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]),
-        0.5 * (bounds[4] + bounds[5]) };
-      camera->SetFocalPoint(centre);
-      camera->SetPosition(centre[0] + 0.1 * (bounds[1] - bounds[0]), centre[1],
-        centre[2] + 0.2 * (bounds[5] - bounds[4]));
-      camera->Azimuth(azimuth);
-      camera->SetClippingRange(0.01 * (bounds[1] - bounds[0]), 10 * (bounds[1] - bounds[0]));
+      this->LookFromInsideTheBox(camera, azimuth);
     }
   }
   vtkSmartPointer<vtkImageData> Frame(const Stage& stage, double azimuth) const
