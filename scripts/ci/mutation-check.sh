@@ -21,11 +21,10 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 . "$here/scripts/ci/gtest-shards.sh"
 build="${1:-$here/build}"
 mode="${2:-sample}"
+[ -d "$build" ] && build="$(cd "$build" && pwd)"
 tests="$build/Testing/Rendering/mtpt_rendering_tests"
 min_failures="${MIN_FAILURES:-10}"
 [ -x "$tests" ] || { echo "mutation-check: $tests not built (run scripts/test.sh)" >&2; exit 1; }
-build="$(cd "$build" && pwd)"
-tests="$build/Testing/Rendering/mtpt_rendering_tests"
 cd "$build/Testing/Rendering" # as ctest runs it: the images it writes land in the build tree
 
 sample=(

@@ -112,11 +112,10 @@ EOF
 # archive's size over the cores, but never under the preset's 64 MiB dictionary, keep every
 # core busy (on 2 cores: 115 s instead of 199, for 0.8% more bytes).
 log "packing $archive"
-tar -C "$build/device-kit" -cf "$build/device-kit.tar" mtpt-device-kit
-block=$((($(stat -c %s "$build/device-kit.tar") + $(nproc) - 1) / $(nproc)))
+block=$((($(du -sb "$stage" | cut -f1) + $(nproc) - 1) / $(nproc)))
 [ "$block" -lt $((64 << 20)) ] && block=$((64 << 20))
-xz -T0 --x86 --lzma2=preset=9e --block-size="$block" -c "$build/device-kit.tar" >"$archive.part"
-rm "$build/device-kit.tar"
+tar -C "$build/device-kit" -cf - mtpt-device-kit |
+  xz -T0 --x86 --lzma2=preset=9e --block-size="$block" >"$archive.part"
 mv "$archive.part" "$archive"
 bytes=$(stat -c %s "$archive")
 mib=$(awk -v b="$bytes" 'BEGIN { printf "%.1f", b / 1048576 }')
