@@ -104,8 +104,8 @@ TEST(LevelOfDetail, EveryPrefixIsSpreadEvenlyOverTheMesh)
     for (std::size_t c = 0; c < mesh.CellCount(); ++c)
     {
       // The lattice splits the box [-1, 1]^3 at its centre, and no centroid lies on it.
-      const int octant = (centres[c][0] > 0 ? 1 : 0) | (centres[c][1] > 0 ? 2 : 0) |
-        (centres[c][2] > 0 ? 4 : 0);
+      const int octant =
+        (centres[c][0] > 0 ? 1 : 0) | (centres[c][1] > 0 ? 2 : 0) | (centres[c][2] > 0 ? 4 : 0);
       ++cells[octant];
       kept[octant] += importance[c] < threshold ? 1 : 0;
     }
@@ -132,7 +132,42 @@ TEST(LevelOfDetail, FractionLevels)
   EXPECT_DOUBLE_EQ(mtpt::CellFractionLevel(0.3, 1.0), 1.0);
 }
 
-TEST(LevelOfDetail, SelectionIsTheVisibleCellsBelowTheThreshold)
+TEST(LevelOfDetail, KeptLevelsSelectWhatTheImportanceSelectsAtEveryLevel)
+{
+  // A byte a cell instead of the importance: its deepest kept level. At every level the
+  // byte and the importance must keep the same cells, on meshes whose importance bits do
+  // and do not fill the levels' thresholds.
+  for (const TetMesh& mesh : { mtpt::test::JitteredGrid(10, 7), mtpt::test::JitteredGrid(1, 3) })
+  {
+    const std::size_t n = mesh.CellCount();
+    const std::vector<std::uint32_t> importance = Importance(mesh, 2);
+    for (int threads : { 1, 2 })
+    {
+      std::vector<std::uint8_t> levels(n, 0xcd);
+      mtpt::ComputeKeptLevels(mesh.Points(), mesh.Cells(), levels.data(), threads);
+      for (int k = 0; k <= mtpt::DeepestDetailLevel; ++k)
+      {
+        const std::uint64_t threshold = mtpt::ImportanceThreshold(mtpt::DetailLevelFraction(k), n);
+        for (std::size_t c = 0; c < n; ++c)
+        {
+          ASSERT_EQ(levels[c] >= k, importance[c] < threshold)
+            << "cell " << c << " of " << n << " at level " << k << ", " << threads << " threads";
+        }
+      }
+    }
+  }
+  // The levels the frame's plan gives (CellFractionLevel) map back to their level.
+  for (int k = 0; k <= mtpt::DeepestDetailLevel; ++k)
+  {
+    EXPECT_EQ(mtpt::DetailLevelOf(mtpt::DetailLevelFraction(k)), k);
+    EXPECT_EQ(mtpt::DetailLevelFraction(k),
+      k == 0 ? 1.0 : mtpt::CellFractionLevel(mtpt::DetailLevelFraction(k), 0.0));
+  }
+  EXPECT_EQ(mtpt::DetailLevelOf(1.0), 0);
+  EXPECT_EQ(mtpt::DetailLevelOf(std::numeric_limits<double>::quiet_NaN()), 0);
+}
+
+TEST(LevelOfDetail, SelectionIsTheVisibleCellsTheLevelKeeps)
 {
   const TetMesh mesh = mtpt::test::JitteredGrid(10, 7);
   const std::size_t n = mesh.CellCount();
@@ -145,9 +180,9 @@ TEST(LevelOfDetail, SelectionIsTheVisibleCellsBelowTheThreshold)
   const mtpt::MeshKey key =
     mtpt::MeshKey::Of(mesh.Points(), mesh.Cells(), mtpt::ScalarsView{}, nullptr, 1);
   mtpt::CellSelectionStage stage;
-  for (double fraction : { 0.5, 0.3, 0.1 })
+  for (int level : { 4, 7, 13, 1 }) // fractions 0.5, 0.30, 0.105 and 0.84, the largest
   {
-    const std::uint64_t threshold = mtpt::ImportanceThreshold(fraction, n);
+    const std::uint64_t threshold = mtpt::ImportanceThreshold(mtpt::DetailLevelFraction(level), n);
     std::vector<std::uint32_t> expected;
     for (std::uint32_t c : visible)
     {
@@ -157,21 +192,25 @@ TEST(LevelOfDetail, SelectionIsTheVisibleCellsBelowTheThreshold)
       }
     }
     const std::uint64_t before = stage.Version();
-    EXPECT_TRUE(stage.Update({ key, 4, threshold }, mesh.Points(), mesh.Cells(), visible.data(),
-      visible.size(), 2));
+    EXPECT_TRUE(stage.Update(
+      { key, 4, level }, mesh.Points(), mesh.Cells(), visible.data(), visible.size(), 2));
     EXPECT_NE(stage.Version(), before);
     ASSERT_EQ(stage.SelectedCount(), expected.size());
     EXPECT_TRUE(std::equal(expected.begin(), expected.end(), stage.Selected()));
     EXPECT_EQ(stage.LeftOut(), visible.size() - expected.size());
+    EXPECT_LE(stage.SelectedCount(), mtpt::CellSelectionStage::LargestSubset(n));
     // The same key again: nothing computed, the same version.
     const std::uint64_t version = stage.Version();
-    EXPECT_FALSE(stage.Update({ key, 4, threshold }, mesh.Points(), mesh.Cells(), visible.data(),
-      visible.size(), 2));
+    EXPECT_FALSE(stage.Update(
+      { key, 4, level }, mesh.Points(), mesh.Cells(), visible.data(), visible.size(), 2));
     EXPECT_EQ(stage.Version(), version);
   }
+  // A byte a cell and the largest subset's list, not the importance's 4 bytes a cell.
+  EXPECT_LE(
+    stage.MemoryBytes(), n + mtpt::CellSelectionStage::LargestSubset(n) * sizeof(std::uint32_t));
   // Every cell: the visible list itself.
-  EXPECT_FALSE(stage.Update({ key, 4, mtpt::ImportanceThreshold(1.0, n) }, mesh.Points(),
-    mesh.Cells(), visible.data(), visible.size(), 2));
+  EXPECT_FALSE(
+    stage.Update({ key, 4, 0 }, mesh.Points(), mesh.Cells(), visible.data(), visible.size(), 2));
   EXPECT_EQ(stage.Selected(), visible.data());
   EXPECT_EQ(stage.SelectedCount(), visible.size());
   EXPECT_EQ(stage.LeftOut(), 0u);
@@ -242,10 +281,11 @@ TEST(LevelOfDetail, PipelineDrawsTheSubsetAndThenTheFullFrameExactly)
   // (The buffers keep the capacity of the largest batch: compare the frame's slots.)
   const std::size_t slots = fresh.TetrahedronCount();
   ASSERT_EQ(pipeline.TetrahedronCount(), slots);
-  EXPECT_TRUE(std::equal(fresh.Keys().begin(), fresh.Keys().begin() + slots,
-    pipeline.Keys().begin()));
-  EXPECT_EQ(0, std::memcmp(pipeline.Vertices().data(), fresh.Vertices().data(),
-                 mtpt::VerticesPerTetrahedron * slots * sizeof(mtpt::TetVertex)));
+  EXPECT_TRUE(
+    std::equal(fresh.Keys().begin(), fresh.Keys().begin() + slots, pipeline.Keys().begin()));
+  EXPECT_EQ(0,
+    std::memcmp(pipeline.Vertices().data(), fresh.Vertices().data(),
+      mtpt::VerticesPerTetrahedron * slots * sizeof(mtpt::TetVertex)));
   EXPECT_TRUE(std::equal(fresh.Indices().begin(),
     fresh.Indices().begin() + mtpt::IndicesPerTetrahedron * slots, pipeline.Indices().begin()));
 }

@@ -65,7 +65,7 @@ CellSelectionKey CellSelectionKeyOf(
   CellSelectionKey key;
   key.mesh = mesh;
   key.visible = visible;
-  key.threshold = ImportanceThreshold(input.cellFraction, input.cells.cellCount);
+  key.level = DetailLevelOf(input.cellFraction);
   return key;
 }
 
@@ -160,9 +160,12 @@ std::size_t FramePipeline::BytesNeeded(const MemoryNeed& need)
   const std::size_t perPoint = sizeof(ProjectedPoint);
   // Per cell: the culling's list; the depth keys (the order's scratch once it took them);
   // the near plane's verdict (a byte per key); the order; the ranks; with the level of
-  // detail, the importance and its list.
+  // detail, each cell's kept level (a byte) and the subset's list, at most the cells its
+  // largest fraction keeps.
   const std::size_t perCell = sizeof(std::uint32_t) + sizeof(SortKey) + 1 + sizeof(SortKey) +
-    sizeof(std::uint32_t) + (need.levelOfDetail ? 2 * sizeof(std::uint32_t) : 0);
+    sizeof(std::uint32_t) + (need.levelOfDetail ? 1 : 0);
+  const std::size_t subset =
+    need.levelOfDetail ? CellSelectionStage::LargestSubset(need.cells) * sizeof(std::uint32_t) : 0;
   // Per piece: the pieces and their keys (grown one at a time, so up to twice their number),
   // their places in the order and its scratch, and their ranks.
   const std::size_t perPiece =
@@ -182,7 +185,7 @@ std::size_t FramePipeline::BytesNeeded(const MemoryNeed& need)
   const std::size_t groups = window < need.cells + need.pieces ? (OrderStage::MaxGroups + 2) *
       sizeof(std::size_t) * (1 + static_cast<std::size_t>(detail::ResolveThreads(need.threads)))
                                                                : 0;
-  return need.points * perPoint + need.cells * perCell + need.pieces * perPiece +
+  return need.points * perPoint + need.cells * perCell + subset + need.pieces * perPiece +
     window * perWindowCell + counts + groups;
 }
 
@@ -320,7 +323,7 @@ void FramePipeline::PrepareImportance(const FrameInput& input, int threads)
 {
   const std::size_t n = input.cells.cellCount;
   if (n > MaxTetrahedra() ||
-    CellSelectionStage::KeepsEveryCell(ImportanceThreshold(input.cellFraction, n), n))
+    CellSelectionStage::KeepsEveryCell(DetailLevelOf(input.cellFraction), n))
   {
     return;
   }

@@ -153,8 +153,12 @@ int ImportanceBits(std::size_t cellCount)
   return bits;
 }
 
-void ComputeImportance(
-  const PointsView& points, const CellsView& cells, std::uint32_t* importance, int threads)
+namespace
+{
+/// body(cell, importance) for every cell, in parallel: the cells sorted along the Morton curve
+/// of their centroids, the cell at position p of the curve of importance ReverseBits(p).
+template <typename Body>
+void ForEachAlongCurve(const PointsView& points, const CellsView& cells, int threads, Body&& body)
 {
   const std::size_t n = cells.cellCount;
   if (n == 0)
@@ -167,10 +171,55 @@ void ComputeImportance(
   // Keys are distinct (the cell id is in the low half): one sorted order, any thread count.
   detail::ParallelSort(keys.data(), n, nthreads);
   const int bits = ImportanceBits(n);
-  const auto count = static_cast<std::int64_t>(n);
-  detail::ParallelFor(0, count, nthreads,
+  detail::ParallelFor(0, static_cast<std::int64_t>(n), nthreads,
     [&](std::int64_t p)
-    { importance[keys[p] & 0xffffffffu] = ReverseBits(static_cast<std::uint32_t>(p), bits); });
+    { body(keys[p] & 0xffffffffu, ReverseBits(static_cast<std::uint32_t>(p), bits)); });
+}
+} // namespace
+
+void ComputeImportance(
+  const PointsView& points, const CellsView& cells, std::uint32_t* importance, int threads)
+{
+  ForEachAlongCurve(points, cells, threads,
+    [importance](std::uint64_t cell, std::uint32_t value) { importance[cell] = value; });
+}
+
+int DetailLevelOf(double fraction)
+{
+  if (!(fraction < 1.0))
+  {
+    return 0; // 1 or more, or NaN: every cell, as ImportanceThreshold
+  }
+  if (!(fraction > 0.0))
+  {
+    return DeepestDetailLevel;
+  }
+  return static_cast<int>(
+    std::min<double>(std::nearbyint(-4.0 * std::log2(fraction)), DeepestDetailLevel));
+}
+
+double DetailLevelFraction(int level)
+{
+  return std::exp2(-static_cast<double>(std::max(level, 0)) / 4.0); // as CellFractionLevel
+}
+
+void ComputeKeptLevels(
+  const PointsView& points, const CellsView& cells, std::uint8_t* levels, int threads)
+{
+  // threshold[k]: the importance below which level k keeps a cell, non-increasing in k.
+  std::uint64_t threshold[DeepestDetailLevel + 1];
+  for (int k = 0; k <= DeepestDetailLevel; ++k)
+  {
+    threshold[k] = ImportanceThreshold(DetailLevelFraction(k), cells.cellCount);
+  }
+  ForEachAlongCurve(points, cells, threads,
+    [&](std::uint64_t cell, std::uint32_t importance)
+    {
+      // The first level that leaves the cell out; the one before it is its deepest.
+      const std::uint64_t* out = std::partition_point(threshold, threshold + DeepestDetailLevel + 1,
+        [importance](std::uint64_t t) { return importance < t; });
+      levels[cell] = static_cast<std::uint8_t>(out - threshold - 1);
+    });
 }
 
 std::uint64_t ImportanceThreshold(double fraction, std::size_t cellCount)
@@ -210,7 +259,7 @@ bool CellSelectionStage::Update(const Key& key, const PointsView& points, const 
     return false;
   }
   const std::size_t n = cells.cellCount;
-  if (KeepsEveryCell(key.threshold, n))
+  if (KeepsEveryCell(key.level, n))
   {
     // Every visible cell: the visible list itself, a new result only if it was a subset.
     this->Record.Store(key,
@@ -221,28 +270,53 @@ bool CellSelectionStage::Update(const Key& key, const PointsView& points, const 
   }
   const int nthreads = detail::ResolveThreads(threads);
   this->PrepareImportance(key.mesh, points, cells, nthreads);
+  // Count, then list: the list holds the kept cells only, in ascending order.
   const std::size_t candidates = visible ? visibleCount : n;
-  AllocationPoint(AllocationSite::LevelOfDetail);
-  if (this->List.size() < candidates)
+  const std::uint8_t* levels = this->Levels.data();
+  const auto keeps = [&](std::size_t i, std::uint32_t& c)
   {
-    this->List.resize(candidates);
-  }
-  const std::uint32_t* importance = this->Importance.data();
-  const std::size_t kept = detail::CompactInOrder(candidates, nthreads, this->List.data(),
-    [&](std::size_t begin, std::size_t end, std::uint32_t* out)
+    c = visible ? visible[i] : static_cast<std::uint32_t>(i);
+    return levels[c] >= key.level;
+  };
+  const int blocks = ThreadsForWork(candidates, detail::CellsPerThread, nthreads);
+  std::vector<std::size_t> offsets(static_cast<std::size_t>(blocks) + 1, 0);
+  std::size_t kept = 0;
+  detail::CountPlaceScatter(
+    candidates, blocks, blocks,
+    [&](int b, detail::IndexRange r)
     {
       std::size_t count = 0;
-      for (std::size_t i = begin; i < end; ++i)
+      for (std::size_t i = r.begin; i < r.end; ++i)
       {
-        const std::uint32_t c = visible ? visible[i] : static_cast<std::uint32_t>(i);
-        if (importance[c] < key.threshold)
+        std::uint32_t c;
+        count += keeps(i, c) ? 1 : 0;
+      }
+      offsets[static_cast<std::size_t>(b)] = count;
+    },
+    [&]
+    {
+      kept = detail::ExclusivePrefixByBucket(offsets.data(), static_cast<std::size_t>(blocks), 1,
+        [](std::size_t, std::size_t, std::size_t) {});
+      AllocationPoint(AllocationSite::LevelOfDetail);
+      if (this->List.size() < kept)
+      {
+        this->List.resize(kept); // grown only: a smaller subset reuses it
+      }
+      return true;
+    },
+    [&](int b, detail::IndexRange r)
+    {
+      std::uint32_t* out = this->List.data() + offsets[static_cast<std::size_t>(b)];
+      for (std::size_t i = r.begin; i < r.end; ++i)
+      {
+        std::uint32_t c;
+        if (keeps(i, c))
         {
-          out[count++] = c;
+          *out++ = c;
         }
       }
-      return count;
     });
-  this->Count = kept; // the list keeps its size: no refill when the next subset is larger
+  this->Count = kept;
   this->Passed = false;
   this->Record.Store(key);
   return true;
@@ -251,17 +325,17 @@ bool CellSelectionStage::Update(const Key& key, const PointsView& points, const 
 bool CellSelectionStage::PrepareImportance(
   const MeshKey& key, const PointsView& points, const CellsView& cells, int threads)
 {
-  if (this->ImportanceRecord.Holds(key))
+  if (this->LevelsRecord.Holds(key))
   {
     return false;
   }
   AllocationPoint(AllocationSite::LevelOfDetail);
-  if (this->Importance.size() < cells.cellCount)
+  if (this->Levels.size() < cells.cellCount)
   {
-    this->Importance.resize(cells.cellCount);
+    this->Levels.resize(cells.cellCount);
   }
-  ComputeImportance(points, cells, this->Importance.data(), threads);
-  this->ImportanceRecord.Store(key);
+  ComputeKeptLevels(points, cells, this->Levels.data(), threads);
+  this->LevelsRecord.Store(key);
   return true;
 }
 
@@ -274,15 +348,15 @@ void CellSelectionStage::Forget()
 void CellSelectionStage::Release()
 {
   this->Forget();
-  this->ImportanceRecord.Forget();
-  std::vector<std::uint32_t>().swap(this->Importance);
+  this->LevelsRecord.Forget();
+  std::vector<std::uint8_t>().swap(this->Levels);
   std::vector<std::uint32_t>().swap(this->List);
   this->Count = 0;
 }
 
 std::size_t CellSelectionStage::MemoryBytes() const
 {
-  return (this->Importance.capacity() + this->List.capacity()) * sizeof(std::uint32_t);
+  return this->Levels.capacity() + this->List.capacity() * sizeof(std::uint32_t);
 }
 
 double VolumeBudget(double allottedSeconds, double intervalSeconds, double lastSeconds)

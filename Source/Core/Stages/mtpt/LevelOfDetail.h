@@ -13,6 +13,10 @@
  * cells left out by scaling every drawn cell's attenuation by visible / drawn, so that a
  * ray keeps its expected optical depth.
  *
+ * The stage keeps a byte a cell, not the 4-byte importance: the deepest level of
+ * CellFractionLevel that keeps the cell (ComputeKeptLevels), which selects the same cells as
+ * the importance does at every level. Its subset list holds the kept cells only.
+ *
  * A fraction of 1 selects nothing: the frame is the full frame, bit for bit.
  */
 #ifndef mtpt_LevelOfDetail_h
@@ -21,6 +25,7 @@
 #include "mtpt/MeshView.h"
 #include "mtpt/Stage.h"
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -55,23 +60,42 @@ std::uint64_t ImportanceThreshold(double fraction, std::size_t cellCount);
  */
 double CellFractionLevel(double fraction, double minimum);
 
+/// The deepest level a cell's byte records (ComputeKeptLevels): fraction 2^(-255/4).
+constexpr int DeepestDetailLevel = 255;
+
+/// The level k of a fraction 2^(-k/4) that CellFractionLevel gave; 0 for 1 or more (and NaN).
+int DetailLevelOf(double fraction);
+
+/// The fraction of level k, 2^(-k/4), the very value CellFractionLevel gives for it.
+double DetailLevelFraction(int level);
+
+/**
+ * For every cell, the deepest level (at most DeepestDetailLevel) whose fraction keeps it:
+ * levels[c] = the largest k with importance[c] < ImportanceThreshold(DetailLevelFraction(k),
+ * cellCount), ComputeImportance's importance. So levels[c] >= k exactly when the importance
+ * keeps cell c at level k: the same subsets from a byte a cell. Thread safety and determinism
+ * as ComputeImportance's.
+ */
+void ComputeKeptLevels(
+  const PointsView& points, const CellsView& cells, std::uint8_t* levels, int threads);
+
 /// What the subset depends on: CellSelectionStage's key.
 struct CellSelectionKey
 {
   MeshKey mesh;
-  std::uint64_t visible = 0;   ///< CullingStage::Version()
-  std::uint64_t threshold = 0; ///< ImportanceThreshold; 2^bits or more: every cell
+  std::uint64_t visible = 0; ///< CullingStage::Version()
+  int level = 0;             ///< DetailLevelOf the cell fraction; 0: every cell
   bool operator==(const CellSelectionKey& o) const
   {
-    return mesh == o.mesh && visible == o.visible && threshold == o.threshold;
+    return mesh == o.mesh && visible == o.visible && level == o.level;
   }
 };
 
 /**
  * Stage 2b as a stage of FramePipeline (Stage.h): the cells of the visible list (Culling.h)
- * whose importance is below the threshold, in ascending order. The importance is kept
- * until the mesh changes; the subset until the mesh, the visible list or the threshold
- * change. With every cell kept it passes the visible list through, computing nothing.
+ * that the key's level keeps, in ascending order. The cells' kept levels are kept until
+ * the mesh changes; the subset until the mesh, the visible list or the level change. With
+ * every cell kept it passes the visible list through, computing nothing.
  */
 class CellSelectionStage : public StageOf<CellSelectionKey>
 {
@@ -84,8 +108,8 @@ public:
     const std::uint32_t* visible, std::size_t visibleCount, int threads);
 
   /**
-   * Computes the importance order of the mesh `key` unless it is kept: what a subset of it
-   * needs, once per mesh. Update calls it too; an application calls it ahead of a frame to
+   * Computes the kept levels of the mesh `key`'s cells unless they are kept: what a subset
+   * of it needs, once per mesh. Update calls it too; an application calls it ahead of a frame to
    * keep the work out of the frame's time. True when it computed.
    */
   bool PrepareImportance(
@@ -104,18 +128,28 @@ public:
         static_cast<double>(this->SelectedCount() > 0 ? this->SelectedCount() : 1)
                                : 1.0;
   }
-  /// Whether `threshold` (ImportanceThreshold) keeps every cell of a mesh of `cellCount`.
-  static bool KeepsEveryCell(std::uint64_t threshold, std::size_t cellCount)
+  /// Whether `level` (DetailLevelOf) keeps every cell of a mesh of `cellCount`.
+  static bool KeepsEveryCell(int level, std::size_t cellCount)
   {
-    return threshold >= (std::uint64_t{ 1 } << ImportanceBits(cellCount));
+    return level <= 0 ||
+      ImportanceThreshold(DetailLevelFraction(level), cellCount) >=
+      (std::uint64_t{ 1 } << ImportanceBits(cellCount));
+  }
+  /// The most cells a subset that leaves some out holds: those its largest fraction,
+  /// 2^(-1/4), keeps of a mesh of `cellCount` (the list's bound, FramePipeline::BytesNeeded).
+  static std::size_t LargestSubset(std::size_t cellCount)
+  {
+    return static_cast<std::size_t>(
+      std::min<std::uint64_t>(cellCount, ImportanceThreshold(DetailLevelFraction(1), cellCount)));
   }
   void Forget() override;
   void Release() override;
   std::size_t MemoryBytes() const override;
 
 private:
-  StageRecord<MeshKey> ImportanceRecord;
-  std::vector<std::uint32_t> Importance, List; ///< List: Count cells of the subset
+  StageRecord<MeshKey> LevelsRecord;
+  std::vector<std::uint8_t> Levels; ///< ComputeKeptLevels, a byte a cell
+  std::vector<std::uint32_t> List;  ///< the subset: Count cells
   const std::uint32_t* Visible = nullptr;
   std::size_t VisibleCount = 0, Count = 0;
   bool Passed = true;
