@@ -257,7 +257,7 @@ TEST(BlendModes, UnorderedFramesSkipTheSort)
   Scene scene(true, false);
   ASSERT_TRUE(scene.pipeline.Prepare(scene.input, 2));
   EXPECT_TRUE(scene.pipeline.Stats().unordered);
-  const std::vector<mtpt::SortKey>& keys = scene.pipeline.Keys();
+  const mtpt::LargeVector<mtpt::SortKey>& keys = scene.pipeline.Keys();
   ASSERT_GT(keys.size(), 1000u);
   Scene sorted(true, true);
   ASSERT_TRUE(sorted.pipeline.Prepare(sorted.input, 2));

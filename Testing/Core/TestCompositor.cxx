@@ -215,8 +215,7 @@ TEST_P(CompositorSimd, OverlappingTrianglesOfAFanBlendInSlotOrder)
   TetVertex corner[4];
   for (int i = 0; i < 4; ++i)
   {
-    corner[i] =
-      TetVertex{ Ndc(xs[i], w), Ndc(ys[i], h), 0.0f, scalars[i], scalars[i], 0.7f };
+    corner[i] = TetVertex{ Ndc(xs[i], w), Ndc(ys[i], h), 0.0f, scalars[i], scalars[i], 0.7f };
   }
   mtpt::Fan fan{};
   fan.boundary[0] = corner[0];
@@ -588,7 +587,6 @@ TEST(Compositor, DepthRangesSplitSegmentsExactly)
   }
 }
 
-
 TEST(Compositor, ClippingPlanesCutSegmentsExactly)
 {
   // A clipping plane keeps the part of each fragment's segment on its normal's side. A plane
@@ -868,9 +866,10 @@ namespace
 /// Every tile of a width x height image drawn by detail::RasterizeTile from all of `fans`, in
 /// visibility order (each tile clips them; drawn front to back, as the compositor draws
 /// them), tile after tile, with an opaque depth image.
-std::vector<float> DrawTiles(const mtpt::detail::RasterFrame& frame,
-  const std::vector<mtpt::Fan>& fans, const std::vector<float>& depth,
-  mtpt::detail::RasterCounts& counts, const std::vector<mtpt::LightFactors>& lights = {})
+template <typename Fans>
+std::vector<float> DrawTiles(const mtpt::detail::RasterFrame& frame, const Fans& fans,
+  const std::vector<float>& depth, mtpt::detail::RasterCounts& counts,
+  const std::vector<mtpt::LightFactors>& lights = {})
 {
   constexpr int T = mtpt::TileSize;
   std::vector<float> tiles;
@@ -910,8 +909,9 @@ namespace
 
 /// Draws `fans` (visibility order) with the fan path and with the triangle path alone, and
 /// returns the largest channel difference; the counts of each in `byFans`, `byTriangles`.
-double FanAgainstTrianglePath(mtpt::detail::RasterFrame frame, const std::vector<mtpt::Fan>& fans,
-  mtpt::detail::RasterCounts& byFans, mtpt::detail::RasterCounts& byTriangles, std::size_t& drawn,
+double FanAgainstTrianglePath(mtpt::detail::RasterFrame frame,
+  const mtpt::LargeVector<mtpt::Fan>& fans, mtpt::detail::RasterCounts& byFans,
+  mtpt::detail::RasterCounts& byTriangles, std::size_t& drawn,
   const std::vector<mtpt::LightFactors>& lights = {})
 {
   std::vector<float> depth(static_cast<std::size_t>(frame.width) * frame.height);
@@ -990,8 +990,8 @@ TEST_P(CompositorSimd, FanPathDrawsTheTrianglesImage)
         FanAgainstTrianglePath(frame, pipeline.Fans(), byFans, byTriangles, drawn);
       // Lit (Lighting.h), each fan by factors of its own: the fan path lights each fragment
       // with its own fan's factors, as the triangle path does.
-      const double litWorst = FanAgainstTrianglePath(
-        frame, pipeline.Fans(), litByFans, litByTriangles, litDrawn, lights);
+      const double litWorst =
+        FanAgainstTrianglePath(frame, pipeline.Fans(), litByFans, litByTriangles, litDrawn, lights);
       const bool faint = density < 1;
       EXPECT_LE(litWorst, faint ? 4e-6 : 1.0 / 2048 + 4e-6);
       EXPECT_EQ(litByFans.fragments, byFans.fragments);
@@ -1055,9 +1055,9 @@ TEST_P(CompositorSimd, FanPathReducesAsTheTrianglePath)
       std::size_t drawn = 0;
       const double worst =
         FanAgainstTrianglePath(frame, pipeline.Fans(), byFans, byTriangles, drawn);
-      SCOPED_TRACE(::testing::Message() << (perspective ? "perspective" : "orthographic") << ", "
-                                        << static_cast<int>(mode) << ", "
-                                        << mtpt::detail::RasterTargetName());
+      SCOPED_TRACE(::testing::Message()
+        << (perspective ? "perspective" : "orthographic") << ", " << static_cast<int>(mode) << ", "
+        << mtpt::detail::RasterTargetName());
       std::printf("mode %d, %s: worst %.3g\n", static_cast<int>(mode),
         perspective ? "perspective" : "orthographic", worst);
       // Measured: at most 1.4e-4, in entry coordinates up to 47 (maximum, minimum) or sums
@@ -1084,8 +1084,8 @@ TEST_P(CompositorSimd, FanPathShadesPreIntegratedAsTheTrianglePath)
   // Where fans the fan path declines (too large, folded) come between others, the triangle
   // path's queued fragments must be blended before the next fan: else the tile's fragments
   // leave their front-to-back order (shown by drawing the queue only at the tile's end:
-  // 0.024 off in the dense perspective image). Faint, nothing becomes opaque; dense, most pixels do, and
-  // the two paths may differ by what a pixel at the threshold of opacity skips (2^-11).
+  // 0.024 off in the dense perspective image). Faint, nothing becomes opaque; dense, most pixels
+  // do, and the two paths may differ by what a pixel at the threshold of opacity skips (2^-11).
   const mtpt::test::TetMesh mesh = mtpt::test::JitteredGrid(9, 5);
   for (bool perspective : { false, true })
   {
@@ -1122,9 +1122,9 @@ TEST_P(CompositorSimd, FanPathShadesPreIntegratedAsTheTrianglePath)
       std::size_t drawn = 0;
       const double worst =
         FanAgainstTrianglePath(frame, pipeline.Fans(), byFans, byTriangles, drawn);
-      SCOPED_TRACE(::testing::Message() << (perspective ? "perspective" : "orthographic")
-                                        << ", density " << density << ", "
-                                        << mtpt::detail::RasterTargetName());
+      SCOPED_TRACE(::testing::Message()
+        << (perspective ? "perspective" : "orthographic") << ", density " << density << ", "
+        << mtpt::detail::RasterTargetName());
       std::printf("%s, density %g: worst %.3g\n", perspective ? "perspective" : "orthographic",
         density, worst);
       const bool faint = density < 1;

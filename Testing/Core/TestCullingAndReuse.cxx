@@ -289,7 +289,7 @@ TEST(FramePipeline, ReuseRecomputesOnlyWhatChanged)
   mtpt::FramePipeline pipeline;
   pipeline.SetReuse(true);
   ASSERT_TRUE(pipeline.Run(input, 2));
-  const std::vector<mtpt::SortKey> keys = pipeline.Keys();
+  const mtpt::LargeVector<mtpt::SortKey> keys = pipeline.Keys();
   const std::vector<float> first = Composite(pipeline, input, table);
 
   // Unchanged: nothing recomputed, same buffers.

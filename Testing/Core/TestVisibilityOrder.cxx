@@ -93,7 +93,7 @@ TEST_P(OrderTest, SortedPermutationForEveryThreadCount)
           // With a lent scratch, too short and holding other keys: the same result, and
           // the sorter holds no scratch of its own (at most the radix order's counts).
           auto lending = mtpt::MakeVisibilityOrder(param.method, param.maxSubArray);
-          std::vector<SortKey> scratch(n / 2, ~SortKey{ 0 });
+          mtpt::LargeVector<SortKey> scratch(n / 2, ~SortKey{ 0 });
           keys = input;
           lending->Sort(keys.data(), keys.size(), threads, scratch);
           ASSERT_EQ(keys, expected);

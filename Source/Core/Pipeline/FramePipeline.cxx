@@ -505,7 +505,7 @@ DecomposeInput FramePipeline::WindowInput(std::size_t first, std::size_t count, 
   if (count < this->SortedSize)
   {
     // A batch: the cells of the rank groups it overlaps, not every candidate.
-    std::vector<SortKey>& storage = this->DepthKeys.Consume();
+    LargeVector<SortKey>& storage = this->DepthKeys.Consume();
     this->Order.Group(count, in.cells.cellCount, in.cellList, in.cellListCount, storage, threads);
     in.rankedCells = this->Order.CellsOfRanks(first, count, storage, in.rankedCellCount);
   }

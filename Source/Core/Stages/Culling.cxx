@@ -264,7 +264,7 @@ std::size_t CullingStage::VisibleCount() const
 
 void CullingStage::Release()
 {
-  std::vector<std::uint32_t>().swap(this->List);
+  LargeVector<std::uint32_t>().swap(this->List);
   this->Forget();
 }
 

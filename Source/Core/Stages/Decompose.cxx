@@ -1123,9 +1123,9 @@ bool SlotStage::Update(const Key& key, const DecomposeInput& input, const std::u
 
 void SlotStage::Release()
 {
-  std::vector<TetVertex>().swap(this->VertexBuffer);
-  std::vector<std::uint32_t>().swap(this->IndexBuffer);
-  std::vector<ProjectionClass>().swap(this->Classes);
+  LargeVector<TetVertex>().swap(this->VertexBuffer);
+  LargeVector<std::uint32_t>().swap(this->IndexBuffer);
+  LargeVector<ProjectionClass>().swap(this->Classes);
   this->Forget();
 }
 
@@ -1157,8 +1157,8 @@ bool FanStage::Update(const Key& key, const DecomposeInput& input, const std::ui
 
 void FanStage::Release()
 {
-  std::vector<Fan>().swap(this->FanBuffer);
-  std::vector<ProjectionClass>().swap(this->Classes);
+  LargeVector<Fan>().swap(this->FanBuffer);
+  LargeVector<ProjectionClass>().swap(this->Classes);
   this->Forget();
 }
 

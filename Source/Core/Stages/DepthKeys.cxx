@@ -176,7 +176,7 @@ bool DepthKeyStage::Update(const Key& key, const ProjectedPoint* points, std::si
 
 void DepthKeyStage::Release()
 {
-  std::vector<SortKey>().swap(this->Kept);
+  LargeVector<SortKey>().swap(this->Kept);
   this->Used = false;
   this->Record.Forget();
 }

@@ -349,8 +349,8 @@ void CellSelectionStage::Release()
 {
   this->Forget();
   this->LevelsRecord.Forget();
-  std::vector<std::uint8_t>().swap(this->Levels);
-  std::vector<std::uint32_t>().swap(this->List);
+  LargeVector<std::uint8_t>().swap(this->Levels);
+  LargeVector<std::uint32_t>().swap(this->List);
   this->Count = 0;
 }
 

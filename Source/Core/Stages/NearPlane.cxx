@@ -189,7 +189,7 @@ int CutTetrahedron(const ProjectedPoint* const corners[4], const float scalars[4
   return 3;
 }
 
-bool NearPlaneStage::Update(const Key& key, const std::vector<SortKey>& keys,
+bool NearPlaneStage::Update(const Key& key, const LargeVector<SortKey>& keys,
   const ProjectedPoint* points, std::size_t pointCount, const CellsView& cells,
   const ScalarsView& scalars, const float* colours, const Matrix4& projection, bool perspective,
   int threads)
@@ -212,7 +212,7 @@ bool NearPlaneStage::Update(const Key& key, const std::vector<SortKey>& keys,
   return true;
 }
 
-bool NearPlaneStage::Classify(const std::vector<SortKey>& keys, const ProjectedPoint* points,
+bool NearPlaneStage::Classify(const LargeVector<SortKey>& keys, const ProjectedPoint* points,
   std::size_t pointCount, const CellsView& cells, const ScalarsView& scalars,
   const NearPlane& plane, int threads)
 {
@@ -262,7 +262,7 @@ bool NearPlaneStage::Classify(const std::vector<SortKey>& keys, const ProjectedP
   return true;
 }
 
-void NearPlaneStage::CutCrossing(const std::vector<SortKey>& keys, const ProjectedPoint* points,
+void NearPlaneStage::CutCrossing(const LargeVector<SortKey>& keys, const ProjectedPoint* points,
   std::size_t pointCount, const CellsView& cells, const ScalarsView& scalars, const float* colours,
   const NearPlane& plane, const Matrix4& projection, bool perspective)
 {
@@ -319,9 +319,9 @@ void NearPlaneStage::CutCrossing(const std::vector<SortKey>& keys, const Project
 
 void NearPlaneStage::Release()
 {
-  std::vector<std::uint8_t>().swap(this->Verdicts);
+  LargeVector<std::uint8_t>().swap(this->Verdicts);
   std::vector<NearPiece>().swap(this->Made);
-  std::vector<SortKey>().swap(this->Keys);
+  LargeVector<SortKey>().swap(this->Keys);
   this->Cut = false;
   this->Record.Forget();
 }

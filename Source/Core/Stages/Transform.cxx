@@ -107,7 +107,7 @@ bool TransformStage::Update(
 
 void TransformStage::Release()
 {
-  std::vector<ProjectedPoint>().swap(this->Projected);
+  LargeVector<ProjectedPoint>().swap(this->Projected);
   this->Record.Forget();
 }
 

@@ -49,7 +49,7 @@ public:
   OrderMethod Method() const override { return OrderMethod::PartitionSort; }
 
   using VisibilityOrder::Sort;
-  void Sort(SortKey* keys, std::size_t count, int threads, std::vector<SortKey>&) override
+  void Sort(SortKey* keys, std::size_t count, int threads, LargeVector<SortKey>&) override
   {
     if (count < SmallInput)
     {
@@ -131,7 +131,7 @@ public:
   OrderMethod Method() const override { return OrderMethod::RadixSort; }
 
   using VisibilityOrder::Sort;
-  void Sort(SortKey* keys, std::size_t count, int threads, std::vector<SortKey>& scratch) override
+  void Sort(SortKey* keys, std::size_t count, int threads, LargeVector<SortKey>& scratch) override
   {
     if (count < SmallInput)
     {
@@ -331,7 +331,7 @@ bool OrderStage::Update(const Key& key, const Cells& cells, bool fromPrevious, D
   // The keys the near plane keeps, in ascending cell id order (the radix sort's fast case),
   // taken from the key stage, whose buffer is this update's scratch from here on.
   const std::size_t previousCount = this->Sorted.size();
-  std::vector<SortKey>& scratch = keys.Consume();
+  LargeVector<SortKey>& scratch = keys.Consume();
   AllocationPoint(AllocationSite::Order); // the keys given to the order already
   if (!nearPlane.CutsAny())
   {
@@ -351,7 +351,7 @@ bool OrderStage::Update(const Key& key, const Cells& cells, bool fromPrevious, D
   if (!key.sorted)
   {
     // Any order serves: the cells in id order, then the near plane's pieces.
-    const std::vector<SortKey>& pieces = nearPlane.PieceKeys();
+    const LargeVector<SortKey>& pieces = nearPlane.PieceKeys();
     this->Sorted.insert(this->Sorted.end(), pieces.begin(), pieces.end());
     this->SortedFromPrevious = false;
     this->Held = Cells{}; // not an order to sort the next one from
@@ -372,7 +372,7 @@ bool OrderStage::Update(const Key& key, const Cells& cells, bool fromPrevious, D
   {
     this->Sorter->Sort(this->Sorted.data(), this->Sorted.size(), threads, scratch);
   }
-  const std::vector<SortKey>& pieces = nearPlane.PieceKeys();
+  const LargeVector<SortKey>& pieces = nearPlane.PieceKeys();
   if (!pieces.empty())
   {
     scratch.resize(this->Sorted.size() + pieces.size());
@@ -386,7 +386,7 @@ bool OrderStage::Update(const Key& key, const Cells& cells, bool fromPrevious, D
   return true;
 }
 
-bool OrderStage::SortFromPrevious(std::vector<SortKey>& scratch, int threads)
+bool OrderStage::SortFromPrevious(LargeVector<SortKey>& scratch, int threads)
 {
   const std::size_t count = this->Sorted.size();
   scratch.resize(count);
@@ -431,7 +431,7 @@ void OrderStage::Invert(std::size_t ranked, int threads, const std::uint32_t* ca
 }
 
 void OrderStage::Group(std::size_t ranksPerGroup, std::size_t meshCells,
-  const std::uint32_t* candidates, std::size_t candidateCount, std::vector<SortKey>& storage,
+  const std::uint32_t* candidates, std::size_t candidateCount, LargeVector<SortKey>& storage,
   int threads)
 {
   if (this->Record.Valid() && this->GroupedVersion == this->Version())
@@ -491,7 +491,7 @@ void OrderStage::Group(std::size_t ranksPerGroup, std::size_t meshCells,
 }
 
 const SortKey* OrderStage::CellsOfRanks(std::size_t first, std::size_t count,
-  const std::vector<SortKey>& storage, std::size_t& cells) const
+  const LargeVector<SortKey>& storage, std::size_t& cells) const
 {
   const std::size_t groups = this->GroupStarts.empty() ? 0 : this->GroupStarts.size() - 1;
   const std::size_t size = this->GroupRanks;
@@ -507,8 +507,8 @@ void OrderStage::Release()
   std::vector<std::size_t>().swap(this->GroupStarts);
   std::vector<std::size_t>().swap(this->GroupCounts);
   this->GroupedVersion = 0;
-  std::vector<SortKey>().swap(this->Sorted);
-  std::vector<std::uint32_t>().swap(this->Ranks);
+  LargeVector<SortKey>().swap(this->Sorted);
+  LargeVector<std::uint32_t>().swap(this->Ranks);
   this->Sorter = MakeVisibilityOrder(this->Sorter->Method(), this->SorterMaxSubArraySize);
   this->Record.Forget();
 }

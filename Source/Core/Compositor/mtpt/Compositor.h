@@ -56,6 +56,7 @@
 #ifndef mtpt_Compositor_h
 #define mtpt_Compositor_h
 
+#include "mtpt/LargeBuffer.h"
 #include "mtpt/Lighting.h"
 #include "mtpt/MeshView.h"
 #include "mtpt/Records.h"
@@ -249,13 +250,13 @@ private:
   CompositeSettings Settings;
   CompositorStats Statistics;
   int TilesX = 0, TilesY = 0;
-  std::vector<float> Image;              ///< per tile: R, G, B, A planes
+  LargeVector<float> Image;              ///< per tile: R, G, B, A planes
   std::vector<std::uint8_t> Cleared;     ///< per tile: cleared since Begin
-  std::vector<TileRange> Ranges;         ///< per fan of the last Composite
-  std::vector<std::uint8_t> Straddles;   ///< per fan of the last Composite: cut by a plane
+  LargeVector<TileRange> Ranges;         ///< per fan of the last Composite
+  LargeVector<std::uint8_t> Straddles;   ///< per fan of the last Composite: cut by a plane
   std::vector<std::uint32_t> Counts;     ///< per (block, tile): pairs, then the block's cursor
   std::vector<std::size_t> TileStart;    ///< per tile: its first entry (tiles + 1 values)
-  std::vector<std::uint32_t> Entries;    ///< fans of the last Composite, tile by tile, in order
+  LargeVector<std::uint32_t> Entries;    ///< fans of the last Composite, tile by tile, in order
   std::vector<int> Tiles;                ///< tiles with fans in the last Composite
   std::vector<PixelRegion> BlockTouched; ///< per binning block: the region its fans touch
   std::vector<std::size_t> BlockBinned;  ///< per binning block: its fans that touch the image

@@ -37,6 +37,7 @@
 #include "mtpt/Decompose.h"
 #include "mtpt/DepthKeys.h"
 #include "mtpt/FramePlan.h"
+#include "mtpt/LargeBuffer.h"
 #include "mtpt/LevelOfDetail.h"
 #include "mtpt/Lighting.h"
 #include "mtpt/NearPlane.h"
@@ -305,14 +306,14 @@ public:
   std::size_t SortedCount() const { return SortedSize; }
   /// Slots in the buffers: the last batch decomposed.
   std::size_t TetrahedronCount() const { return BatchCount; }
-  const std::vector<ProjectedPoint>& Points() const { return this->Transform.Points(); }
+  const LargeVector<ProjectedPoint>& Points() const { return this->Transform.Points(); }
   /// The order: SortedCount() keys, back to front.
-  const std::vector<SortKey>& Keys() const { return this->Order.Keys(); }
-  const std::vector<TetVertex>& Vertices() const { return this->Slots.Vertices(); }
-  const std::vector<std::uint32_t>& Indices() const { return this->Slots.Indices(); }
+  const LargeVector<SortKey>& Keys() const { return this->Order.Keys(); }
+  const LargeVector<TetVertex>& Vertices() const { return this->Slots.Vertices(); }
+  const LargeVector<std::uint32_t>& Indices() const { return this->Slots.Indices(); }
 
   /// Fans of the last DecomposeFans.
-  const std::vector<Fan>& Fans() const { return this->FanBuffers.Fans(); }
+  const LargeVector<Fan>& Fans() const { return this->FanBuffers.Fans(); }
   std::size_t FanCount() const { return FanBatchCount; }
   /// Changes whenever the fans' content changes (as BufferVersion for the slots).
   std::uint64_t FanVersion() const { return this->FanBuffers.Version(); }

@@ -15,6 +15,7 @@
 #ifndef mtpt_Culling_h
 #define mtpt_Culling_h
 
+#include "mtpt/LargeBuffer.h"
 #include "mtpt/MeshView.h"
 #include "mtpt/Stage.h"
 #include "mtpt/TransferFunctionTable.h"
@@ -141,7 +142,7 @@ public:
   std::size_t MemoryBytes() const override;
 
 private:
-  std::vector<std::uint32_t> List;
+  LargeVector<std::uint32_t> List;
   OpacityCulling Opacity;
 };
 

@@ -29,6 +29,7 @@
 #ifndef mtpt_Decompose_h
 #define mtpt_Decompose_h
 
+#include "mtpt/LargeBuffer.h"
 #include "mtpt/MeshView.h"
 #include "mtpt/NearPlane.h"
 #include "mtpt/Records.h"
@@ -266,7 +267,7 @@ protected:
   bool Run(const Key& key, const DecomposeInput& input, const std::uint32_t* rank,
     const std::vector<NearPiece>& pieces, int threads, Cells&& cells, Piece&& piece);
 
-  std::vector<ProjectionClass> Classes; ///< per slot of the window
+  LargeVector<ProjectionClass> Classes; ///< per slot of the window
   std::size_t CoversNoPixel = 0, Undrawable = 0;
 };
 
@@ -277,14 +278,14 @@ class SlotStage : public DecompositionStage
 public:
   bool Update(const Key& key, const DecomposeInput& input, const std::uint32_t* rank,
     const std::vector<NearPiece>& pieces, int threads);
-  const std::vector<TetVertex>& Vertices() const { return this->VertexBuffer; }
-  const std::vector<std::uint32_t>& Indices() const { return this->IndexBuffer; }
+  const LargeVector<TetVertex>& Vertices() const { return this->VertexBuffer; }
+  const LargeVector<std::uint32_t>& Indices() const { return this->IndexBuffer; }
   void Release() override;
   std::size_t MemoryBytes() const override;
 
 private:
-  std::vector<TetVertex> VertexBuffer;
-  std::vector<std::uint32_t> IndexBuffer;
+  LargeVector<TetVertex> VertexBuffer;
+  LargeVector<std::uint32_t> IndexBuffer;
 };
 
 /// The CPU compositor's input: one fan per tetrahedron.
@@ -293,12 +294,12 @@ class FanStage : public DecompositionStage
 public:
   bool Update(const Key& key, const DecomposeInput& input, const std::uint32_t* rank,
     const std::vector<NearPiece>& pieces, int threads);
-  const std::vector<Fan>& Fans() const { return this->FanBuffer; }
+  const LargeVector<Fan>& Fans() const { return this->FanBuffer; }
   void Release() override;
   std::size_t MemoryBytes() const override;
 
 private:
-  std::vector<Fan> FanBuffer;
+  LargeVector<Fan> FanBuffer;
 };
 
 } // namespace mtpt

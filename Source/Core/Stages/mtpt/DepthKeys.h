@@ -16,6 +16,7 @@
 #ifndef mtpt_DepthKeys_h
 #define mtpt_DepthKeys_h
 
+#include "mtpt/LargeBuffer.h"
 #include "mtpt/MeshView.h"
 #include "mtpt/Records.h"
 #include "mtpt/Stage.h"
@@ -103,12 +104,12 @@ public:
     const CellsView& cells, const std::uint32_t* list, std::size_t listCount, int threads);
 
   /// The keys; not to be read while Consumed().
-  const std::vector<SortKey>& Keys() const { return this->Kept; }
+  const LargeVector<SortKey>& Keys() const { return this->Kept; }
   /**
    * The keys' buffer, to move the keys out of and to use as scratch: it holds no particular
    * values afterwards, and Consumed() is true until the keys are computed again.
    */
-  std::vector<SortKey>& Consume()
+  LargeVector<SortKey>& Consume()
   {
     this->Used = true;
     return this->Kept;
@@ -120,7 +121,7 @@ public:
   std::size_t MemoryBytes() const override { return this->Kept.capacity() * sizeof(SortKey); }
 
 private:
-  std::vector<SortKey> Kept;
+  LargeVector<SortKey> Kept;
   KeyCounts Count;
   bool Used = false; ///< Consume was called since the keys were computed
 };

@@ -22,6 +22,7 @@
 #ifndef mtpt_LevelOfDetail_h
 #define mtpt_LevelOfDetail_h
 
+#include "mtpt/LargeBuffer.h"
 #include "mtpt/MeshView.h"
 #include "mtpt/Stage.h"
 
@@ -148,8 +149,8 @@ public:
 
 private:
   StageRecord<MeshKey> LevelsRecord;
-  std::vector<std::uint8_t> Levels; ///< ComputeKeptLevels, a byte a cell
-  std::vector<std::uint32_t> List;  ///< the subset: Count cells
+  LargeVector<std::uint8_t> Levels; ///< ComputeKeptLevels, a byte a cell
+  LargeVector<std::uint32_t> List;  ///< the subset: Count cells
   const std::uint32_t* Visible = nullptr;
   std::size_t VisibleCount = 0, Count = 0;
   bool Passed = true;

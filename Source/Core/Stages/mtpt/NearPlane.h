@@ -18,6 +18,7 @@
 #ifndef mtpt_NearPlane_h
 #define mtpt_NearPlane_h
 
+#include "mtpt/LargeBuffer.h"
 #include "mtpt/MeshView.h"
 #include "mtpt/Records.h"
 #include "mtpt/Stage.h"
@@ -93,7 +94,7 @@ class NearPlaneStage : public StageOf<NearPlaneKey>
 public:
   /// Cuts the cells of `keys` unless that was done for `key`; true when it computed.
   /// `colours`: FrameInput::colours (null without dependent components).
-  bool Update(const Key& key, const std::vector<SortKey>& keys, const ProjectedPoint* points,
+  bool Update(const Key& key, const LargeVector<SortKey>& keys, const ProjectedPoint* points,
     std::size_t pointCount, const CellsView& cells, const ScalarsView& scalars,
     const float* colours, const Matrix4& projection, bool perspective, int threads);
 
@@ -104,7 +105,7 @@ public:
   /// The pieces; piece j has cell id cellCount + j.
   const std::vector<NearPiece>& Pieces() const { return this->Made; }
   /// The pieces' keys, sorted.
-  const std::vector<SortKey>& PieceKeys() const { return this->Keys; }
+  const LargeVector<SortKey>& PieceKeys() const { return this->Keys; }
   /// Cells cut by the plane.
   std::size_t Clipped() const { return this->ClippedCells; }
   void Release() override;
@@ -118,17 +119,17 @@ private:
     InFront   ///< wholly in front of the plane: dropped
   };
   /// Each key's verdict (parallel); false when no point is in front of the plane at all.
-  bool Classify(const std::vector<SortKey>& keys, const ProjectedPoint* points,
+  bool Classify(const LargeVector<SortKey>& keys, const ProjectedPoint* points,
     std::size_t pointCount, const CellsView& cells, const ScalarsView& scalars,
     const NearPlane& plane, int threads);
   /// Cuts the crossing cells in order (deterministic piece ids) and makes the pieces' keys.
-  void CutCrossing(const std::vector<SortKey>& keys, const ProjectedPoint* points,
+  void CutCrossing(const LargeVector<SortKey>& keys, const ProjectedPoint* points,
     std::size_t pointCount, const CellsView& cells, const ScalarsView& scalars,
     const float* colours, const NearPlane& plane, const Matrix4& projection, bool perspective);
 
-  std::vector<std::uint8_t> Verdicts; ///< per depth key
+  LargeVector<std::uint8_t> Verdicts; ///< per depth key
   std::vector<NearPiece> Made;
-  std::vector<SortKey> Keys;
+  LargeVector<SortKey> Keys;
   bool Cut = false;
   std::size_t ClippedCells = 0;
 };

@@ -18,6 +18,7 @@
 #ifndef mtpt_Transform_h
 #define mtpt_Transform_h
 
+#include "mtpt/LargeBuffer.h"
 #include "mtpt/MeshView.h"
 #include "mtpt/Records.h"
 
@@ -63,7 +64,7 @@ public:
   bool Update(const Key& key, const PointsView& points, const ScalarsView& scalars, int threads);
 
   /// One record per point (valid after Update; the vector may be longer than the mesh).
-  const std::vector<ProjectedPoint>& Points() const { return this->Projected; }
+  const LargeVector<ProjectedPoint>& Points() const { return this->Projected; }
   /// Frees the records.
   void Release() override;
   std::size_t MemoryBytes() const override
@@ -72,7 +73,7 @@ public:
   }
 
 private:
-  std::vector<ProjectedPoint> Projected; ///< grows to the largest mesh and is reused
+  LargeVector<ProjectedPoint> Projected; ///< grows to the largest mesh and is reused
 };
 
 } // namespace mtpt

@@ -11,6 +11,7 @@
 #define mtpt_VisibilityOrder_h
 
 #include "mtpt/DepthKeys.h"
+#include "mtpt/LargeBuffer.h"
 #include "mtpt/NearPlane.h"
 #include "mtpt/Stage.h"
 
@@ -63,12 +64,12 @@ public:
    * has a buffer of keys of its own for other work lends it instead of holding two.
    */
   virtual void Sort(
-    SortKey* keys, std::size_t count, int threads, std::vector<SortKey>& scratch) = 0;
+    SortKey* keys, std::size_t count, int threads, LargeVector<SortKey>& scratch) = 0;
   /// Bytes of scratch memory the object holds.
   virtual std::size_t MemoryBytes() const { return this->OwnScratch.capacity() * sizeof(SortKey); }
 
 private:
-  std::vector<SortKey> OwnScratch; ///< the scratch of Sort without one lent
+  LargeVector<SortKey> OwnScratch; ///< the scratch of Sort without one lent
 };
 
 /// Default sub-array threshold MAX of the partition sort.
@@ -188,16 +189,16 @@ public:
    * sweep, and no rank array. `candidates` as for Invert (null: cells [0, meshCells)).
    */
   void Group(std::size_t ranksPerGroup, std::size_t meshCells, const std::uint32_t* candidates,
-    std::size_t candidateCount, std::vector<SortKey>& storage, int threads);
+    std::size_t candidateCount, LargeVector<SortKey>& storage, int threads);
   /// The entries of Group's `storage` for the groups that overlap ranks
   /// [first, first + count), and their number.
   const SortKey* CellsOfRanks(std::size_t first, std::size_t count,
-    const std::vector<SortKey>& storage, std::size_t& cells) const;
+    const LargeVector<SortKey>& storage, std::size_t& cells) const;
   /// The most groups an order is split into.
   static constexpr std::size_t MaxGroups = 256;
 
   /// The order: Count() keys, back to front.
-  const std::vector<SortKey>& Keys() const { return this->Sorted; }
+  const LargeVector<SortKey>& Keys() const { return this->Sorted; }
   std::size_t Count() const { return this->Sorted.size(); }
   /// Rank of each cell id in the order (NotInOrder for cells left out), after Invert.
   const std::uint32_t* Rank() const { return this->Ranks.data(); }
@@ -208,14 +209,14 @@ public:
   std::size_t MemoryBytes() const override;
 
 private:
-  bool SortFromPrevious(std::vector<SortKey>& scratch, int threads);
+  bool SortFromPrevious(LargeVector<SortKey>& scratch, int threads);
   void Mutate(OrderMutation mutation);
 
   std::unique_ptr<VisibilityOrder> Sorter;
   std::size_t SorterMaxSubArraySize = DefaultMaxSubArraySize;
   Cells Held; ///< the cells of the held order
-  std::vector<SortKey> Sorted;
-  std::vector<std::uint32_t> Ranks;
+  LargeVector<SortKey> Sorted;
+  LargeVector<std::uint32_t> Ranks;
   /// Group's first entry of each group (and the end), the counts that place them, and the
   /// order's version they were made for (0: none).
   std::vector<std::size_t> GroupStarts, GroupCounts;
