@@ -244,7 +244,8 @@ def large_table(rows):
              "CPU stages, ms (tetrahedra a second) | "
              "rasterization, ms (ns per fragment and core) | fragments | moving at "
              f"{rows[0]['moving_rate']:g} fps asked: ms, cells drawn, sample distance | "
-             "grid, MiB | MTPT's buffers, MiB (bytes per tetrahedron) | peak resident, MiB | "
+             "grid, MiB | MTPT's buffers, MiB (bytes per tetrahedron): full frames; moving "
+             "frames | peak resident, MiB: full; moving | "
              "VTK's PT, ms (peak MiB) | VTK's PT / MTPT |",
              "|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|"]
     for r in rows:
@@ -258,8 +259,9 @@ def large_table(rows):
             f"({tets / r['cpu_stages_ms'] / 1e3:.1f}M) | {ms(r['raster_ms'])} ({ns:.1f}) | "
             f"{r['fragments'] / 1e6:.0f}M | {ms(r['moving_ms'])}, "
             f"{100 * r['moving_cell_fraction']:.2g}%, {r['moving_sample_distance']:.2f} | "
-            f"{r['grid_mib']:.0f} | {r['mtpt_mib']:.0f} ({r['mtpt_mib'] * 2**20 / tets:.0f}) | "
-            f"{r['mtpt_peak_mib']:.0f} | {pt} | {ratio} |")
+            f"{r['grid_mib']:.0f} | {r['mtpt_mib']:.0f} ({r['mtpt_mib'] * 2**20 / tets:.0f}); "
+            f"{r['moving_mtpt_mib']:.0f} ({r['moving_mtpt_mib'] * 2**20 / tets:.0f}) | "
+            f"{r['mtpt_peak_mib']:.0f}; {r['moving_peak_mib']:.0f} | {pt} | {ratio} |")
     return lines
 
 
