@@ -23,6 +23,9 @@
 #include "vtkDataArrayRange.h"
 #include "vtkInformation.h"
 #include "vtkMath.h"
+#include "vtkMatrix4x4.h"
+#include "vtkMultiBlockDataSet.h"
+#include "vtkNew.h"
 #include "vtkObjectFactory.h"
 #include "vtkOpenGLRenderWindow.h"
 #include "vtkPlaneCollection.h"
@@ -31,6 +34,7 @@
 #include "vtkRenderer.h"
 #include "vtkUnstructuredGridBase.h"
 #include "vtkVolume.h"
+#include "vtkVolumeCollection.h"
 #include "vtkVolumeProperty.h"
 #include "vtkWeakPointer.h"
 #include "vtksys/SystemInformation.hxx"
@@ -122,6 +126,10 @@ public:
   vtkVolume* PeelVolume = nullptr;
   mtpt::OpenGLBackend OpenGL;
   mtpt::CPUBackend CPU;
+  /// The inputs of the volumes this mapper draws together (CompositeWithOtherVolumes), kept
+  /// from frame to frame while they are the same objects.
+  vtkNew<vtkMultiBlockDataSet> Group;
+  std::vector<vtkDataObject*> GroupMembers;
 
   // The window whose context owns the backends' OpenGL objects. Weak: a window destroyed
   // while this mapper was not in it must not be touched again.
@@ -612,8 +620,92 @@ int vtkMultiThreadedProjectedTetrahedraMapper::FillInputPortInformation(
   return 1;
 }
 
+namespace
+{
+/// Said once when two MTPT volumes of a renderer cannot be drawn together.
+const char* const SeparateVolumesWarning =
+  "another volume of this renderer drawn by a vtkMultiThreadedProjectedTetrahedraMapper has a "
+  "vtkVolumeProperty or a matrix of its own: the two are drawn one after the other, as VTK "
+  "draws volumes, so where their cells interleave in depth one lies wrongly over the other. "
+  "Volumes that share one property object and one matrix are composited in one visibility "
+  "order (SetCompositeWithOtherVolumes)";
+
+/// Whether two volumes are placed by the same matrix.
+bool SameMatrix(vtkVolume* a, vtkVolume* b)
+{
+  const double* x = a->GetMatrix()->GetData();
+  const double* y = b->GetMatrix()->GetData();
+  return std::equal(x, x + 16, y);
+}
+} // namespace
+
+vtkDataObject* vtkMultiThreadedProjectedTetrahedraMapper::GroupInput(
+  vtkRenderer* renderer, vtkVolume* volume)
+{
+  Internals& in = *this->Internal;
+  vtkDataObject* own = this->GetInputDataObject(0, 0);
+  if (!this->CompositeWithOtherVolumes)
+  {
+    return own;
+  }
+  // The renderer's visible MTPT volumes that composite with others, in its order: those of
+  // this volume's property and matrix are drawn together by the first of them. A volume the
+  // renderer's culler left out of this frame (wholly outside the view: its render time
+  // multiplier 0) is not drawn, so it neither leads a group nor adds cells to one.
+  std::vector<vtkVolume*> members;
+  vtkVolumeCollection* volumes = renderer->GetVolumes();
+  vtkCollectionSimpleIterator it;
+  volumes->InitTraversal(it);
+  while (vtkVolume* other = volumes->GetNextVolume(it))
+  {
+    auto* mapper = vtkMultiThreadedProjectedTetrahedraMapper::SafeDownCast(other->GetMapper());
+    if (!other->GetVisibility() || !(other->GetRenderTimeMultiplier() > 0) || !mapper ||
+      !mapper->CompositeWithOtherVolumes || !mapper->GetInputDataObject(0, 0))
+    {
+      continue;
+    }
+    if (other->GetProperty() == volume->GetProperty() && SameMatrix(other, volume))
+    {
+      members.push_back(other);
+    }
+    else if (other != volume && in.Report(other, SeparateVolumesWarning))
+    {
+      vtkWarningMacro(<< SeparateVolumesWarning);
+    }
+  }
+  if (members.size() <= 1 || std::find(members.begin(), members.end(), volume) == members.end())
+  {
+    return own; // alone, or not among the renderer's volumes (drawn by another prop)
+  }
+  if (members.front() != volume)
+  {
+    return nullptr; // the first of the group draws this volume's cells with its own
+  }
+  std::vector<vtkDataObject*> inputs;
+  for (vtkVolume* member : members)
+  {
+    auto* mapper = static_cast<vtkMultiThreadedProjectedTetrahedraMapper*>(member->GetMapper());
+    if (mapper != this)
+    {
+      mapper->Update(); // its input as of this frame, as its own GetBounds brings it
+    }
+    inputs.push_back(mapper->GetInputDataObject(0, 0));
+  }
+  if (inputs != in.GroupMembers)
+  {
+    in.Group->Initialize();
+    in.Group->SetNumberOfBlocks(static_cast<unsigned int>(inputs.size()));
+    for (unsigned int b = 0; b < inputs.size(); ++b)
+    {
+      in.Group->SetBlock(b, inputs[b]);
+    }
+    in.GroupMembers = inputs;
+  }
+  return in.Group;
+}
+
 bool vtkMultiThreadedProjectedTetrahedraMapper::PrepareInput(
-  vtkVolumeProperty* property, mtpt::FrameInput& frame)
+  vtkDataObject* input, vtkVolumeProperty* property, mtpt::FrameInput& frame)
 {
   Internals& in = *this->Internal;
   // Problems are reported once per change of what they are about, not every frame.
@@ -631,7 +723,7 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::PrepareInput(
       }
     }
   };
-  if (!in.Source.Update(this->GetInputDataObject(0, 0), this, property, report))
+  if (!in.Source.Update(input, this, property, report))
   {
     return false;
   }
@@ -708,8 +800,14 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
     return;
   }
   this->MoveToWindow(window);
+  vtkDataObject* input = this->GroupInput(renderer, volume);
+  if (!input)
+  {
+    this->TimeToDraw = 0; // drawn by the first volume of its group
+    return;
+  }
   mtpt::FrameInput frame;
-  if (!this->PrepareInput(volume->GetProperty(), frame))
+  if (!this->PrepareInput(input, volume->GetProperty(), frame))
   {
     return;
   }
@@ -1096,6 +1194,7 @@ void vtkMultiThreadedProjectedTetrahedraMapper::PrintSelf(ostream& os, vtkIndent
   os << indent << "MemoryLimit: " << this->MemoryLimit
      << (this->MemoryLimit == 0 ? " (the memory available)" : "") << "\n";
   os << indent << "ReuseResults: " << this->ReuseResults << "\n";
+  os << indent << "CompositeWithOtherVolumes: " << this->CompositeWithOtherVolumes << "\n";
   os << indent << "CullInvisibleCells: " << this->CullInvisibleCells << "\n";
   os << indent << "ImageSampleDistance: " << this->ImageSampleDistance << "\n";
   os << indent << "MinimumImageSampleDistance: " << this->MinimumImageSampleDistance << "\n";

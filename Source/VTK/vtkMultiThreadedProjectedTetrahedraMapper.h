@@ -264,6 +264,22 @@ public:
 
   ///@{
   /**
+   * Several volumes in one picture (default on). The visible volumes of a renderer whose
+   * mappers are MTPT mappers with this on, and that share this volume's property object and
+   * matrix, are drawn together: the first of them in the renderer's order draws the cells of
+   * all their inputs in one visibility order, with its own mapper's settings, and the others
+   * draw nothing. Where their cells interleave in depth the picture is then right, which
+   * drawing them one after the other (VTK's way) cannot give. Volumes with another property
+   * or matrix are drawn one after the other, with a warning once. Off: this volume is drawn
+   * by itself, as VTK draws every volume.
+   */
+  vtkSetMacro(CompositeWithOtherVolumes, bool);
+  vtkGetMacro(CompositeWithOtherVolumes, bool);
+  vtkBooleanMacro(CompositeWithOtherVolumes, bool);
+  ///@}
+
+  ///@{
+  /**
    * Sampling distance in the image, in pixels, as vtkUnstructuredGridVolumeRayCastMapper's:
    * 1 (the default) composites one sample per pixel; 2 one per 2 x 2 pixels (the image is
    * floor(viewport / 2) pixels on each side, stretched over the viewport with bilinear
@@ -453,6 +469,7 @@ protected:
   vtkIdType BatchSize = 1 << 20;
   vtkIdType MemoryLimit = 0;
   bool ReuseResults = true;
+  bool CompositeWithOtherVolumes = true;
   bool CullInvisibleCells = true;
   float ImageSampleDistance = 1.0f;
   float MinimumImageSampleDistance = 1.0f;
@@ -497,7 +514,13 @@ private:
 
   // The steps of Render: the glue between VTK, the core's frame pipeline and a backend.
   void MoveToWindow(vtkOpenGLRenderWindow* window);
-  bool PrepareInput(vtkVolumeProperty* property, mtpt::FrameInput& frame);
+  bool PrepareInput(vtkDataObject* input, vtkVolumeProperty* property, mtpt::FrameInput& frame);
+  /**
+   * What this frame draws for `volume` (CompositeWithOtherVolumes): its own input, the
+   * inputs of the volumes drawn with it as one composite data set, or null when another
+   * mapper of its group draws it.
+   */
+  vtkDataObject* GroupInput(vtkRenderer* renderer, vtkVolume* volume);
   bool DrawPrepared(vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window,
     mtpt::FrameInput& frame);
   mtpt::RenderBackend* ChooseBackend();

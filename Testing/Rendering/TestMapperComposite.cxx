@@ -31,6 +31,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -205,6 +206,121 @@ TEST_P(MapperComposite, InterleavedBlocksMatchTheMergedGridAndItsExactReference)
     EXPECT_GT(vtk.coveredRmse, 2 * mine.coveredRmse) << "VTK's blockwise order is visibly wrong";
     EXPECT_GT(CoveredFraction(ours, Background), 0.2);
   }
+}
+
+/**
+ * The blocks of `scene` as volumes of their own in one renderer, each drawn by a mapper of
+ * its own (`together`: SetCompositeWithOtherVolumes), sharing `property` or each with a copy
+ * of it; the image. Warnings go to `observer`.
+ */
+vtkSmartPointer<vtkImageData> DrawVolumes(const Parts& scene, int backend, bool together,
+  bool shared, MessageObserver* observer = nullptr, std::vector<vtkIdType>* drawn = nullptr)
+{
+  auto property = MakeProperty(-0.3, 1.3, 0.3);
+  std::vector<vtkSmartPointer<Mapper>> mappers;
+  for (std::size_t b = 0; b < scene.blocks.size(); ++b)
+  {
+    auto mapper = vtkSmartPointer<Mapper>::New();
+    mapper->SetBackend(backend);
+    mapper->SetCompositeWithOtherVolumes(together);
+    if (observer)
+    {
+      mapper->AddObserver(vtkCommand::WarningEvent, observer);
+      mapper->AddObserver(vtkCommand::ErrorEvent, observer);
+    }
+    mappers.push_back(mapper);
+  }
+  Stage stage = MakeStage(scene.blocks[0], property, mappers[0], 220, 220);
+  for (std::size_t b = 1; b < scene.blocks.size(); ++b)
+  {
+    mappers[b]->SetInputData(scene.blocks[b]);
+    vtkNew<vtkVolume> volume;
+    volume->SetMapper(mappers[b]);
+    if (shared)
+    {
+      volume->SetProperty(property);
+    }
+    else
+    {
+      auto copy = MakeProperty(-0.3, 1.3, 0.3); // the same functions, another object
+      volume->SetProperty(copy);
+    }
+    stage.renderer->AddVolume(volume);
+  }
+  SetView(stage.renderer, { scene.azimuth, scene.elevation }, true);
+  stage.window->Render();
+  stage.window->Render(); // a second frame: the group kept, no warning again
+  auto image = Grab(stage.window, false);
+  for (const auto& mapper : mappers)
+  {
+    if (drawn)
+    {
+      drawn->push_back(mapper->GetNumberOfTetrahedra());
+    }
+    mapper->ReleaseGraphicsResources(stage.window);
+  }
+  return image;
+}
+
+TEST_P(MapperComposite, VolumesSharingAPropertyAreOnePictureOfTheirCells)
+{
+  // A mesh split into two volumes (interleaved slabs; an inner block in a shell), one
+  // property: drawn together they are the merged grid drawn as one volume; drawn one after
+  // the other, as VTK draws volumes, they are visibly wrong.
+  for (const Parts& scene : InterleavedScenes())
+  {
+    SCOPED_TRACE(scene.name);
+    vtkNew<Mapper> single;
+    single->SetBackend(GetParam());
+    Stage stage;
+    auto whole = Draw(scene.merged, single, scene, &stage);
+    auto exact = ReferenceImage(stage, scene.merged);
+    single->ReleaseGraphicsResources(stage.window);
+
+    auto observer = vtkSmartPointer<MessageObserver>::New();
+    std::vector<vtkIdType> drawn;
+    auto together = DrawVolumes(scene, GetParam(), true, true, observer, &drawn);
+    EXPECT_TRUE(observer->warnings.empty());
+    EXPECT_TRUE(observer->errors.empty());
+    // The first volume's mapper drew every cell of both; the other drew none.
+    ASSERT_EQ(drawn.size(), 2u);
+    EXPECT_EQ(drawn[0], scene.merged->GetNumberOfCells());
+    EXPECT_EQ(drawn[1], 0);
+    auto apart = DrawVolumes(scene, GetParam(), false, true);
+
+    const ImageDifference same = Compare(together, whole), wrong = Compare(apart, whole);
+    std::printf("%s: covered-pixel RMSE against one volume of all the cells: drawn together "
+                "%.5f (worst %.4f), one after the other %.4f (worst %.3f); against the exact "
+                "reference: together %.4f, apart %.4f\n",
+      scene.name.c_str(), same.coveredRmse, same.worst, wrong.coveredRmse, wrong.worst,
+      Compare(together, exact).coveredRmse, Compare(apart, exact).coveredRmse);
+    EXPECT_LT(same.coveredRmse, 1.0 / 255);
+    EXPECT_LT(same.worst, 4.0 / 255);
+    EXPECT_GT(wrong.coveredRmse, 2.0 / 255) << "one volume after the other is visibly wrong";
+    EXPECT_GT(wrong.worst, 10.0 / 255);
+    EXPECT_GT(CoveredFraction(together, Background), 0.2);
+  }
+}
+
+TEST_P(MapperComposite, VolumesOfTheirOwnPropertiesAreDrawnApartWithOneWarning)
+{
+  // Two properties (equal functions, two objects): not one picture; each mapper says so
+  // once, over two frames, and draws its own cells as VTK would.
+  const Parts scene = InterleavedScenes()[1];
+  auto observer = vtkSmartPointer<MessageObserver>::New();
+  std::vector<vtkIdType> drawn;
+  auto image = DrawVolumes(scene, GetParam(), true, false, observer, &drawn);
+  EXPECT_TRUE(observer->errors.empty());
+  EXPECT_EQ(observer->warnings.size(), 2u); // one from each mapper
+  for (const std::string& w : observer->warnings)
+  {
+    EXPECT_NE(w.find("one after the other"), std::string::npos) << w;
+  }
+  ASSERT_EQ(drawn.size(), 2u);
+  EXPECT_EQ(drawn[0], scene.blocks[0]->GetNumberOfCells());
+  EXPECT_EQ(drawn[1], scene.blocks[1]->GetNumberOfCells());
+  EXPECT_EQ(Compare(image, DrawVolumes(scene, GetParam(), false, true)).worst, 0.0)
+    << "drawn apart, as with the switch off";
 }
 
 TEST_P(MapperComposite, EveryKindOfTreeDrawsTheSameImage)
