@@ -465,10 +465,10 @@ void CheckFrame(const mtpt::FramePipeline& pipeline, const mtpt::FrameInput& fra
 
   // Keys: strictly ascending (back to front), distinct cells or pieces, and each cell's key
   // the depth of its centroid (DepthKeys.h) recomputed here from the projected points.
-  const std::vector<mtpt::SortKey>& keys = pipeline.Keys();
+  const mtpt::LargeVector<mtpt::SortKey>& keys = pipeline.Keys();
   FUZZ_CHECK(keys.size() >= count, "keys %zu, sorted %zu", keys.size(), count);
   std::vector<std::uint8_t> seen(n + s.nearPieces, 0);
-  const std::vector<mtpt::ProjectedPoint>& points = pipeline.Points();
+  const mtpt::LargeVector<mtpt::ProjectedPoint>& points = pipeline.Points();
   for (std::size_t k = 0; k < count; ++k)
   {
     FUZZ_CHECK(k == 0 || keys[k - 1] < keys[k], "keys %zu and %zu out of order", k - 1, k);
@@ -528,8 +528,8 @@ void CheckFrame(const mtpt::FramePipeline& pipeline, const mtpt::FrameInput& fra
   }
 
   // Buffers: slot k's indices in [5k, 5k + 5); every vertex finite, thickness >= 0.
-  const std::vector<mtpt::TetVertex>& vertices = pipeline.Vertices();
-  const std::vector<std::uint32_t>& indices = pipeline.Indices();
+  const mtpt::LargeVector<mtpt::TetVertex>& vertices = pipeline.Vertices();
+  const mtpt::LargeVector<std::uint32_t>& indices = pipeline.Indices();
   FUZZ_CHECK(vertices.size() >= 5 * count && indices.size() >= 12 * count,
     "buffers %zu vertices, %zu indices for %zu slots", vertices.size(), indices.size(), count);
   for (std::size_t k = 0; k < count; ++k)
