@@ -110,7 +110,8 @@ struct FrameInput
   /// Skip cells entirely outside the view volume before sorting.
   bool cullFrustum = true;
   /// The level of detail of a moving frame: the fraction of the visible cells drawn, a
-  /// CellFractionLevel (LevelOfDetail.h). 1: every cell, the full frame.
+  /// CellFractionLevel (LevelOfDetail.h; another fraction takes its nearest level,
+  /// DetailLevelOf). 1: every cell, the full frame.
   double cellFraction = 1;
   /// False when the blend mode reduces fragments in any order (BlendMode): the cells are
   /// culled as always but kept in cell order, and nothing is sorted.
