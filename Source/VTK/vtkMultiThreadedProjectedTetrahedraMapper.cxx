@@ -126,10 +126,9 @@ public:
   vtkVolume* PeelVolume = nullptr;
   mtpt::OpenGLBackend OpenGL;
   mtpt::CPUBackend CPU;
-  /// The inputs of the volumes this mapper draws together (CompositeWithOtherVolumes), kept
-  /// from frame to frame while they are the same objects.
+  /// The inputs of the volumes this mapper draws together (CompositeWithOtherVolumes), one
+  /// block each, kept from frame to frame while they are the same objects.
   vtkNew<vtkMultiBlockDataSet> Group;
-  std::vector<vtkDataObject*> GroupMembers;
 
   // The window whose context owns the backends' OpenGL objects. Weak: a window destroyed
   // while this mapper was not in it must not be touched again.
@@ -691,15 +690,20 @@ vtkDataObject* vtkMultiThreadedProjectedTetrahedraMapper::GroupInput(
     }
     inputs.push_back(mapper->GetInputDataObject(0, 0));
   }
-  if (inputs != in.GroupMembers)
+  const auto blocks = static_cast<unsigned int>(inputs.size());
+  bool same = in.Group->GetNumberOfBlocks() == blocks;
+  for (unsigned int b = 0; b < blocks && same; ++b)
+  {
+    same = in.Group->GetBlock(b) == inputs[b];
+  }
+  if (!same)
   {
     in.Group->Initialize();
-    in.Group->SetNumberOfBlocks(static_cast<unsigned int>(inputs.size()));
-    for (unsigned int b = 0; b < inputs.size(); ++b)
+    in.Group->SetNumberOfBlocks(blocks);
+    for (unsigned int b = 0; b < blocks; ++b)
     {
       in.Group->SetBlock(b, inputs[b]);
     }
-    in.GroupMembers = inputs;
   }
   return in.Group;
 }
