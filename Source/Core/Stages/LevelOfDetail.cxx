@@ -279,7 +279,7 @@ bool CellSelectionStage::Update(const Key& key, const PointsView& points, const 
     return levels[c] >= key.level;
   };
   const int blocks = ThreadsForWork(candidates, detail::CellsPerThread, nthreads);
-  std::vector<std::size_t> offsets(static_cast<std::size_t>(blocks) + 1, 0);
+  std::vector<std::size_t> offsets(static_cast<std::size_t>(blocks), 0);
   std::size_t kept = 0;
   detail::CountPlaceScatter(
     candidates, blocks, blocks,

@@ -18,11 +18,18 @@ std::align_val_t SmallAlignment(std::size_t alignment)
 {
   return std::align_val_t(std::max(alignment, alignof(std::max_align_t)));
 }
+
+/// Whether a block takes the huge-page path (else operator new's); allocation and release
+/// must decide alike.
+bool OnHugePages(std::size_t bytes, std::size_t alignment)
+{
+  return bytes >= HugePageBytes && alignment <= HugePageBytes;
+}
 } // namespace
 
 void* AllocateLargeBuffer(std::size_t bytes, std::size_t alignment)
 {
-  if (bytes < HugePageBytes || alignment > HugePageBytes)
+  if (!OnHugePages(bytes, alignment))
   {
     return ::operator new(bytes, SmallAlignment(alignment));
   }
@@ -48,7 +55,7 @@ void FreeLargeBuffer(void* block, std::size_t bytes, std::size_t alignment) noex
   {
     return;
   }
-  if (bytes < HugePageBytes || alignment > HugePageBytes)
+  if (!OnHugePages(bytes, alignment))
   {
     ::operator delete(block, SmallAlignment(alignment));
     return;

@@ -12,8 +12,8 @@
  * rank; the compositor gathers a tile's fans). Past the caches every such access also needs
  * its page's translation, and with 4 KiB pages a gigabyte takes 262,144 of them, far more
  * than the processor's translation buffers hold; 2 MiB pages take 512. Where the system
- * keeps transparent huge pages for the regions that ask (Linux's "madvise" setting, Debian's
- * default) or for all, the buffers get them; elsewhere the hint changes nothing. What a
+ * keeps transparent huge pages for the regions that ask (Linux's "madvise" setting) or for
+ * all ("always"), the buffers get them; elsewhere the hint changes nothing. What a
  * buffer holds, and every result, is the same either way.
  */
 #ifndef mtpt_LargeBuffer_h
