@@ -86,6 +86,40 @@ TEST(Transform, MatchesDoubleReferenceForFloatAndDoublePoints)
   EXPECT_EQ(withCellScalars[7].scalar, 0.0f);
 }
 
+TEST(Transform, PartsArePlacedByTheirOwnMatrices)
+{
+  // Two parts, the second with a model matrix of its own: its records are those of its points
+  // projected with model-view times that matrix; the first part's, of model-view alone.
+  const TetMesh mesh = JitteredGrid(4, 5);
+  const std::size_t n = mesh.points.size() / 3;
+  const mtpt::Matrix4 mv = LookAt({ 0.5, 1, 4 }, { 0, 0, 0 }, { 0, 1, 0 });
+  const mtpt::Matrix4 proj = Perspective(40, 1.0, 1.0, 10.0);
+  const mtpt::Matrix4 model =
+    mtpt::Multiply(Scale(1.5, 0.5, 2), LookAt({ 0.2, 0, 1 }, { 0, 0, 0 }, { 0, 1, 0 }));
+  const mtpt::ScalarsView scalars{ mesh.scalars.data(), mtpt::ScalarsView::Association::Points };
+  mtpt::MeshPart parts[2];
+  for (mtpt::MeshPart& part : parts)
+  {
+    part.points = mtpt::PointsView::FromFloat(mesh.points.data(), n);
+  }
+  parts[1].model = &model;
+  mtpt::PointsView points;
+  mtpt::CellsView cells;
+  mtpt::MeshParts(parts, 2, points, cells);
+  std::vector<float> twice(mesh.scalars);
+  twice.insert(twice.end(), mesh.scalars.begin(), mesh.scalars.end());
+  std::vector<mtpt::ProjectedPoint> placed(2 * n), plain(n), moved(n);
+  mtpt::ProjectPoints(points, { twice.data(), scalars.association }, mv, proj, placed.data(), 2);
+  mtpt::ProjectPoints(parts[0].points, scalars, mv, proj, plain.data(), 1);
+  mtpt::ProjectPoints(parts[0].points, scalars, mtpt::Multiply(mv, model), proj, moved.data(), 1);
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    ASSERT_TRUE(SameRecord(placed[i], plain[i])) << i;
+    ASSERT_TRUE(SameRecord(placed[n + i], moved[i])) << i;
+  }
+  EXPECT_FALSE(SameRecord(placed[n + 1], plain[1])) << "the matrix moves the points";
+}
+
 TEST(Transform, FlagsPointsNoCellMayUse)
 {
   const float nan = std::numeric_limits<float>::quiet_NaN();

@@ -34,6 +34,7 @@ TransformKey TransformKeyOf(const FrameInput& input, const MeshKey& mesh)
   key.mesh = mesh;
   key.modelView = input.modelView;
   key.projection = input.projection;
+  key.placement = input.placementVersion;
   return key;
 }
 

@@ -68,8 +68,9 @@ void ProjectPoints(const PointsView& points, const ScalarsView& scalars, const M
     for (std::size_t k = 0; k < points.partCount; ++k)
     {
       const PointsView& part = points.parts[k].points;
+      const Matrix4* model = points.parts[k].model;
       ProjectPoints(part, { pointScalars ? pointScalars + first : nullptr, scalars.association },
-        modelView, projection, out + first, threads);
+        model ? Multiply(modelView, *model) : modelView, projection, out + first, threads);
       first += part.count;
     }
     return;

@@ -126,9 +126,10 @@ struct FrameInput
   const float* normals = nullptr;
   std::uint64_t normalsVersion = 0;
   /// Change counters, read only with reuse on (FramePipeline::SetReuse): change
-  /// `dataVersion` whenever the content of the points, cells or scalars changes, and
-  /// `opacityVersion` whenever the content of the opacity table changes.
-  std::uint64_t dataVersion = 0, opacityVersion = 0;
+  /// `dataVersion` whenever the content of the points, cells or scalars changes,
+  /// `opacityVersion` whenever the content of the opacity table changes, and
+  /// `placementVersion` whenever a part's model matrix (MeshPart::model) changes.
+  std::uint64_t dataVersion = 0, opacityVersion = 0, placementVersion = 0;
 };
 
 /**

@@ -33,7 +33,8 @@ namespace mtpt
 
 /**
  * Projects `points` into `out` (points.count records) with the model-view matrix
- * (view * model) and the projection matrix, and copies point scalars alongside.
+ * (view * model; a part of its own model matrix, MeshPart::model, with model-view times
+ * it) and the projection matrix, and copies point scalars alongside.
  *
  * Thread safety: reentrant; runs on `threads` OpenMP threads (<= 0: all available).
  * Determinism: each record depends only on its own input point: identical for any
@@ -47,9 +48,11 @@ struct TransformKey
 {
   MeshKey mesh;
   Matrix4 modelView{}, projection{};
+  std::uint64_t placement = 0; ///< FrameInput::placementVersion: the parts' model matrices
   bool operator==(const TransformKey& o) const
   {
-    return mesh == o.mesh && modelView == o.modelView && projection == o.projection;
+    return mesh == o.mesh && modelView == o.modelView && projection == o.projection &&
+      placement == o.placement;
   }
 };
 

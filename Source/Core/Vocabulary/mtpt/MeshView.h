@@ -119,6 +119,10 @@ struct MeshPart
 {
   PointsView points; ///< a single part: no nested parts
   CellsView cells;
+  /// The matrix taking the part's points to the mesh's model coordinates, for parts placed
+  /// by matrices of their own (volumes of several transforms drawn as one mesh); null: the
+  /// identity. The caller keeps it alive and unchanged while the views are in use.
+  const Matrix4* model = nullptr;
 };
 
 /// The points and cells of `count` parts as one mesh (the views refer to `parts`, which the
