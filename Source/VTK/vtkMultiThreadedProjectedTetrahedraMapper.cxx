@@ -24,10 +24,10 @@
 #include "vtkInformation.h"
 #include "vtkMath.h"
 #include "vtkMatrix4x4.h"
-#include "vtkMultiBlockDataSet.h"
 #include "vtkNew.h"
 #include "vtkObjectFactory.h"
 #include "vtkOpenGLRenderWindow.h"
+#include "vtkPlane.h"
 #include "vtkPlaneCollection.h"
 #include "vtkOpenGLState.h"
 #include "vtkPoints.h"
@@ -41,6 +41,7 @@
 #include "Basics/OpenGLHeader.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -115,6 +116,8 @@ public:
   mtpt::TransferFunctionTables Tables;
   mtpt::DependentColours Colours; ///< of dependent components
   bool Dependent = false;         ///< the last input has dependent components
+  /// The last input is volumes of several matrices, each placed by its own (GroupVolumes).
+  bool Placed = false;
   /// Shading: each cell's normal (mtpt/Lighting.h), computed for NormalsKey, counted by
   /// NormalsVersion; and the last frame's lighting.
   std::vector<float> Normals;
@@ -126,10 +129,6 @@ public:
   vtkVolume* PeelVolume = nullptr;
   mtpt::OpenGLBackend OpenGL;
   mtpt::CPUBackend CPU;
-  /// The inputs of the volumes this mapper draws together (CompositeWithOtherVolumes), one
-  /// block each, kept from frame to frame while they are the same objects.
-  vtkNew<vtkMultiBlockDataSet> Group;
-
   // The window whose context owns the backends' OpenGL objects. Weak: a window destroyed
   // while this mapper was not in it must not be touched again.
   vtkWeakPointer<vtkRenderWindow> LastWindow;
@@ -621,14 +620,6 @@ int vtkMultiThreadedProjectedTetrahedraMapper::FillInputPortInformation(
 
 namespace
 {
-/// Said once when two MTPT volumes of a renderer cannot be drawn together.
-const char* const SeparateVolumesWarning =
-  "another volume of this renderer drawn by a vtkMultiThreadedProjectedTetrahedraMapper has a "
-  "vtkVolumeProperty or a matrix of its own: the two are drawn one after the other, as VTK "
-  "draws volumes, so where their cells interleave in depth one lies wrongly over the other. "
-  "Volumes that share one property object and one matrix are composited in one visibility "
-  "order (SetCompositeWithOtherVolumes)";
-
 /// Whether two volumes are placed by the same matrix.
 bool SameMatrix(vtkVolume* a, vtkVolume* b)
 {
@@ -636,21 +627,119 @@ bool SameMatrix(vtkVolume* a, vtkVolume* b)
   const double* y = b->GetMatrix()->GetData();
   return std::equal(x, x + 16, y);
 }
+
+/// The rest of the warning given once when two MTPT volumes of a renderer are drawn apart.
+const char* const SeparateVolumesWarning =
+  ": the two are drawn one after the other, as VTK draws volumes, so where their cells "
+  "interleave in depth one lies wrongly over the other. Volumes of one blend mode, shading "
+  "mode, clipping planes and lighting are composited in one visibility order "
+  "(SetCompositeWithOtherVolumes)";
+
+/**
+ * What the volumes drawn together must share: the rest of each mapper's settings are the
+ * first's. One blend mode, shading mode, clipping planes and lighting; one matrix where
+ * shading by lights is on (the cells' normals are taken to the eye by one matrix); and one
+ * property object where a table of several properties cannot serve: blend modes other than
+ * composite (their scalars compare across cells) and dependent components (classified per
+ * property).
+ */
+struct GroupKey
+{
+  std::array<double, 16> matrix{};
+  int blendMode = 0;
+  int shadingMode = 0;
+  double averageRange[2] = { 0, 0 };
+  std::vector<std::array<double, 6>> planes; ///< origin and normal of each clipping plane
+  bool shade = false;
+  double lighting[4] = { 0, 0, 0, 0 };   ///< ambient, diffuse, specular, specular power
+  vtkVolumeProperty* property = nullptr; ///< null: any property
+};
+
+GroupKey GroupKeyOf(vtkVolume* volume, vtkMultiThreadedProjectedTetrahedraMapper* mapper)
+{
+  GroupKey key;
+  std::copy_n(volume->GetMatrix()->GetData(), 16, key.matrix.begin());
+  key.blendMode = mapper->GetBlendMode();
+  key.shadingMode = mapper->GetShadingMode();
+  if (key.blendMode == vtkMultiThreadedProjectedTetrahedraMapper::AVERAGE_INTENSITY_BLEND)
+  {
+    mapper->GetAverageIPScalarRange(key.averageRange);
+  }
+  if (vtkPlaneCollection* planes = mapper->GetClippingPlanes())
+  {
+    for (int i = 0; i < planes->GetNumberOfItems(); ++i)
+    {
+      std::array<double, 6> plane{};
+      planes->GetItem(i)->GetOrigin(plane.data());
+      planes->GetItem(i)->GetNormal(plane.data() + 3);
+      key.planes.push_back(plane);
+    }
+  }
+  vtkVolumeProperty* property = volume->GetProperty();
+  key.shade = property->GetShade(0) != 0;
+  if (key.shade)
+  {
+    key.lighting[0] = property->GetAmbient(0);
+    key.lighting[1] = property->GetDiffuse(0);
+    key.lighting[2] = property->GetSpecular(0);
+    key.lighting[3] = property->GetSpecularPower(0);
+  }
+  if (key.blendMode != vtkMultiThreadedProjectedTetrahedraMapper::COMPOSITE_BLEND ||
+    !property->GetIndependentComponents())
+  {
+    key.property = property;
+  }
+  return key;
+}
+
+/// Why volumes of keys `a` and `b` are drawn apart, or empty when they are drawn together.
+std::string Difference(const GroupKey& a, const GroupKey& b)
+{
+  if (a.matrix != b.matrix && (a.shade || b.shade))
+  {
+    return "a matrix of its own (its position, orientation, scale or user matrix) where "
+           "shading by lights is on (the property's Shade)";
+  }
+  if (a.blendMode != b.blendMode || a.averageRange[0] != b.averageRange[0] ||
+    a.averageRange[1] != b.averageRange[1])
+  {
+    return "another blend mode";
+  }
+  if (a.shadingMode != b.shadingMode)
+  {
+    return "another shading mode (SetShadingMode)";
+  }
+  if (a.planes != b.planes)
+  {
+    return "clipping planes of its own";
+  }
+  if (a.shade != b.shade || !std::equal(a.lighting, a.lighting + 4, b.lighting))
+  {
+    return "a property of other lighting (Shade, Ambient, Diffuse, Specular, SpecularPower)";
+  }
+  if (a.property != b.property)
+  {
+    return "a property of its own, which a blend mode other than composite or dependent "
+           "components (IndependentComponents off) cannot share a table with";
+  }
+  return std::string();
+}
 } // namespace
 
-vtkDataObject* vtkMultiThreadedProjectedTetrahedraMapper::GroupInput(
-  vtkRenderer* renderer, vtkVolume* volume)
+bool vtkMultiThreadedProjectedTetrahedraMapper::GroupVolumes(
+  vtkRenderer* renderer, vtkVolume* volume, std::vector<mtpt::GroupedVolume>& group)
 {
   Internals& in = *this->Internal;
-  vtkDataObject* own = this->GetInputDataObject(0, 0);
+  group.assign(1, { this->GetInputDataObject(0, 0), this, volume->GetProperty() });
   if (!this->CompositeWithOtherVolumes)
   {
-    return own;
+    return true;
   }
   // The renderer's visible MTPT volumes that composite with others, in its order: those of
-  // this volume's property and matrix are drawn together by the first of them. A volume the
-  // renderer's culler left out of this frame (wholly outside the view: its render time
-  // multiplier 0) is not drawn, so it neither leads a group nor adds cells to one.
+  // this volume's key are drawn together by the first of them. A volume the renderer's
+  // culler left out of this frame (wholly outside the view: its render time multiplier 0)
+  // is not drawn, so it neither leads a group nor adds cells to one.
+  const GroupKey key = GroupKeyOf(volume, this);
   std::vector<vtkVolume*> members;
   vtkVolumeCollection* volumes = renderer->GetVolumes();
   vtkCollectionSimpleIterator it;
@@ -659,28 +748,42 @@ vtkDataObject* vtkMultiThreadedProjectedTetrahedraMapper::GroupInput(
   {
     auto* mapper = vtkMultiThreadedProjectedTetrahedraMapper::SafeDownCast(other->GetMapper());
     if (!other->GetVisibility() || !(other->GetRenderTimeMultiplier() > 0) || !mapper ||
-      !mapper->CompositeWithOtherVolumes || !mapper->GetInputDataObject(0, 0))
+      !mapper->CompositeWithOtherVolumes || !mapper->GetInputDataObject(0, 0) ||
+      !other->GetProperty())
     {
       continue;
     }
-    if (other->GetProperty() == volume->GetProperty() && SameMatrix(other, volume))
+    const std::string difference =
+      other == volume ? std::string() : Difference(key, GroupKeyOf(other, mapper));
+    if (difference.empty())
     {
       members.push_back(other);
+      continue;
     }
-    else if (other != volume && in.Report(other, SeparateVolumesWarning))
+    const std::string warning = "another volume of this renderer drawn by a "
+                                "vtkMultiThreadedProjectedTetrahedraMapper has " +
+      difference + SeparateVolumesWarning;
+    if (in.Report(other, warning))
     {
-      vtkWarningMacro(<< SeparateVolumesWarning);
+      vtkWarningMacro(<< warning);
     }
   }
   if (members.size() <= 1 || std::find(members.begin(), members.end(), volume) == members.end())
   {
-    return own; // alone, or not among the renderer's volumes (drawn by another prop)
+    return true; // alone, or not among the renderer's volumes (drawn by another prop)
   }
   if (members.front() != volume)
   {
-    return nullptr; // the first of the group draws this volume's cells with its own
+    return false; // the first of the group draws this volume's cells with its own
   }
-  std::vector<vtkDataObject*> inputs;
+  // Where their matrices differ, each volume's cells are placed by its own matrix and the
+  // frame's model coordinates are world coordinates (SetUpFrame).
+  bool placed = false;
+  for (vtkVolume* member : members)
+  {
+    placed = placed || !SameMatrix(member, volume);
+  }
+  group.clear();
   for (vtkVolume* member : members)
   {
     auto* mapper = static_cast<vtkMultiThreadedProjectedTetrahedraMapper*>(member->GetMapper());
@@ -688,28 +791,15 @@ vtkDataObject* vtkMultiThreadedProjectedTetrahedraMapper::GroupInput(
     {
       mapper->Update(); // its input as of this frame, as its own GetBounds brings it
     }
-    inputs.push_back(mapper->GetInputDataObject(0, 0));
+    group.push_back({ mapper->GetInputDataObject(0, 0), mapper, member->GetProperty(),
+      placed ? member->GetMatrix()->GetData() : nullptr });
   }
-  const auto blocks = static_cast<unsigned int>(inputs.size());
-  bool same = in.Group->GetNumberOfBlocks() == blocks;
-  for (unsigned int b = 0; b < blocks && same; ++b)
-  {
-    same = in.Group->GetBlock(b) == inputs[b];
-  }
-  if (!same)
-  {
-    in.Group->Initialize();
-    in.Group->SetNumberOfBlocks(blocks);
-    for (unsigned int b = 0; b < blocks; ++b)
-    {
-      in.Group->SetBlock(b, inputs[b]);
-    }
-  }
-  return in.Group;
+  return true;
 }
 
 bool vtkMultiThreadedProjectedTetrahedraMapper::PrepareInput(
-  vtkDataObject* input, vtkVolumeProperty* property, mtpt::FrameInput& frame)
+  const std::vector<mtpt::GroupedVolume>& group, vtkVolumeProperty* property,
+  mtpt::FrameInput& frame)
 {
   Internals& in = *this->Internal;
   // Problems are reported once per change of what they are about, not every frame.
@@ -727,15 +817,32 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::PrepareInput(
       }
     }
   };
-  if (!in.Source.Update(input, this, property, report))
+  if (!in.Source.Update(group, report))
   {
     return false;
   }
-  in.Tables.Update(property, in.Source.Range()[0], in.Source.Range()[1]);
+  // One table segment per property object (volumes drawn together may each have one), and
+  // where there are several, each volume's scalars mapped into its segment.
+  std::vector<mtpt::TransferFunctionTables::Segment> segments;
+  for (const mtpt::MeshSource::Segment& segment : in.Source.Segments())
+  {
+    segments.push_back({ segment.property, segment.range[0], segment.range[1] });
+    std::string warning;
+    mtpt::UnitDistance(segment.property, &warning);
+    if (segment.property != property && !warning.empty() && in.Report(segment.property, warning))
+    {
+      vtkWarningMacro(<< warning);
+    }
+  }
+  in.Tables.Update(segments);
+  in.Source.MapToSegments(
+    [&in](int segment, double scalar) { return in.Tables.EntryOf(segment, scalar); });
   frame.points = in.Source.Points();
   frame.cells = in.Source.Cells();
   frame.scalars = in.Source.Scalars();
   frame.dataVersion = in.Source.Version();
+  frame.placementVersion = in.Source.PlacementVersion();
+  in.Placed = group.size() > 1 && group.front().matrix;
   in.Dependent = in.Source.Channels() > 1;
   if (in.Dependent)
   {
@@ -804,14 +911,14 @@ void vtkMultiThreadedProjectedTetrahedraMapper::Render(vtkRenderer* renderer, vt
     return;
   }
   this->MoveToWindow(window);
-  vtkDataObject* input = this->GroupInput(renderer, volume);
-  if (!input)
+  std::vector<mtpt::GroupedVolume> group;
+  if (!this->GroupVolumes(renderer, volume, group))
   {
     this->TimeToDraw = 0; // drawn by the first volume of its group
     return;
   }
   mtpt::FrameInput frame;
-  if (!this->PrepareInput(input, volume->GetProperty(), frame))
+  if (!this->PrepareInput(group, volume->GetProperty(), frame))
   {
     return;
   }
@@ -967,7 +1074,8 @@ void vtkMultiThreadedProjectedTetrahedraMapper::SetUpFrame(vtkRenderer* renderer
   mtpt::BackendFrame& draw)
 {
   Internals& in = *this->Internal;
-  mtpt::ViewMatrices(renderer, volume, frame.modelView, frame.projection);
+  // Volumes placed by matrices of their own are drawn in world coordinates (GroupVolumes).
+  mtpt::ViewMatrices(renderer, in.Placed ? nullptr : volume, frame.modelView, frame.projection);
   frame.perspective = renderer->GetActiveCamera()->GetParallelProjection() == 0;
   draw.renderer = renderer;
   draw.window = window;
@@ -1037,6 +1145,10 @@ mtpt::FrameSettings vtkMultiThreadedProjectedTetrahedraMapper::FrameSettingsOf(
   if (!warning.empty() && this->Internal->Report(property, warning))
   {
     vtkWarningMacro(<< warning);
+  }
+  if (this->Internal->Tables.Segments() > 1)
+  {
+    settings.unitDistance = 1.0; // each segment's attenuation is per its own unit distance
   }
   return settings;
 }

@@ -39,6 +39,7 @@
 
 #include <cstddef> // for std::size_t
 #include <memory>  // for std::unique_ptr
+#include <vector>  // for std::vector
 
 VTK_ABI_NAMESPACE_BEGIN
 class vtkOpenGLRenderWindow;
@@ -53,6 +54,7 @@ struct FrameFacts;
 struct FrameInput;
 struct FramePlan;
 struct FrameSettings;
+struct GroupedVolume;
 class RenderBackend;
 }
 
@@ -265,13 +267,15 @@ public:
   ///@{
   /**
    * Several volumes in one picture (default on). The visible volumes of a renderer whose
-   * mappers are MTPT mappers with this on, and that share this volume's property object and
-   * matrix, are drawn together: the first of them in the renderer's order draws the cells of
-   * all their inputs in one visibility order, with its own mapper's settings, and the others
-   * draw nothing. Where their cells interleave in depth the picture is then right, which
-   * drawing them one after the other (VTK's way) cannot give. Volumes with another property
-   * or matrix are drawn one after the other, with a warning once. Off: this volume is drawn
-   * by itself, as VTK draws every volume.
+   * mappers are MTPT mappers with this on are drawn together: the first of them in the
+   * renderer's order draws the cells of all of them in one visibility order, with its own
+   * mapper's settings, each cell with its own volume's scalars, transfer functions, unit
+   * distance and matrix, and the others draw nothing. Where their cells interleave in depth
+   * the picture is then right, which drawing them one after the other (VTK's way) cannot
+   * give. Volumes that differ in what one frame cannot mix (blend mode, shading mode,
+   * clipping planes, lighting; Documentation/mapper.md, "Several volumes") are drawn one
+   * after the other, with a warning once. Off: this volume is drawn by itself, as VTK draws
+   * every volume.
    */
   vtkSetMacro(CompositeWithOtherVolumes, bool);
   vtkGetMacro(CompositeWithOtherVolumes, bool);
@@ -514,13 +518,15 @@ private:
 
   // The steps of Render: the glue between VTK, the core's frame pipeline and a backend.
   void MoveToWindow(vtkOpenGLRenderWindow* window);
-  bool PrepareInput(vtkDataObject* input, vtkVolumeProperty* property, mtpt::FrameInput& frame);
+  bool PrepareInput(const std::vector<mtpt::GroupedVolume>& group, vtkVolumeProperty* property,
+    mtpt::FrameInput& frame);
   /**
-   * What this frame draws for `volume` (CompositeWithOtherVolumes): its own input, the
-   * inputs of the volumes drawn with it as one composite data set, or null when another
-   * mapper of its group draws it.
+   * What this frame draws for `volume` (CompositeWithOtherVolumes): its own input, or the
+   * volumes drawn with it, this one first (`group`); false when another mapper of its group
+   * draws it.
    */
-  vtkDataObject* GroupInput(vtkRenderer* renderer, vtkVolume* volume);
+  bool GroupVolumes(
+    vtkRenderer* renderer, vtkVolume* volume, std::vector<mtpt::GroupedVolume>& group);
   bool DrawPrepared(vtkRenderer* renderer, vtkVolume* volume, vtkOpenGLRenderWindow* window,
     mtpt::FrameInput& frame);
   mtpt::RenderBackend* ChooseBackend();

@@ -9,8 +9,11 @@
 
 #include "vtkMultiThreadedProjectedTetrahedraMapper.h"
 
+#include "vtkActor.h"
+#include "vtkActorCollection.h"
 #include "vtkAppendFilter.h"
 #include "vtkCellData.h"
+#include "vtkColorTransferFunction.h"
 #include "vtkDataSetTriangleFilter.h"
 #include "vtkPoints.h"
 #include "vtkFloatArray.h"
@@ -20,11 +23,18 @@
 #include "vtkMultiBlockDataSet.h"
 #include "vtkMultiBlockUnstructuredGridVolumeMapper.h"
 #include "vtkPartitionedDataSet.h"
+#include "vtkPiecewiseFunction.h"
+#include "vtkPlane.h"
+#include "vtkPolyDataMapper.h"
+#include "vtkProperty.h"
 #include "vtkPartitionedDataSetCollection.h"
 #include "vtkPointData.h"
 #include "vtkRTAnalyticSource.h"
 #include "vtkRenderWindow.h"
 #include "vtkRenderer.h"
+#include "vtkSphereSource.h"
+#include "vtkTransform.h"
+#include "vtkTransformFilter.h"
 #include "vtkUnstructuredGrid.h"
 #include "vtkVolume.h"
 #include "vtkVolumeProperty.h"
@@ -211,10 +221,12 @@ TEST_P(MapperComposite, InterleavedBlocksMatchTheMergedGridAndItsExactReference)
 /**
  * The blocks of `scene` as volumes of their own in one renderer, each drawn by a mapper of
  * its own (`together`: SetCompositeWithOtherVolumes), sharing `property` or each with a copy
- * of it; the image. Warnings go to `observer`.
+ * of it; the image. `setUp`, when given, sets up each volume and its mapper after that
+ * (block b's). Warnings go to `observer`; `drawn` receives each mapper's tetrahedra.
  */
 vtkSmartPointer<vtkImageData> DrawVolumes(const Parts& scene, int backend, bool together,
-  bool shared, MessageObserver* observer = nullptr, std::vector<vtkIdType>* drawn = nullptr)
+  bool shared, MessageObserver* observer = nullptr, std::vector<vtkIdType>* drawn = nullptr,
+  const std::function<void(std::size_t block, vtkVolume*, Mapper*)>& setUp = nullptr)
 {
   auto property = MakeProperty(-0.3, 1.3, 0.3);
   std::vector<vtkSmartPointer<Mapper>> mappers;
@@ -231,6 +243,10 @@ vtkSmartPointer<vtkImageData> DrawVolumes(const Parts& scene, int backend, bool 
     mappers.push_back(mapper);
   }
   Stage stage = MakeStage(scene.blocks[0], property, mappers[0], 220, 220);
+  if (setUp)
+  {
+    setUp(0, stage.volume, mappers[0]);
+  }
   for (std::size_t b = 1; b < scene.blocks.size(); ++b)
   {
     mappers[b]->SetInputData(scene.blocks[b]);
@@ -244,6 +260,10 @@ vtkSmartPointer<vtkImageData> DrawVolumes(const Parts& scene, int backend, bool 
     {
       auto copy = MakeProperty(-0.3, 1.3, 0.3); // the same functions, another object
       volume->SetProperty(copy);
+    }
+    if (setUp)
+    {
+      setUp(b, volume, mappers[b]);
     }
     stage.renderer->AddVolume(volume);
   }
@@ -302,24 +322,492 @@ TEST_P(MapperComposite, VolumesSharingAPropertyAreOnePictureOfTheirCells)
   }
 }
 
-TEST_P(MapperComposite, VolumesOfTheirOwnPropertiesAreDrawnApartWithOneWarning)
+/**
+ * Two volumes of their own transfer functions, unit distances and arrays: block 0 through a
+ * colour ramp over "field" with unit distance 0.2; block 1 through other functions over an
+ * array "doubled" (2 field + 1) with unit distance 0.1. `Apply` sets a volume up so;
+ * `Equivalent` is the same scene as one volume: both blocks in one composite input, block
+ * 1's scalar moved by Shift, and one property of unit distance 0.1 whose functions are
+ * block 0's (opacity halved) below Shift and block 1's, moved by Shift, above.
+ */
+struct TwoFunctions
 {
-  // Two properties (equal functions, two objects): not one picture; each mapper says so
-  // once, over two frames, and draws its own cells as VTK would.
-  const Parts scene = InterleavedScenes()[1];
+  static constexpr double Shift = 10;
+
+  /// A copy of `block` with a point array `name`: its "field" times `scale` plus `offset`.
+  static vtkSmartPointer<vtkUnstructuredGrid> WithArray(
+    vtkUnstructuredGrid* block, const char* name, double scale, double offset)
+  {
+    auto copy = vtkSmartPointer<vtkUnstructuredGrid>::New();
+    copy->ShallowCopy(block);
+    vtkDataArray* field = block->GetPointData()->GetArray("field");
+    vtkNew<vtkFloatArray> values;
+    values->SetName(name);
+    values->SetNumberOfTuples(field->GetNumberOfTuples());
+    for (vtkIdType i = 0; i < field->GetNumberOfTuples(); ++i)
+    {
+      values->SetValue(i, static_cast<float>(scale * field->GetTuple1(i) + offset));
+    }
+    vtkNew<vtkPointData> data;
+    data->ShallowCopy(block->GetPointData());
+    copy->GetPointData()->ShallowCopy(data);
+    copy->GetPointData()->AddArray(values);
+    return copy;
+  }
+
+  static void AddFunctions(vtkColorTransferFunction* colour, vtkPiecewiseFunction* opacity,
+    std::size_t block, double shift, double opacityScale)
+  {
+    if (block == 0)
+    {
+      colour->AddRGBPoint(-0.3 + shift, 0.2, 0.3, 0.9);
+      colour->AddRGBPoint(0.5 + shift, 0.95, 0.95, 0.6);
+      colour->AddRGBPoint(1.3 + shift, 0.9, 0.2, 0.1);
+      opacity->AddPoint(-0.3 + shift, 0.05 * opacityScale);
+      opacity->AddPoint(1.3 + shift, 0.9 * opacityScale);
+      return;
+    }
+    colour->AddRGBPoint(0.4 + shift, 0.1, 0.8, 0.3);
+    colour->AddRGBPoint(2.0 + shift, 0.9, 0.9, 0.9);
+    colour->AddRGBPoint(3.6 + shift, 0.6, 0.1, 0.8);
+    opacity->AddPoint(0.4 + shift, 0.8 * opacityScale);
+    opacity->AddPoint(3.6 + shift, 0.1 * opacityScale);
+  }
+
+  static void Apply(std::size_t block, vtkVolume* volume, Mapper* mapper)
+  {
+    vtkNew<vtkColorTransferFunction> colour;
+    vtkNew<vtkPiecewiseFunction> opacity;
+    AddFunctions(colour, opacity, block, 0.0, 1.0);
+    vtkNew<vtkVolumeProperty> property;
+    property->SetColor(colour);
+    property->SetScalarOpacity(opacity);
+    property->SetScalarOpacityUnitDistance(block == 0 ? 0.2 : 0.1);
+    volume->SetProperty(property);
+    auto* input = vtkUnstructuredGrid::SafeDownCast(mapper->GetInputDataObject(0, 0));
+    if (block == 1)
+    {
+      mapper->SetScalarModeToUsePointFieldData();
+      mapper->SelectScalarArray("doubled");
+      if (!input->GetPointData()->GetArray("doubled"))
+      {
+        mapper->SetInputData(WithArray(input, "doubled", 2, 1));
+      }
+    }
+  }
+
+  /// The scene as one volume: its composite input and property.
+  static std::pair<vtkSmartPointer<vtkMultiBlockDataSet>, vtkSmartPointer<vtkVolumeProperty>>
+  Equivalent(const Parts& scene)
+  {
+    // One array name in both blocks, so that the reference's appended grid keeps it.
+    auto first = WithArray(scene.blocks[0], "value", 1, 0);
+    auto second = WithArray(scene.blocks[1], "value", 2, 1 + Shift);
+    first->GetPointData()->SetActiveScalars("value");
+    second->GetPointData()->SetActiveScalars("value");
+    auto tree = MultiBlock({ first, second });
+    vtkNew<vtkColorTransferFunction> colour;
+    vtkNew<vtkPiecewiseFunction> opacity;
+    AddFunctions(colour, opacity, 0, 0.0, 0.5);
+    AddFunctions(colour, opacity, 1, Shift, 1.0);
+    auto property = vtkSmartPointer<vtkVolumeProperty>::New();
+    property->SetColor(colour);
+    property->SetScalarOpacity(opacity);
+    property->SetScalarOpacityUnitDistance(0.1);
+    return { tree, property };
+  }
+};
+
+/**
+ * The scene's blocks as volumes set up by `setUp` (sharing one property or not), drawn
+ * together, checked to be drawn by the first mapper without a message, and drawn one after
+ * the other: the two images.
+ */
+std::pair<vtkSmartPointer<vtkImageData>, vtkSmartPointer<vtkImageData>> TogetherAndApart(
+  const Parts& scene, int backend, bool shared,
+  const std::function<void(std::size_t block, vtkVolume*, Mapper*)>& setUp)
+{
   auto observer = vtkSmartPointer<MessageObserver>::New();
   std::vector<vtkIdType> drawn;
-  auto image = DrawVolumes(scene, GetParam(), true, false, observer, &drawn);
+  auto together = DrawVolumes(scene, backend, true, shared, observer, &drawn, setUp);
+  EXPECT_TRUE(observer->warnings.empty()) << observer->warnings.front();
+  EXPECT_TRUE(observer->errors.empty());
+  EXPECT_EQ(drawn.size(), 2u);
+  EXPECT_EQ(drawn.at(0), scene.merged->GetNumberOfCells());
+  EXPECT_EQ(drawn.at(1), 0);
+  return { together, DrawVolumes(scene, backend, false, shared, nullptr, nullptr, setUp) };
+}
+
+/**
+ * Volumes drawn together (`together`) are the picture of the scene as one volume (`whole`)
+ * within 1/255 covered RMSE and of its exact reference within 2/255; drawn one after the
+ * other (`apart`) they are at least twice as far from the reference.
+ */
+void ExpectOnePicture(vtkImageData* together, vtkImageData* apart, vtkImageData* whole,
+  vtkImageData* exact, const std::string& what)
+{
+  const ImageDifference same = Compare(together, whole), right = Compare(together, exact),
+                        wrong = Compare(apart, exact);
+  std::printf("%s: covered-pixel RMSE against the exact reference: drawn together %.4f (worst "
+              "%.3f), one after the other %.4f (worst %.3f); against the scene as one volume "
+              "%.5f (worst %.4f)\n",
+    what.c_str(), right.coveredRmse, right.worst, wrong.coveredRmse, wrong.worst,
+    same.coveredRmse, same.worst);
+  EXPECT_LT(same.coveredRmse, 1.0 / 255);
+  EXPECT_LT(same.worst, 4.0 / 255);
+  EXPECT_LT(right.coveredRmse, 2.0 / 255);
+  EXPECT_GT(wrong.coveredRmse, 2 * right.coveredRmse) << "one after the other is wrong";
+  EXPECT_GT(CoveredFraction(together, Background), 0.2);
+}
+
+TEST_P(MapperComposite, VolumesOfTheirOwnTransferFunctionsAreOnePicture)
+{
+  // Each cell through its own volume's transfer functions, unit distance and array, all
+  // cells in one order: the image of the same scene as one volume (one composite input, one
+  // property holding both functions), and of its exact reference. Both shadings.
+  for (const int shading : { Mapper::VTK_COMPATIBLE_SHADING, Mapper::PRE_INTEGRATED_SHADING })
+  {
+    const auto setUp = [shading](std::size_t block, vtkVolume* volume, Mapper* mapper)
+    {
+      TwoFunctions::Apply(block, volume, mapper);
+      mapper->SetShadingMode(shading);
+    };
+    for (const Parts& scene : InterleavedScenes())
+    {
+      SCOPED_TRACE(scene.name);
+      SCOPED_TRACE(shading);
+      const auto images = TogetherAndApart(scene, GetParam(), false, setUp);
+
+      const auto equivalent = TwoFunctions::Equivalent(scene);
+      vtkNew<Mapper> one;
+      one->SetBackend(GetParam());
+      one->SetShadingMode(shading);
+      Stage stage = MakeStage(equivalent.first, equivalent.second, one, 220, 220);
+      SetView(stage.renderer, { scene.azimuth, scene.elevation }, true);
+      stage.window->Render();
+      auto whole = Grab(stage.window, false);
+      auto exact = ReferenceImage(stage);
+      one->ReleaseGraphicsResources(stage.window);
+      ExpectOnePicture(images.first, images.second, whole, exact,
+        scene.name + ", two transfer functions, " + one->GetShadingModeAsString() + " shading");
+    }
+  }
+}
+
+TEST_P(MapperComposite, VolumesOfTheirOwnMatricesAreOnePicture)
+{
+  // The second volume turned and moved by its own matrix: each cell placed by its volume's
+  // matrix, all in one order; the image of the same scene as one volume whose second block's
+  // points were moved by that matrix, and of its exact reference.
+  for (const Parts& scene : InterleavedScenes())
+  {
+    SCOPED_TRACE(scene.name);
+    const auto place = [](std::size_t block, vtkVolume* volume, Mapper*)
+    {
+      if (block == 1)
+      {
+        volume->SetOrientation(0, 0, 12);
+        volume->SetPosition(0.08, -0.05, 0.1);
+      }
+    };
+    const auto images = TogetherAndApart(scene, GetParam(), true, place);
+
+    vtkNew<vtkVolume> moved;
+    place(1, moved, nullptr);
+    vtkNew<vtkTransform> transform;
+    transform->SetMatrix(moved->GetMatrix());
+    vtkNew<vtkTransformFilter> move;
+    move->SetTransform(transform);
+    move->SetInputData(scene.blocks[1]);
+    move->SetOutputPointsPrecision(vtkAlgorithm::DOUBLE_PRECISION);
+    move->Update();
+    auto tree =
+      MultiBlock({ scene.blocks[0], vtkUnstructuredGrid::SafeDownCast(move->GetOutput()) });
+    vtkNew<Mapper> one;
+    one->SetBackend(GetParam());
+    Stage stage;
+    auto whole = Draw(tree, one, scene, &stage);
+    auto exact = ReferenceImage(stage);
+    one->ReleaseGraphicsResources(stage.window);
+    ExpectOnePicture(images.first, images.second, whole, exact,
+      scene.name + ", the second volume moved by its matrix");
+  }
+}
+
+/// Volumes of their own properties in one renderer, added and changed by a test.
+struct Group
+{
+  Stage stage;
+  std::vector<vtkSmartPointer<vtkVolume>> volumes;
+  vtkSmartPointer<MessageObserver> observer = vtkSmartPointer<MessageObserver>::New();
+
+  Group(const Parts& scene, int backend)
+  {
+    stage.renderer = vtkSmartPointer<vtkRenderer>::New();
+    stage.renderer->SetBackground(Background[0], Background[1], Background[2]);
+    stage.window = vtkSmartPointer<vtkRenderWindow>::New();
+    stage.window->SetOffScreenRendering(1);
+    stage.window->SetSize(220, 220);
+    stage.window->AddRenderer(stage.renderer);
+    this->backend = backend;
+    this->view = { scene.azimuth, scene.elevation };
+  }
+  /// A volume of `input` with block `block`'s functions of TwoFunctions.
+  vtkVolume* Add(vtkDataObject* input, std::size_t block)
+  {
+    vtkNew<Mapper> mapper;
+    mapper->SetBackend(this->backend);
+    mapper->SetInputDataObject(input);
+    mapper->AddObserver(vtkCommand::WarningEvent, this->observer);
+    mapper->AddObserver(vtkCommand::ErrorEvent, this->observer);
+    auto volume = vtkSmartPointer<vtkVolume>::New();
+    volume->SetMapper(mapper);
+    TwoFunctions::Apply(block, volume, mapper);
+    this->stage.renderer->AddVolume(volume);
+    this->volumes.push_back(volume);
+    return volume;
+  }
+  vtkIdType Drawn(std::size_t v)
+  {
+    return static_cast<Mapper*>(this->volumes[v]->GetMapper())->GetNumberOfTetrahedra();
+  }
+  vtkSmartPointer<vtkImageData> Render()
+  {
+    if (!this->viewSet)
+    {
+      SetView(this->stage.renderer, this->view, true);
+      this->viewSet = true;
+    }
+    this->stage.window->Render();
+    return Grab(this->stage.window, false);
+  }
+  ~Group()
+  {
+    for (const auto& volume : this->volumes)
+    {
+      volume->GetMapper()->ReleaseGraphicsResources(this->stage.window);
+    }
+  }
+  int backend = 0;
+  View view;
+  bool viewSet = false;
+};
+
+TEST_P(MapperComposite, TheGroupFollowsItsVolumes)
+{
+  // Two volumes of their own functions, and a third that is hidden, then shown, then
+  // removed; an empty one; one input drawn twice; a multi-block input among them.
+  const Parts scene = InterleavedScenes()[1];
+  const vtkIdType cells0 = scene.blocks[0]->GetNumberOfCells();
+  const vtkIdType cells1 = scene.blocks[1]->GetNumberOfCells();
+  Group two(scene, GetParam());
+  two.Add(scene.blocks[0], 0);
+  two.Add(scene.blocks[1], 1);
+  auto pair = two.Render();
+  EXPECT_EQ(two.Drawn(0), cells0 + cells1);
+
+  Group more(scene, GetParam());
+  more.Add(scene.blocks[0], 0);
+  more.Add(scene.blocks[1], 1);
+  vtkVolume* third = more.Add(scene.merged, 0);
+  third->SetVisibility(0);
+  EXPECT_EQ(Compare(more.Render(), pair).worst, 0.0) << "a hidden volume is not drawn";
+  EXPECT_EQ(more.Drawn(0), cells0 + cells1);
+  third->SetVisibility(1);
+  auto three = more.Render();
+  EXPECT_EQ(more.Drawn(0), 2 * (cells0 + cells1));
+  EXPECT_EQ(more.Drawn(2), 0);
+  EXPECT_GT(Compare(three, pair).coveredRmse, 2.0 / 255) << "the third volume is drawn";
+  more.stage.renderer->RemoveVolume(third);
+  EXPECT_EQ(Compare(more.Render(), pair).worst, 0.0) << "a removed volume is not drawn";
+  EXPECT_EQ(more.Drawn(0), cells0 + cells1);
+  EXPECT_TRUE(more.observer->warnings.empty());
+  EXPECT_TRUE(more.observer->errors.empty());
+
+  // A volume without cells: said once, the others drawn as without it.
+  Group empty(scene, GetParam());
+  empty.Add(scene.blocks[0], 0);
+  empty.Add(scene.blocks[1], 1);
+  vtkNew<vtkUnstructuredGrid> nothing;
+  empty.Add(nothing, 0);
+  EXPECT_EQ(Compare(empty.Render(), pair).worst, 0.0);
+  empty.Render();
+  ASSERT_EQ(empty.observer->warnings.size(), 1u);
+  EXPECT_NE(empty.observer->warnings[0].find("volume 3: its input has no cells"), std::string::npos)
+    << empty.observer->warnings[0];
+
+  // One input in two volumes of their own functions: every cell drawn once for each.
+  Group shared(scene, GetParam());
+  auto both = TwoFunctions::WithArray(scene.blocks[0], "doubled", 2, 1);
+  shared.Add(both, 0);
+  shared.Add(both, 1);
+  shared.Render();
+  EXPECT_EQ(shared.volumes[0]->GetMapper()->GetInputDataObject(0, 0),
+    shared.volumes[1]->GetMapper()->GetInputDataObject(0, 0));
+  EXPECT_EQ(shared.Drawn(0), 2 * cells0);
+  EXPECT_TRUE(shared.observer->warnings.empty());
+
+  // The second volume's cells as a multi-block of two: the same picture.
+  Group tree(scene, GetParam());
+  tree.Add(scene.blocks[0], 0);
+  vtkVolume* composite = tree.Add(scene.blocks[1], 1);
+  auto* second =
+    vtkUnstructuredGrid::SafeDownCast(composite->GetMapper()->GetInputDataObject(0, 0));
+  auto low = Block(second, [](const double* c) { return c[1] < 0; });
+  auto high = Block(second, [](const double* c) { return c[1] >= 0; });
+  static_cast<Mapper*>(composite->GetMapper())->SetInputDataObject(MultiBlock({ low, high }));
+  const ImageDifference blocks = Compare(tree.Render(), pair);
+  std::printf("the second volume as two blocks: covered-pixel RMSE %.5f (worst %.4f) against "
+              "it as one grid\n",
+    blocks.coveredRmse, blocks.worst);
+  EXPECT_EQ(tree.Drawn(0), cells0 + cells1);
+  EXPECT_LT(blocks.coveredRmse, 0.5 / 255);
+  EXPECT_LT(blocks.worst, 2.0 / 255);
+  EXPECT_TRUE(tree.observer->warnings.empty());
+}
+
+TEST_P(MapperComposite, ClippingLightingPeelingAndRenderersKeepTheGroup)
+{
+  // Volumes of their own functions with one clipping plane, with lighting, and through depth
+  // peeling beside a translucent sphere: the picture of the scene as one volume under the
+  // same plane, lights or peeling. Two renderers side by side: each draws its own group.
+  const Parts scene = InterleavedScenes()[1];
+  vtkNew<vtkPlane> plane;
+  plane->SetOrigin(0.1, 0.0, 0.0);
+  plane->SetNormal(-0.3, 1.0, 0.2);
+  vtkNew<vtkSphereSource> sphere;
+  sphere->SetCenter(0.3, 0.2, 0.9);
+  sphere->SetRadius(0.45);
+  sphere->SetThetaResolution(32);
+  sphere->SetPhiResolution(32);
+  enum Case
+  {
+    Clipped,
+    Lit,
+    Peeled
+  };
+  for (const Case c : { Clipped, Lit, Peeled })
+  {
+    SCOPED_TRACE(c);
+    // Sets a mapper, its volume and the renderer up for the case.
+    const auto setUp = [&](Mapper* mapper, vtkVolume* volume, vtkRenderer* renderer)
+    {
+      if (c == Clipped)
+      {
+        mapper->AddClippingPlane(plane);
+      }
+      else if (c == Lit)
+      {
+        volume->GetProperty()->ShadeOn();
+      }
+      else if (renderer->GetActors()->GetNumberOfItems() == 0)
+      {
+        vtkNew<vtkPolyDataMapper> surface;
+        surface->SetInputConnection(sphere->GetOutputPort());
+        vtkNew<vtkActor> actor;
+        actor->SetMapper(surface);
+        actor->GetProperty()->SetColor(0.15, 0.85, 0.35);
+        actor->GetProperty()->SetOpacity(0.45);
+        actor->GetProperty()->LightingOff();
+        renderer->AddActor(actor);
+        renderer->SetUseDepthPeeling(1);
+        renderer->SetUseDepthPeelingForVolumes(1);
+        renderer->SetMaximumNumberOfPeels(8);
+        renderer->SetOcclusionRatio(0.0);
+      }
+    };
+    Group two(scene, GetParam());
+    two.stage.window->SetMultiSamples(0); // VTK's depth peeling needs a single-sampled window
+    for (std::size_t b = 0; b < 2; ++b)
+    {
+      vtkVolume* volume = two.Add(scene.blocks[b], b);
+      setUp(static_cast<Mapper*>(volume->GetMapper()), volume, two.stage.renderer);
+    }
+    auto together = two.Render();
+    EXPECT_EQ(two.Drawn(1), 0);
+    EXPECT_TRUE(two.observer->warnings.empty()) << two.observer->warnings.front();
+    EXPECT_TRUE(two.observer->errors.empty()) << two.observer->errors.front();
+
+    const auto equivalent = TwoFunctions::Equivalent(scene);
+    vtkNew<Mapper> one;
+    one->SetBackend(GetParam());
+    Stage stage =
+      MakeStage(equivalent.first, equivalent.second, one, 220, 220, WindowSettings{ true, 0 });
+    setUp(one, stage.volume, stage.renderer);
+    SetView(stage.renderer, { scene.azimuth, scene.elevation }, true);
+    stage.window->Render();
+    auto whole = Grab(stage.window, false);
+    one->ReleaseGraphicsResources(stage.window);
+    const ImageDifference same = Compare(together, whole);
+    std::printf("two transfer functions, %s: covered-pixel RMSE %.5f (worst %.4f) against the "
+                "scene as one volume\n",
+      c == Clipped ? "one clipping plane" : (c == Lit ? "lit" : "peeled with a sphere"),
+      same.coveredRmse, same.worst);
+    EXPECT_LT(same.coveredRmse, 1.0 / 255);
+    EXPECT_LT(same.worst, 4.0 / 255);
+    EXPECT_GT(CoveredFraction(together, Background), 0.1);
+  }
+
+  // Two renderers side by side, each with two volumes: each group is its renderer's.
+  Group left(scene, GetParam());
+  left.Add(scene.blocks[0], 0);
+  left.Add(scene.blocks[1], 1);
+  left.stage.renderer->SetViewport(0.0, 0.0, 0.5, 1.0);
+  vtkNew<vtkRenderer> right;
+  right->SetViewport(0.5, 0.0, 1.0, 1.0);
+  std::vector<vtkSmartPointer<Mapper>> rightMappers;
+  for (std::size_t b = 0; b < 2; ++b)
+  {
+    auto mapper = vtkSmartPointer<Mapper>::New();
+    mapper->SetBackend(GetParam());
+    mapper->SetInputData(scene.blocks[b]);
+    vtkNew<vtkVolume> volume;
+    volume->SetMapper(mapper);
+    TwoFunctions::Apply(b, volume, mapper);
+    right->AddVolume(volume);
+    rightMappers.push_back(mapper);
+  }
+  left.stage.window->AddRenderer(right);
+  SetView(right, left.view, true);
+  left.Render();
+  EXPECT_EQ(left.Drawn(0), scene.merged->GetNumberOfCells());
+  EXPECT_EQ(left.Drawn(1), 0);
+  EXPECT_EQ(rightMappers[0]->GetNumberOfTetrahedra(), scene.merged->GetNumberOfCells());
+  EXPECT_EQ(rightMappers[1]->GetNumberOfTetrahedra(), 0);
+  for (const auto& mapper : rightMappers)
+  {
+    mapper->ReleaseGraphicsResources(left.stage.window);
+  }
+}
+
+TEST_P(MapperComposite, VolumesOfAnotherBlendModeAreDrawnApartWithOneWarning)
+{
+  // The second volume's mapper blends by maximum intensity: not one picture; each mapper
+  // says so once, over two frames, and draws its own cells as VTK would.
+  const Parts scene = InterleavedScenes()[1];
+  const auto maximum = [](std::size_t block, vtkVolume*, Mapper* mapper)
+  {
+    if (block == 1)
+    {
+      mapper->SetBlendModeToMaximumIntensity();
+    }
+  };
+  auto observer = vtkSmartPointer<MessageObserver>::New();
+  std::vector<vtkIdType> drawn;
+  auto image = DrawVolumes(scene, GetParam(), true, true, observer, &drawn, maximum);
   EXPECT_TRUE(observer->errors.empty());
   EXPECT_EQ(observer->warnings.size(), 2u); // one from each mapper
   for (const std::string& w : observer->warnings)
   {
+    EXPECT_NE(w.find("another blend mode"), std::string::npos) << w;
     EXPECT_NE(w.find("one after the other"), std::string::npos) << w;
   }
   ASSERT_EQ(drawn.size(), 2u);
   EXPECT_EQ(drawn[0], scene.blocks[0]->GetNumberOfCells());
   EXPECT_EQ(drawn[1], scene.blocks[1]->GetNumberOfCells());
-  EXPECT_EQ(Compare(image, DrawVolumes(scene, GetParam(), false, true)).worst, 0.0)
+  EXPECT_EQ(
+    Compare(image, DrawVolumes(scene, GetParam(), false, true, nullptr, nullptr, maximum)).worst,
+    0.0)
     << "drawn apart, as with the switch off";
 }
 

@@ -35,17 +35,35 @@ namespace mtpt
 namespace
 {
 
-/// A float RGBA texture of `width` x 1 texels, clamped, with the given filter.
-void MakeTableTexture(vtkTextureObject* texture, vtkOpenGLRenderWindow* window, int width,
+/**
+ * Texels in a row of the tables' textures. A table of more entries (volumes of several
+ * properties drawn together, TransferFunctionTables) takes several rows, entry i at texel
+ * (i % TableRowWidth, i / TableRowWidth), read texel by texel; one of at most this many
+ * entries is one row, which the hardware's filtering may read too.
+ */
+constexpr int TableRowWidth = 4096;
+
+/// A float RGBA texture of the `entries` RGBA values in rows (TableRowWidth), clamped, with
+/// the given filter.
+void MakeTableTexture(vtkTextureObject* texture, vtkOpenGLRenderWindow* window, int entries,
   const float* values, bool linear)
 {
+  const int width = std::min(entries, TableRowWidth);
+  const int rows = (entries + width - 1) / width;
+  std::vector<float> padded;
+  if (rows * width != entries)
+  {
+    padded.assign(4 * static_cast<std::size_t>(rows) * width, 0.0f);
+    std::copy_n(values, 4 * static_cast<std::size_t>(entries), padded.begin());
+    values = padded.data();
+  }
   texture->SetContext(window);
   texture->SetWrapS(vtkTextureObject::ClampToEdge);
   texture->SetWrapT(vtkTextureObject::ClampToEdge);
   const int filter = linear ? vtkTextureObject::Linear : vtkTextureObject::Nearest;
   texture->SetMinificationFilter(filter);
   texture->SetMagnificationFilter(filter);
-  texture->Create2DFromRaw(width, 1, 4, VTK_FLOAT, const_cast<float*>(values));
+  texture->Create2DFromRaw(width, rows, 4, VTK_FLOAT, const_cast<float*>(values));
 }
 
 /**
@@ -174,6 +192,7 @@ void OpenGLBackend::SetUniforms(const BackendFrame& frame, vtkShaderProgram* pro
   program->SetUniformi("transferFunction", this->TransferFunction->GetTextureUnit());
   program->SetUniformi("shadingMode", static_cast<int>(plan.values));
   program->SetUniformi("tableSize", table.size);
+  program->SetUniformi("tableWidth", std::min(table.size, TableRowWidth));
   program->SetUniformi("blendMode", reduce ? static_cast<int>(plan.blendMode) : 0);
   program->SetUniformi("clampEntries", reduce ? 0 : 1);
   if (reduce)

@@ -30,6 +30,7 @@ struct MeshSource::Grid
   ScalarSelection Selected;
   const float* Values = nullptr; ///< ChannelsOf(Selected) floats per point or cell of Tetrahedra
   double Range[2] = { 0, 0 };
+  vtkVolumeProperty* Property = nullptr; ///< of the volume it is drawn for
   bool Seen = false; ///< still in the input at the last Update
 };
 
@@ -155,94 +156,158 @@ bool MeshSource::PrepareGrid(Grid& grid, vtkUnstructuredGridBase* input, const s
 bool MeshSource::Update(vtkDataObject* input, vtkAbstractVolumeMapper* mapper,
   vtkVolumeProperty* property, const Reporter& report)
 {
-  this->Used.clear();
-  if (!input)
-  {
-    report(
-      nullptr, "no input: connect an unstructured grid, or a composite data set of them", true);
-    return false;
-  }
-  const bool single = vtkUnstructuredGridBase::SafeDownCast(input) != nullptr;
-  std::vector<std::pair<vtkDataObject*, std::string>> skipped;
-  const auto grids = Grids(input, &skipped);
-  for (const auto& other : skipped)
-  {
-    report(other.first, other.second, false);
-  }
-  if (!single && !vtkDataObjectTree::SafeDownCast(input))
-  {
-    report(input,
-      std::string("cannot render a ") + input->GetClassName() +
-        ": the input must be an unstructured grid or a composite data set of them",
-      true);
-    return false;
-  }
-  this->UseGrids(grids, single, mapper, property, report);
-  this->RetireUnseen();
-  if (this->Used.empty())
-  {
-    this->Forget();
-    if (!single && !grids.empty())
-    {
-      report(input, "no block of the composite input can be drawn", false);
-    }
-    else if (!single)
-    {
-      report(input, "the composite input has no unstructured grid: nothing to draw", false);
-    }
-    return false;
-  }
-  this->MakeViews(single);
-  return true;
+  return this->Update(
+    std::vector<GroupedVolume>{ GroupedVolume{ input, mapper, property } }, report);
 }
 
-void MeshSource::UseGrids(
-  const std::vector<std::pair<vtkUnstructuredGridBase*, std::string>>& grids, bool single,
-  vtkAbstractVolumeMapper* mapper, vtkVolumeProperty* property, const Reporter& report)
+bool MeshSource::Update(const std::vector<GroupedVolume>& volumes, const Reporter& report)
 {
+  this->Used.clear();
+  this->UsedSegments.clear();
+  this->UsedMatrices.clear();
   for (auto& entry : this->Cache)
   {
     entry.second->Seen = false;
   }
-  bool cellData = false;
-  int channels = 1;
+  const bool several = volumes.size() > 1;
+  bool single = false;
+  std::vector<vtkVolumeProperty*> properties; // one segment each, in order of first use
+  for (std::size_t v = 0; v < volumes.size(); ++v)
+  {
+    const GroupedVolume& volume = volumes[v];
+    // A volume of several is named by its place in the renderer's group.
+    const std::string prefix = several ? "volume " + std::to_string(v + 1) + ": " : "";
+    vtkDataObject* input = volume.input;
+    if (!input)
+    {
+      report(nullptr,
+        prefix + "no input: connect an unstructured grid, or a composite data set of them",
+        !several);
+      continue;
+    }
+    const bool grid = vtkUnstructuredGridBase::SafeDownCast(input) != nullptr;
+    single = !several && grid;
+    if (!grid && !vtkDataObjectTree::SafeDownCast(input))
+    {
+      report(input,
+        prefix + "cannot render a " + input->GetClassName() +
+          ": the input must be an unstructured grid or a composite data set of them",
+        !several);
+      continue;
+    }
+    std::vector<std::pair<vtkDataObject*, std::string>> skipped;
+    auto grids = Grids(input, &skipped);
+    for (const auto& other : skipped)
+    {
+      report(other.first, prefix + other.second, false);
+    }
+    if (several && grid)
+    {
+      grids[0].second = "its input";
+    }
+    const auto found = std::find(properties.begin(), properties.end(), volume.property);
+    const std::size_t before = this->Used.size();
+    this->UseGrids(
+      grids, single, volume, static_cast<int>(found - properties.begin()), prefix, report);
+    if (this->Used.size() > before && found == properties.end())
+    {
+      properties.push_back(volume.property);
+    }
+    if (!grid && this->Used.size() == before)
+    {
+      report(input,
+        prefix +
+          (grids.empty() ? "the composite input has no unstructured grid: nothing to draw"
+                         : "no block of the composite input can be drawn"),
+        false);
+    }
+  }
+  this->RetireUnseen();
+  if (this->Used.empty())
+  {
+    this->Forget();
+    return false;
+  }
+  this->MakeViews(single);
+  this->PlaceParts();
+  return true;
+}
+
+void MeshSource::PlaceParts()
+{
+  if (this->Parts.size() != this->Used.size())
+  {
+    return; // a single grid: no parts
+  }
+  // Models is sized with the parts (MakeViews) and rewritten in place: the parts point into it.
+  bool changed = false;
+  for (std::size_t k = 0; k < this->Parts.size(); ++k)
+  {
+    const double* matrix = this->UsedMatrices[k];
+    Matrix4 model = IdentityMatrix();
+    if (matrix)
+    {
+      std::copy_n(matrix, 16, model.begin());
+    }
+    if (model != this->Models[k] || static_cast<bool>(matrix) != this->Placed[k])
+    {
+      this->Models[k] = model;
+      this->Placed[k] = matrix != nullptr;
+      changed = true;
+    }
+    this->Parts[k].model = matrix ? &this->Models[k] : nullptr;
+  }
+  if (changed)
+  {
+    ++this->Placement;
+  }
+}
+
+void MeshSource::UseGrids(
+  const std::vector<std::pair<vtkUnstructuredGridBase*, std::string>>& grids, bool single,
+  const GroupedVolume& volume, int segment, const std::string& prefix, const Reporter& report)
+{
   for (const auto& item : grids)
   {
-    std::unique_ptr<Grid>& grid = this->Cache[item.first];
+    std::unique_ptr<Grid>& grid =
+      this->Cache[GridKey{ item.first, volume.mapper, volume.property }];
     if (!grid)
     {
       grid.reset(new Grid);
+      grid->Property = volume.property;
     }
     grid->Seen = true;
-    if (!this->PrepareGrid(*grid, item.first, item.second, single, mapper, property, report))
+    const std::string name = prefix + item.second;
+    if (!this->PrepareGrid(*grid, item.first, name, single, volume.mapper, volume.property, report))
     {
       continue;
     }
     // One association and one count of values for all: the first grid drawn decides.
-    if (this->Used.empty())
+    if (!this->Used.empty())
     {
-      cellData = grid->Selected.cellData;
-      channels = ChannelsOf(grid->Selected);
-    }
-    else if (grid->Selected.cellData != cellData)
-    {
-      report(grid->Tetrahedra,
-        item.second + "'s scalars are " + (grid->Selected.cellData ? "cell" : "point") +
-          " data where the blocks before it have " + (cellData ? "cell" : "point") +
-          " data; it is not drawn",
-        false);
-      continue;
-    }
-    else if (ChannelsOf(grid->Selected) != channels)
-    {
-      report(grid->Tetrahedra,
-        item.second + "'s scalars have " + std::to_string(ChannelsOf(grid->Selected)) +
-          " dependent components where the blocks before it have " + std::to_string(channels) +
-          "; it is not drawn",
-        false);
-      continue;
+      const ScalarSelection& first = this->Used.front()->Selected;
+      if (grid->Selected.cellData != first.cellData)
+      {
+        report(grid->Tetrahedra,
+          name + "'s scalars are " + (grid->Selected.cellData ? "cell" : "point") +
+            " data where the blocks before it have " + (first.cellData ? "cell" : "point") +
+            " data; it is not drawn",
+          false);
+        continue;
+      }
+      if (ChannelsOf(grid->Selected) != ChannelsOf(first))
+      {
+        report(grid->Tetrahedra,
+          name + "'s scalars have " + std::to_string(ChannelsOf(grid->Selected)) +
+            " dependent components where the blocks before it have " +
+            std::to_string(ChannelsOf(first)) + "; it is not drawn",
+          false);
+        continue;
+      }
     }
     this->Used.push_back(grid.get());
+    this->UsedSegments.push_back(segment);
+    this->UsedMatrices.push_back(volume.matrix);
   }
 }
 
@@ -267,30 +332,48 @@ void MeshSource::RetireUnseen()
 void MeshSource::MakeViews(bool single)
 {
   std::vector<Key> keys;
-  for (const Grid* grid : this->Used)
+  for (std::size_t g = 0; g < this->Used.size(); ++g)
   {
+    const Grid* grid = this->Used[g];
     keys.push_back({ grid->Tetrahedra, grid->Tetrahedra->GetMTime(), grid->Selected.array,
-      grid->Selected.array->GetMTime(), grid->Selected.component, grid->Selected.cellData });
+      grid->Selected.array->GetMTime(), grid->Selected.component, grid->Selected.cellData,
+      this->UsedSegments[g] });
   }
   if (keys == this->LastKeys && this->DataVersion > 0)
   {
-    return; // the views, the gathered scalars and the range are those of last time
+    return; // the views, the gathered scalars and the ranges are those of last time
   }
   this->LastKeys = keys;
   ++this->DataVersion;
+  this->Mapped = false;
   const Grid& first = *this->Used.front();
   this->ScalarChannels = ChannelsOf(first.Selected);
   const auto association =
     first.Selected.cellData ? ScalarsView::Association::Cells : ScalarsView::Association::Points;
-  this->ScalarRange[0] = std::numeric_limits<double>::infinity();
-  this->ScalarRange[1] = -std::numeric_limits<double>::infinity();
-  for (const Grid* grid : this->Used)
+  const double inf = std::numeric_limits<double>::infinity();
+  this->ScalarRange[0] = inf;
+  this->ScalarRange[1] = -inf;
+  this->SegmentData.clear();
+  for (std::size_t g = 0; g < this->Used.size(); ++g)
   {
+    const Grid* grid = this->Used[g];
     this->ScalarRange[0] = std::min(this->ScalarRange[0], grid->Range[0]);
     this->ScalarRange[1] = std::max(this->ScalarRange[1], grid->Range[1]);
+    const auto segment = static_cast<std::size_t>(this->UsedSegments[g]);
+    if (segment >= this->SegmentData.size())
+    {
+      this->SegmentData.resize(segment + 1, Segment{ nullptr, { inf, -inf } });
+      this->SegmentData[segment].property = this->Used[g]->Property;
+    }
+    double* range = this->SegmentData[segment].range;
+    range[0] = std::min(range[0], grid->Range[0]);
+    range[1] = std::max(range[1], grid->Range[1]);
   }
   if (single)
   {
+    this->Parts.clear();
+    this->Models.clear();
+    this->Placed.clear();
     this->PointData = first.Adapter.Points();
     this->CellData = first.Adapter.Cells();
     this->ScalarData = { first.Values, association };
@@ -299,11 +382,36 @@ void MeshSource::MakeViews(bool single)
   this->Parts.clear();
   for (const Grid* grid : this->Used)
   {
-    this->Parts.push_back({ grid->Adapter.Points(), grid->Adapter.Cells() });
+    this->Parts.push_back({ grid->Adapter.Points(), grid->Adapter.Cells(), nullptr });
   }
+  this->Models.assign(this->Parts.size(), IdentityMatrix());
+  this->Placed.assign(this->Parts.size(), false);
+  ++this->Placement;
   MeshParts(this->Parts.data(), this->Parts.size(), this->PointData, this->CellData);
   this->GatherScalars();
   this->ScalarData = { this->Gathered.data(), association };
+}
+
+void MeshSource::MapToSegments(const std::function<double(int segment, double scalar)>& entry)
+{
+  if (this->SegmentData.size() <= 1 || this->ScalarChannels != 1 || this->Mapped)
+  {
+    return;
+  }
+  // Each grid's scalars into its segment: the gathered copy is rewritten in place.
+  float* value = this->Gathered.data();
+  for (std::size_t g = 0; g < this->Used.size(); ++g)
+  {
+    const Grid* grid = this->Used[g];
+    const std::size_t count =
+      grid->Selected.cellData ? grid->Adapter.Cells().cellCount : grid->Adapter.Points().count;
+    const int segment = this->UsedSegments[g];
+    for (std::size_t i = 0; i < count; ++i, ++value)
+    {
+      *value = static_cast<float>(entry(segment, *value));
+    }
+  }
+  this->Mapped = true;
 }
 
 void MeshSource::Forget()

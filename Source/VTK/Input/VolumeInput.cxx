@@ -157,9 +157,16 @@ void ViewMatrices(vtkRenderer* renderer, vtkVolume* volume, Matrix4& modelView, 
     }
   };
   vtkCamera* camera = renderer->GetActiveCamera();
-  vtkNew<vtkMatrix4x4> eye;
-  vtkMatrix4x4::Multiply4x4(camera->GetModelViewTransformMatrix(), volume->GetMatrix(), eye);
-  copy(eye, modelView);
+  if (volume)
+  {
+    vtkNew<vtkMatrix4x4> eye;
+    vtkMatrix4x4::Multiply4x4(camera->GetModelViewTransformMatrix(), volume->GetMatrix(), eye);
+    copy(eye, modelView);
+  }
+  else
+  {
+    copy(camera->GetModelViewTransformMatrix(), modelView);
+  }
   copy(
     camera->GetProjectionTransformMatrix(renderer->GetTiledAspectRatio(), -1.0, 1.0), projection);
 }

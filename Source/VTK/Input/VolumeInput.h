@@ -67,8 +67,9 @@ ScalarSelection SelectScalars(
 
 /**
  * The matrices of a frame of `volume` in `renderer`, as the mapper draws it: model-view =
- * the active camera's view transform times the volume's matrix; projection = the camera's
- * for the renderer's tiled aspect ratio with OpenGL's depth range.
+ * the active camera's view transform times the volume's matrix (the view transform alone
+ * for a null `volume`); projection = the camera's for the renderer's tiled aspect ratio
+ * with OpenGL's depth range.
  */
 void ViewMatrices(
   vtkRenderer* renderer, vtkVolume* volume, Matrix4& modelView, Matrix4& projection);

@@ -17,6 +17,8 @@ uniform float inverseUnitDistance; // 1 / ScalarOpacityUnitDistance
 // function's means (VTK-compatible), 1 scalars (pre-integrated, the reductions), 2 colours.
 uniform int shadingMode;
 uniform int tableSize;
+// Entries in a row of the tables' textures: entry i at texel (i % tableWidth, i / tableWidth).
+uniform int tableWidth;
 uniform sampler2D transferFunction;
 // Prefix integrals (T, E_r, E_g, E_b) at the table entries, as a float sum high + low so
 // that differences of nearby entries keep their precision.
@@ -51,9 +53,14 @@ float Opacity(float d)
   return d < MTPT_SERIES_DEPTH ? OpacitySeries(d) : 1.0 - exp(-d);
 }
 
+ivec2 TableTexel(int i)
+{
+  return ivec2(i % tableWidth, i / tableWidth);
+}
+
 vec4 Entry(int i)
 {
-  return texelFetch(transferFunction, ivec2(i, 0), 0);
+  return texelFetch(transferFunction, TableTexel(i), 0);
 }
 
 void Split(float u, out int i, out float f)
@@ -100,8 +107,8 @@ void SpanMeans(float u0, float u1, out float tau, out vec3 e)
   vec3 e0, e1;
   Partial(i0, f0, t0, e0);
   Partial(i1, f1, t1, e1);
-  vec4 sums = (texelFetch(integralsHigh, ivec2(i1, 0), 0) - texelFetch(integralsHigh, ivec2(i0, 0), 0)) +
-    (texelFetch(integralsLow, ivec2(i1, 0), 0) - texelFetch(integralsLow, ivec2(i0, 0), 0));
+  vec4 sums = (texelFetch(integralsHigh, TableTexel(i1), 0) - texelFetch(integralsHigh, TableTexel(i0), 0)) +
+    (texelFetch(integralsLow, TableTexel(i1), 0) - texelFetch(integralsLow, TableTexel(i0), 0));
   float inverse = 1.0 / (u1 - u0);
   tau = (sums.x + t1 - t0) * inverse;
   e = (sums.yzw + e1 - e0) * inverse;
@@ -332,8 +339,8 @@ float IntensityMeanInside(float u0, float u1)
   {
     return (IntervalIntegral(i0, f0, 1.0) + IntervalIntegral(i1, 0.0, f1)) / (u1 - u0);
   }
-  vec2 w1 = texelFetch(intensityPrefix, ivec2(i1, 0), 0).xy;
-  vec2 w0 = texelFetch(intensityPrefix, ivec2(i0, 0), 0).xy;
+  vec2 w1 = texelFetch(intensityPrefix, TableTexel(i1), 0).xy;
+  vec2 w0 = texelFetch(intensityPrefix, TableTexel(i0), 0).xy;
   float sum = (w1.x - w0.x) + (w1.y - w0.y);
   return (sum + IntervalIntegral(i1, 0.0, f1) - IntervalIntegral(i0, 0.0, f0)) / (u1 - u0);
 }

@@ -19,6 +19,9 @@ uniform float scalarShift;
 uniform float entryScale;
 uniform float entryShift;
 uniform int tableSize;
+// Entries in a row of the table's texture; a table of more (several properties) is read
+// texel by texel, entry i at (i % tableWidth, i / tableWidth).
+uniform int tableWidth;
 uniform int shadingMode; // mtpt::FragmentValues of the frame's plan: see the fragment shader
 // Perspective-exact pre-integration (mtpt::PerspectiveInterpolation): 1 / eye depth =
 // inverseDepthScale * z_ndc + inverseDepthOffset; eye ray per unit depth =
@@ -37,6 +40,16 @@ out vec3 preIntegration;
 out vec4 exactFrontBack;
 out vec2 exactRay;
 
+// The table at entry coordinate u, clamped to the table, read texel by texel.
+vec4 EntryAt(float u)
+{
+  u = clamp(u, 0.0, float(tableSize - 1));
+  int i = min(int(u), max(tableSize - 2, 0));
+  int j = min(i + 1, tableSize - 1);
+  return mix(texelFetch(transferFunction, ivec2(i % tableWidth, i / tableWidth), 0),
+    texelFetch(transferFunction, ivec2(j % tableWidth, j / tableWidth), 0), u - float(i));
+}
+
 void main()
 {
   if (shadingMode == 2)
@@ -49,9 +62,17 @@ void main()
   {
     // Vertex classification as VTK's PT, with float colours: at the thick vertex the
     // colour and attenuation are the mean of the front and back values.
-    vec4 front =
-      texture(transferFunction, vec2(scalarFrontBack.x * scalarScale + scalarShift, 0.5));
-    vec4 back = texture(transferFunction, vec2(scalarFrontBack.y * scalarScale + scalarShift, 0.5));
+    vec4 front, back;
+    if (tableSize <= tableWidth)
+    {
+      front = texture(transferFunction, vec2(scalarFrontBack.x * scalarScale + scalarShift, 0.5));
+      back = texture(transferFunction, vec2(scalarFrontBack.y * scalarScale + scalarShift, 0.5));
+    }
+    else
+    {
+      front = EntryAt(scalarFrontBack.x * entryScale + entryShift);
+      back = EntryAt(scalarFrontBack.y * entryScale + entryShift);
+    }
     classified = 0.5 * (front + back);
     preIntegration = vec3(0.0, 0.0, thickness);
   }
