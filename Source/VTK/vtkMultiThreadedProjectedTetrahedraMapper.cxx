@@ -118,6 +118,9 @@ public:
   bool Dependent = false;         ///< the last input has dependent components
   /// The last input is volumes of several matrices, each placed by its own (GroupVolumes).
   bool Placed = false;
+  /// The render time the renderer allotted the volumes this mapper draws together, seconds
+  /// (0: it draws its own volume alone).
+  double GroupAllotted = 0;
   /// Shading: each cell's normal (mtpt/Lighting.h), computed for NormalsKey, counted by
   /// NormalsVersion; and the last frame's lighting.
   std::vector<float> Normals;
@@ -731,6 +734,7 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::GroupVolumes(
 {
   Internals& in = *this->Internal;
   group.assign(1, { this->GetInputDataObject(0, 0), this, volume->GetProperty() });
+  in.GroupAllotted = 0;
   if (!this->CompositeWithOtherVolumes)
   {
     return true;
@@ -786,6 +790,7 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::GroupVolumes(
   group.clear();
   for (vtkVolume* member : members)
   {
+    in.GroupAllotted += member->GetAllocatedRenderTime();
     auto* mapper = static_cast<vtkMultiThreadedProjectedTetrahedraMapper*>(member->GetMapper());
     if (mapper != this)
     {
@@ -985,7 +990,9 @@ void vtkMultiThreadedProjectedTetrahedraMapper::AdjustDetail(
   vtkRenderer* renderer, vtkVolume* volume)
 {
   const double last = this->RetrieveRenderTime(renderer, volume);
-  const double allotted = volume->GetAllocatedRenderTime();
+  // The first volume of a group draws every member's cells in the time allotted to them all.
+  const double allotted = this->Internal->GroupAllotted > 0 ? this->Internal->GroupAllotted
+                                                            : volume->GetAllocatedRenderTime();
   if (!this->AutoAdjustCellFraction)
   {
     // VTK's own rule for the distance alone (vtkUnstructuredGridVolumeRayCastMapper).

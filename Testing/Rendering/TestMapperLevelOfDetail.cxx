@@ -193,6 +193,51 @@ TEST_F(MapperLevelOfDetail, MovingFramesKeepTheBudgetAndTheStillFrameIsFresh)
   }
 }
 
+TEST_F(MapperLevelOfDetail, VolumesDrawnTogetherShareTheirTime)
+{
+  // Two volumes of one renderer drawn together: the first volume's mapper draws both in the
+  // time the renderer allots the two, not in its own share of it.
+  vtkNew<SimulatedMapper> mapper;
+  mapper->SetBackend(Mapper::CPU_BACKEND);
+  mapper->windowPixels = 400 * 300;
+  Stage stage = FinStage(mapper, 400, 300);
+  vtkNew<Mapper> other;
+  other->SetInputData(BluntFin);
+  vtkNew<vtkVolume> second;
+  second->SetMapper(other);
+  auto property = MakeBluntFinProperty(); // another property object: still drawn together
+  second->SetProperty(property);
+  stage.renderer->AddVolume(second);
+  stage.window->Render();
+  mapper->Drawn();
+  EXPECT_EQ(other->GetNumberOfTetrahedra(), 0);
+  stage.window->SetDesiredUpdateRate(10);
+  mtpt::DetailLimits limits;
+  for (int frame = 0; frame < 4; ++frame)
+  {
+    const mtpt::Detail last = mapper->LastDetail();
+    const double cells = mapper->CellSeconds(last);
+    const mtpt::MeasuredFrame measured{ last, mapper->LastSeconds(), cells,
+      mapper->LastSeconds() - mapper->fixed - cells, mapper->fixed };
+    stage.renderer->GetActiveCamera()->Azimuth(7);
+    stage.window->Render();
+    mapper->Drawn();
+    const double own = stage.volume->GetAllocatedRenderTime();
+    const double both = own + second->GetAllocatedRenderTime();
+    ASSERT_NEAR(both, 0.1, 1e-9);
+    ASSERT_LT(own, both);
+    const mtpt::Detail expected = mtpt::ChooseDetail(measured,
+      mtpt::VolumeBudget(both, measured.seconds + mapper->window, measured.seconds), limits, last);
+    EXPECT_EQ(mapper->GetCellFraction(), static_cast<float>(expected.cellFraction))
+      << "frame " << frame;
+    EXPECT_EQ(mapper->GetImageSampleDistance(), static_cast<float>(expected.sampleDistance))
+      << "frame " << frame;
+    EXPECT_EQ(other->GetNumberOfTetrahedra(), 0);
+  }
+  other->ReleaseGraphicsResources(stage.window);
+  mapper->ReleaseGraphicsResources(stage.window);
+}
+
 /// Mean of the RGB channels over the pixels that differ from the background in `full`.
 double CoveredMean(vtkImageData* image, vtkImageData* full)
 {
