@@ -323,10 +323,21 @@ TEST_F(MapperVTKScenarios, TwoVolumesOneMovedByAUserTransformAmongCones)
   vtkNew<vtkTransform> transform;
   transform->Translate(1.5, 0.5, -1.0);
   transform->RotateY(30);
+  // Drawn one after the other, as VTK's PT draws them: together, the red cube lies over the
+  // blue one behind it where the two overlap on screen, where VTK's PT, drawing the blue one
+  // second, puts the blue over the red (MapperComposite's tests draw volumes together).
+  const auto apart = [](vtkSmartPointer<vtkUnstructuredGridVolumeMapper> mapper)
+  {
+    if (auto* ours = Mapper::SafeDownCast(mapper))
+    {
+      ours->SetCompositeWithOtherVolumes(false);
+    }
+    return mapper;
+  };
   const Build build = [&](vtkRenderer* renderer, const NewMapper& newMapper)
   {
-    vtkVolume* first = AddVolume(renderer, newMapper(), cube, red);
-    vtkVolume* second = AddVolume(renderer, newMapper(), cube, blue);
+    vtkVolume* first = AddVolume(renderer, apart(newMapper()), cube, red);
+    vtkVolume* second = AddVolume(renderer, apart(newMapper()), cube, blue);
     second->SetUserTransform(transform);
     renderer->AddActor(Cone(1, 0.5, 0.5, nullptr));
     renderer->AddActor(Cone(0.5, 0.5, 1, transform));
