@@ -13,6 +13,7 @@ prepares the data set (point data from cell data, tetrahedra from other cells), 
 table, the colour and opacity transfer functions, the volume property and the scalar bar,
 exactly as for its own mappers; then the volume's mapper is replaced by a
 vtkMultiThreadedProjectedTetrahedraMapper with the same input and scalar selection.
+Several add_volume calls in one plotter are drawn together, in one visibility order.
 """
 import warnings
 
