@@ -293,6 +293,22 @@ vtkSmartPointer<vtkImageData> ReferenceImage(const Stage& stage, vtkUnstructured
     ADD_FAILURE() << "no reference image";
     return nullptr;
   }
+  return ImageOf(reference);
+}
+
+vtkSmartPointer<vtkImageData> VolumesReferenceImage(vtkRenderer* renderer)
+{
+  vtkNew<vtkMTPTReferenceRenderer> reference;
+  if (!reference->RenderVolumes(renderer, renderer->GetVolumes()))
+  {
+    ADD_FAILURE() << "no reference image of the volumes";
+    return nullptr;
+  }
+  return ImageOf(reference);
+}
+
+vtkSmartPointer<vtkImageData> ImageOf(vtkMTPTReferenceRenderer* reference)
+{
   const int* size = reference->GetSize();
   vtkDoubleArray* rgb = reference->GetImage();
   auto image = vtkSmartPointer<vtkImageData>::New();

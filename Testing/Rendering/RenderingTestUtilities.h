@@ -21,6 +21,7 @@ class vtkUnstructuredGridBase;
 class vtkActor;
 class vtkImageData;
 class vtkRenderWindow;
+class vtkMTPTReferenceRenderer;
 class vtkRenderer;
 class vtkUnstructuredGrid;
 class vtkUnstructuredGridVolumeMapper;
@@ -135,6 +136,13 @@ vtkSmartPointer<vtkImageData> Render(
  */
 vtkSmartPointer<vtkImageData> ReferenceImage(
   const Stage& stage, vtkUnstructuredGridBase* input = nullptr);
+
+/// The exact reference of every visible volume of `renderer` integrated together
+/// (vtkMTPTReferenceRenderer::RenderVolumes), rounded as ReferenceImage's.
+vtkSmartPointer<vtkImageData> VolumesReferenceImage(vtkRenderer* renderer);
+
+/// The last image of `reference`, rounded to 8-bit RGB like a window's pixels.
+vtkSmartPointer<vtkImageData> ImageOf(vtkMTPTReferenceRenderer* reference);
 
 /// The RGB back buffer of a rendered window. `rerender` renders again first (the default
 /// of vtkWindowToImageFilter); that render may use a slightly different aspect ratio, so

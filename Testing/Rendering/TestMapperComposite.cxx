@@ -226,7 +226,8 @@ TEST_P(MapperComposite, InterleavedBlocksMatchTheMergedGridAndItsExactReference)
  */
 vtkSmartPointer<vtkImageData> DrawVolumes(const Parts& scene, int backend, bool together,
   bool shared, MessageObserver* observer = nullptr, std::vector<vtkIdType>* drawn = nullptr,
-  const std::function<void(std::size_t block, vtkVolume*, Mapper*)>& setUp = nullptr)
+  const std::function<void(std::size_t block, vtkVolume*, Mapper*)>& setUp = nullptr,
+  vtkSmartPointer<vtkImageData>* exact = nullptr)
 {
   auto property = MakeProperty(-0.3, 1.3, 0.3);
   std::vector<vtkSmartPointer<Mapper>> mappers;
@@ -271,6 +272,10 @@ vtkSmartPointer<vtkImageData> DrawVolumes(const Parts& scene, int backend, bool 
   stage.window->Render();
   stage.window->Render(); // a second frame: the group kept, no warning again
   auto image = Grab(stage.window, false);
+  if (exact)
+  {
+    *exact = VolumesReferenceImage(stage.renderer);
+  }
   for (const auto& mapper : mappers)
   {
     if (drawn)
@@ -421,21 +426,26 @@ struct TwoFunctions
 /**
  * The scene's blocks as volumes set up by `setUp` (sharing one property or not), drawn
  * together, checked to be drawn by the first mapper without a message, and drawn one after
- * the other: the two images.
+ * the other: the two images; and the exact reference of the volumes together
+ * (vtkMTPTReferenceRenderer::RenderVolumes).
  */
-std::pair<vtkSmartPointer<vtkImageData>, vtkSmartPointer<vtkImageData>> TogetherAndApart(
+std::pair<std::pair<vtkSmartPointer<vtkImageData>, vtkSmartPointer<vtkImageData>>,
+  vtkSmartPointer<vtkImageData>>
+TogetherAndApart(
   const Parts& scene, int backend, bool shared,
   const std::function<void(std::size_t block, vtkVolume*, Mapper*)>& setUp)
 {
   auto observer = vtkSmartPointer<MessageObserver>::New();
   std::vector<vtkIdType> drawn;
-  auto together = DrawVolumes(scene, backend, true, shared, observer, &drawn, setUp);
+  vtkSmartPointer<vtkImageData> exact;
+  auto together = DrawVolumes(scene, backend, true, shared, observer, &drawn, setUp, &exact);
   EXPECT_TRUE(observer->warnings.empty()) << observer->warnings.front();
   EXPECT_TRUE(observer->errors.empty());
   EXPECT_EQ(drawn.size(), 2u);
   EXPECT_EQ(drawn.at(0), scene.merged->GetNumberOfCells());
   EXPECT_EQ(drawn.at(1), 0);
-  return { together, DrawVolumes(scene, backend, false, shared, nullptr, nullptr, setUp) };
+  return { { together, DrawVolumes(scene, backend, false, shared, nullptr, nullptr, setUp) },
+    exact };
 }
 
 /**
@@ -488,8 +498,10 @@ TEST_P(MapperComposite, VolumesOfTheirOwnTransferFunctionsAreOnePicture)
       auto whole = Grab(stage.window, false);
       auto exact = ReferenceImage(stage);
       one->ReleaseGraphicsResources(stage.window);
-      ExpectOnePicture(images.first, images.second, whole, exact,
+      ExpectOnePicture(images.first.first, images.first.second, whole, exact,
         scene.name + ", two transfer functions, " + one->GetShadingModeAsString() + " shading");
+      EXPECT_LE(Compare(images.second, exact).worst, 1.0 / 255)
+        << "the reference of the volumes is the reference of the scene as one volume";
     }
   }
 }
@@ -529,8 +541,10 @@ TEST_P(MapperComposite, VolumesOfTheirOwnMatricesAreOnePicture)
     auto whole = Draw(tree, one, scene, &stage);
     auto exact = ReferenceImage(stage);
     one->ReleaseGraphicsResources(stage.window);
-    ExpectOnePicture(images.first, images.second, whole, exact,
+    ExpectOnePicture(images.first.first, images.first.second, whole, exact,
       scene.name + ", the second volume moved by its matrix");
+    EXPECT_LE(Compare(images.second, exact).worst, 1.0 / 255)
+      << "the reference of the volumes is the reference of the scene as one volume";
   }
 }
 

@@ -34,6 +34,10 @@
 #include "vtkUnstructuredGridBase.h"
 #include "vtkUnstructuredGridVolumeMapper.h"
 #include "vtkVolume.h"
+#include "vtkVolumeCollection.h"
+#include "vtkCellData.h"
+#include "vtkPointData.h"
+#include "vtkPoints.h"
 #include "vtkVolumeMapper.h"
 #include "vtkVolumeProperty.h"
 
@@ -464,6 +468,249 @@ bool vtkMTPTReferenceRenderer::Render(
                       : mtpt::ScalarsView::Association::Points };
   std::vector<float> normals;
   SetShading(renderer, property, adapter, view, this->NumberOfThreads, normals, settings);
+  return this->Integrate(adapter, view, settings, size);
+}
+
+namespace
+{
+/// One volume of several for the reference: its tetrahedra in world coordinates with its
+/// scalars, and its transfer functions' nodes over their and the data's range.
+struct PlacedVolume
+{
+  vtkSmartPointer<vtkUnstructuredGrid> grid; ///< world points, scalars "value" (double)
+  mtpt::ReferenceSettings functions;          ///< its color and opacity nodes only
+  double low = 0, high = 1;                   ///< the range the nodes and data span
+  double unitDistance = 1;
+  bool cellData = false;
+};
+
+/// `nodes` extended to [low, high] with its end values (a scalar beyond the nodes reads the
+/// nearest end, as the transfer functions clamp).
+template <typename Node>
+void Extend(std::vector<Node>& nodes, double low, double high)
+{
+  if (nodes.empty())
+  {
+    return;
+  }
+  std::sort(nodes.begin(), nodes.end(),
+    [](const Node& a, const Node& b) { return a.scalar < b.scalar; });
+  if (low < nodes.front().scalar)
+  {
+    Node first = nodes.front();
+    first.scalar = low;
+    nodes.insert(nodes.begin(), first);
+  }
+  if (high > nodes.back().scalar)
+  {
+    Node last = nodes.back();
+    last.scalar = high;
+    nodes.push_back(last);
+  }
+}
+} // namespace
+
+bool vtkMTPTReferenceRenderer::RenderVolumes(vtkRenderer* renderer, vtkVolumeCollection* volumes)
+{
+  this->Image->SetNumberOfTuples(0);
+  this->Size[0] = this->Size[1] = 0;
+  this->RenderSeconds = 0;
+  this->NumberOfSegments = 0;
+  std::vector<vtkVolume*> visible;
+  if (volumes)
+  {
+    vtkCollectionSimpleIterator it;
+    volumes->InitTraversal(it);
+    while (vtkVolume* volume = volumes->GetNextVolume(it))
+    {
+      if (volume->GetVisibility())
+      {
+        visible.push_back(volume);
+      }
+    }
+  }
+  if (visible.empty())
+  {
+    vtkErrorMacro(<< "no visible volume to integrate");
+    return false;
+  }
+  int size[2] = { 0, 0 };
+  std::vector<PlacedVolume> placed;
+  bool exact = true;
+  for (std::size_t v = 0; v < visible.size(); ++v)
+  {
+    vtkVolume* volume = visible[v];
+    vtkUnstructuredGridBase* input = nullptr;
+    if (!this->CheckScene(renderer, volume, input, size))
+    {
+      return false;
+    }
+    vtkVolumeProperty* property = volume->GetProperty();
+    auto* mapper = vtkAbstractVolumeMapper::SafeDownCast(volume->GetMapper());
+    if (property->GetShade(0) || !property->GetIndependentComponents() ||
+      (mapper && vtkVolumeMapper::SafeDownCast(mapper) &&
+        vtkVolumeMapper::SafeDownCast(mapper)->GetBlendMode() != 0) ||
+      (vtkUnstructuredGridVolumeMapper::SafeDownCast(mapper) &&
+        vtkUnstructuredGridVolumeMapper::SafeDownCast(mapper)->GetBlendMode() != 0))
+    {
+      vtkErrorMacro(<< "volume " << v + 1
+                    << ": several volumes are integrated with composite blending, unlit, of "
+                       "independent components; use Render for one volume otherwise");
+      return false;
+    }
+    mtpt::Tetrahedralizer tetrahedralizer;
+    vtkUnstructuredGridBase* tetrahedra = tetrahedralizer.Update(input);
+    mtpt::MeshAdapter adapter;
+    if (tetrahedra->GetNumberOfCells() == 0 || !adapter.Update(tetrahedra))
+    {
+      vtkErrorMacro(<< "cannot integrate volume " << v + 1 << ": "
+                    << (tetrahedra->GetNumberOfCells() == 0 ? "it has no 3D cells"
+                                                            : adapter.Error()));
+      return false;
+    }
+    const mtpt::ScalarSelection selected = mtpt::SelectScalars(tetrahedra, mapper, property);
+    if (!selected.array)
+    {
+      vtkErrorMacro(<< "cannot integrate volume " << v + 1 << ": " << selected.error);
+      return false;
+    }
+    PlacedVolume p;
+    double dataRange[2];
+    vtkIdType nonFinite = 0;
+    const float* values = adapter.Scalars(selected.array, selected.component, dataRange, nonFinite);
+    exact = ConvertTransferFunctions(
+              property, dataRange, this->TransferFunctionSamples, p.functions) &&
+      exact;
+    p.low = dataRange[0];
+    p.high = dataRange[1];
+    for (const auto& node : p.functions.color)
+    {
+      p.low = std::min(p.low, node.scalar);
+      p.high = std::max(p.high, node.scalar);
+    }
+    for (const auto& node : p.functions.opacity)
+    {
+      p.low = std::min(p.low, node.scalar);
+      p.high = std::max(p.high, node.scalar);
+    }
+    Extend(p.functions.color, p.low, p.high);
+    Extend(p.functions.opacity, p.low, p.high);
+    p.unitDistance = mtpt::UnitDistance(property);
+    p.cellData = selected.cellData;
+    // Its tetrahedra with world points (its matrix applied) and the selected scalars.
+    p.grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
+    p.grid->ShallowCopy(tetrahedra);
+    vtkNew<vtkPoints> world;
+    world->SetDataTypeToDouble();
+    world->SetNumberOfPoints(tetrahedra->GetNumberOfPoints());
+    vtkMatrix4x4* matrix = volume->GetMatrix();
+    for (vtkIdType i = 0; i < tetrahedra->GetNumberOfPoints(); ++i)
+    {
+      double point[4] = { 0, 0, 0, 1 };
+      tetrahedra->GetPoint(i, point);
+      matrix->MultiplyPoint(point, point);
+      world->SetPoint(i, point[0] / point[3], point[1] / point[3], point[2] / point[3]);
+    }
+    p.grid->SetPoints(world);
+    const vtkIdType tuples =
+      selected.cellData ? tetrahedra->GetNumberOfCells() : tetrahedra->GetNumberOfPoints();
+    vtkNew<vtkDoubleArray> value;
+    value->SetName("value");
+    value->SetNumberOfTuples(tuples);
+    for (vtkIdType i = 0; i < tuples; ++i)
+    {
+      value->SetValue(i, values[i]);
+    }
+    p.grid->GetPointData()->Initialize();
+    p.grid->GetCellData()->Initialize();
+    (selected.cellData ? static_cast<vtkDataSetAttributes*>(p.grid->GetCellData())
+                       : p.grid->GetPointData())
+      ->SetScalars(value);
+    if (!placed.empty() && p.cellData != placed.front().cellData)
+    {
+      vtkErrorMacro(<< "volume " << v + 1 << "'s scalars are "
+                    << (p.cellData ? "cell" : "point") << " data where volume 1's are "
+                    << (placed.front().cellData ? "cell" : "point") << " data");
+      return false;
+    }
+    placed.push_back(p);
+  }
+  // One mesh of all: volume k's scalars moved into a stretch of their own, its functions moved
+  // alike and each opacity scaled to the smallest unit distance, so that one pair of
+  // functions serves every cell exactly (a cell's scalars stay inside its volume's stretch).
+  double width = 0, unit = placed.front().unitDistance;
+  for (const PlacedVolume& p : placed)
+  {
+    width = std::max(width, p.high - p.low);
+    unit = std::min(unit, p.unitDistance);
+  }
+  const double stride = 2.0 * width + 1.0;
+  mtpt::ReferenceSettings settings;
+  vtkNew<vtkAppendFilter> append;
+  for (std::size_t k = 0; k < placed.size(); ++k)
+  {
+    PlacedVolume& p = placed[k];
+    const double shift = stride * static_cast<double>(k) - p.low;
+    for (mtpt::ColorNode node : p.functions.color)
+    {
+      node.scalar += shift;
+      settings.color.push_back(node);
+    }
+    for (mtpt::OpacityNode node : p.functions.opacity)
+    {
+      node.scalar += shift;
+      node.opacity *= unit / p.unitDistance;
+      settings.opacity.push_back(node);
+    }
+    vtkDataArray* value = p.cellData ? p.grid->GetCellData()->GetScalars()
+                                     : p.grid->GetPointData()->GetScalars();
+    for (vtkIdType i = 0; i < value->GetNumberOfTuples(); ++i)
+    {
+      value->SetTuple1(i, value->GetTuple1(i) + shift);
+    }
+    append->AddInputData(p.grid);
+  }
+  append->Update();
+  vtkNew<vtkUnstructuredGrid> all;
+  all->ShallowCopy(append->GetOutput());
+  mtpt::MeshAdapter adapter;
+  if (!adapter.Update(all))
+  {
+    vtkErrorMacro(<< "cannot integrate the volumes: " << adapter.Error());
+    return false;
+  }
+  const bool cellData = placed.front().cellData;
+  vtkDataArray* scalars =
+    cellData ? all->GetCellData()->GetScalars() : all->GetPointData()->GetScalars();
+  double range[2];
+  vtkIdType nonFinite = 0;
+  const float* values = adapter.Scalars(scalars, 0, range, nonFinite);
+  this->ExactTransferFunctions = exact;
+  // The view of the first volume's mapper (its clipping planes), in world coordinates.
+  if (const int ignored = SetView(renderer, visible.front(), size, settings))
+  {
+    vtkWarningMacro(<< "clipping with the first " << mtpt::ClipPlanes::Max << " clipping "
+                    << "planes; " << ignored << " more are ignored, as the mapper does");
+  }
+  mtpt::ViewMatrices(renderer, nullptr, settings.modelView, settings.projection);
+  if (const int lit = TranslucentTriangles(renderer, settings.triangles))
+  {
+    vtkWarningMacro(<< lit << " translucent actor(s) have lighting on; the reference draws "
+                    << "them with their flat colour (lighting off)");
+  }
+  settings.unitDistance = unit;
+  settings.blendMode = mtpt::BlendMode::Composite;
+  settings.scalarRange[0] = range[0];
+  settings.scalarRange[1] = range[1] > range[0] ? range[1] : range[0] + 1.0;
+  settings.mapping = mtpt::ScalarMapping::TransferFunctions;
+  const mtpt::ScalarsView view{ values,
+    cellData ? mtpt::ScalarsView::Association::Cells : mtpt::ScalarsView::Association::Points };
+  return this->Integrate(adapter, view, settings, size);
+}
+
+bool vtkMTPTReferenceRenderer::Integrate(const mtpt::MeshAdapter& adapter,
+  const mtpt::ScalarsView& view, const mtpt::ReferenceSettings& settings, const int size[2])
+{
   std::vector<double> rgb;
   std::string error;
   mtpt::ReferenceStats stats;

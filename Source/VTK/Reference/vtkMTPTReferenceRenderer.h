@@ -58,7 +58,15 @@ class vtkRenderer;
 class vtkUnstructuredGrid;
 class vtkUnstructuredGridBase;
 class vtkVolume;
+class vtkVolumeCollection;
 VTK_ABI_NAMESPACE_END
+
+namespace mtpt
+{
+class MeshAdapter;
+struct ReferenceSettings;
+struct ScalarsView;
+}
 
 class VTKRENDERINGMTPT_EXPORT vtkMTPTReferenceRenderer : public vtkObject
 {
@@ -98,6 +106,17 @@ public:
    * property, input, 3D cells, scalars; a renderer in no window or an empty viewport).
    */
   bool Render(vtkRenderer* renderer, vtkVolume* volume, vtkUnstructuredGridBase* input = nullptr);
+
+  /**
+   * Computes the reference image of several volumes as `renderer` shows them (the visible
+   * ones of `volumes`, for instance renderer->GetVolumes()), integrated together along each
+   * ray in depth order: each cell with its own volume's matrix, scalars (selected by the
+   * volume's mapper), colour and opacity functions and unit distance, as the mapper draws
+   * volumes together (CompositeWithOtherVolumes). Composite blending, unlit, independent
+   * components, the first volume's clipping planes; anything else, and what Render refuses,
+   * returns false with a vtkErrorMacro.
+   */
+  bool RenderVolumes(vtkRenderer* renderer, vtkVolumeCollection* volumes);
 
   /// The last image: width * height tuples of 3 doubles (linear RGB), row 0 at the bottom.
   vtkDoubleArray* GetImage();
@@ -149,6 +168,9 @@ private:
   bool CheckScene(
     vtkRenderer* renderer, vtkVolume* volume, vtkUnstructuredGridBase*& input, int size[2]);
   void operator=(const vtkMTPTReferenceRenderer&) = delete;
+  /// Integrates the mesh of `adapter` with `settings` into the image of `size`.
+  bool Integrate(const mtpt::MeshAdapter& adapter, const mtpt::ScalarsView& view,
+    const mtpt::ReferenceSettings& settings, const int size[2]);
 };
 
 #endif
