@@ -124,6 +124,11 @@ def reference(renderer, volume):
         exact.SetAverageIPScalarRange(*mapper.GetAverageIPScalarRange())
     if not exact.Render(renderer, volume):
         raise RuntimeError("no reference image")
+    return _rounded(exact, renderer)
+
+
+def _rounded(exact, renderer):
+    """The last image of reference renderer `exact`, rounded to bytes, as RGB image data."""
     values = exact.GetImage()
     pixels = vtkUnsignedCharArray()
     pixels.SetNumberOfComponents(3)
@@ -136,6 +141,15 @@ def reference(renderer, volume):
     image.SetDimensions(width, height, 1)
     image.GetPointData().SetScalars(pixels)
     return image
+
+
+def reference_of_volumes(renderer):
+    """The exact reference of every visible volume of `renderer` integrated together
+    (vtkMTPTReferenceRenderer.RenderVolumes), rounded to bytes, as RGB image data."""
+    exact = vtkMTPTReferenceRenderer()
+    if not exact.RenderVolumes(renderer, renderer.GetVolumes()):
+        raise RuntimeError("no reference image of the volumes")
+    return _rounded(exact, renderer)
 
 
 def difference(a, b, background, scale=1.0):
@@ -173,3 +187,33 @@ def write_picture(path, images, axis):
     writer.SetFileName(path)
     writer.SetInputData(append(images, axis))
     writer.Write()
+
+
+def labelled(image, text):
+    """`image` (RGB image data) with `text` written in its top left corner, as an image."""
+    from vtkmodules.vtkRenderingCore import vtkImageActor, vtkTextActor
+    import vtkmodules.vtkRenderingFreeType  # noqa: F401 (text rendering)
+    width, height, _ = image.GetDimensions()
+    actor = vtkImageActor()
+    actor.GetMapper().SetInputData(image)
+    renderer = vtkRenderer()
+    renderer.AddActor(actor)
+    label = vtkTextActor()
+    label.SetInput(text)
+    label.GetTextProperty().SetFontSize(max(12, height // 18))
+    label.GetTextProperty().SetColor(1.0, 1.0, 1.0)
+    label.GetTextProperty().BoldOn()
+    label.GetTextProperty().SetVerticalJustificationToTop()
+    label.SetDisplayPosition(8, height - 8)
+    renderer.AddActor2D(label)
+    window = vtkRenderWindow()
+    window.SetOffScreenRendering(1)
+    window.SetMultiSamples(0)
+    window.SetSize(width, height)
+    window.AddRenderer(renderer)
+    camera = renderer.GetActiveCamera()
+    camera.ParallelProjectionOn()
+    renderer.ResetCamera()
+    camera.SetParallelScale(0.5 * (height - 1))
+    window.Render()
+    return grab(window)
