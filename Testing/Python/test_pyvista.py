@@ -280,33 +280,11 @@ def test_image_data_is_cast_and_drawn():
     pl.close()
 
 
-def combined_property(properties, shift):
-    """One volume property holding each of `properties`' functions, the k-th moved by
-    k * `shift` along the scalar, each opacity scaled to the smallest unit distance: the
-    property of the scene as one volume whose k-th block's scalars are moved alike."""
-    from vtkmodules.vtkCommonDataModel import vtkPiecewiseFunction
-    from vtkmodules.vtkRenderingCore import vtkColorTransferFunction, vtkVolumeProperty
-    unit = min(p.GetScalarOpacityUnitDistance(0) for p in properties)
-    colour, opacity = vtkColorTransferFunction(), vtkPiecewiseFunction()
-    for k, prop in enumerate(properties):
-        scale = unit / prop.GetScalarOpacityUnitDistance(0)
-        for x, r, g, b, _, _ in nodes(prop.GetRGBTransferFunction(0), 6):
-            colour.AddRGBPoint(x + k * shift, r, g, b)
-        for x, y, _, _ in nodes(prop.GetScalarOpacity(0), 4):
-            opacity.AddPoint(x + k * shift, y * scale)
-    combined = vtkVolumeProperty()
-    combined.SetColor(colour)
-    combined.SetScalarOpacity(opacity)
-    combined.SetScalarOpacityUnitDistance(unit)
-    return combined
-
-
 def test_two_add_volume_calls_are_one_picture(mesh):
     """The fin in interleaved slabs, each half its own add_volume (its own colour map, opacity
     and unit distance): the first volume's mapper draws both in one visibility order, within
     2/255 of the exact integral of the two; drawn one after the other, as VTK draws volumes,
     they are further from it."""
-    from vtkmodules.vtkCommonDataModel import vtkMultiBlockDataSet
     x = mesh.cell_centers().points[:, 0]
     low, high = float(x.min()), float(x.max())
     slab = (np.floor((x - low) / ((high - low) / 6)) % 2).astype(bool)
@@ -328,22 +306,9 @@ def test_two_add_volume_calls_are_one_picture(mesh):
     apart = snapshot(pl)
     assert sum(a.GetMapper().GetNumberOfTetrahedra() for a in actors) == drawn
 
-    # The exact integral: both halves as the blocks of one volume, the second's scalars moved
-    # past the first's, through one property holding both halves' functions.
-    shift = 1000.0
-    blocks = vtkMultiBlockDataSet()
-    for k, actor in enumerate(actors):
-        block = pyvista.wrap(actor.GetMapper().GetInputDataObject(0, 0)).copy()
-        block.point_data["value"] = np.asarray(block.point_data["Density"]) + k * shift
-        block.set_active_scalars("value")
-        blocks.SetBlock(k, block)
-    mapper = Mapper()
-    mapper.SetInputDataObject(blocks)
-    volume = vtkVolume()
-    volume.SetMapper(mapper)
-    volume.SetProperty(combined_property([a.GetProperty() for a in actors], shift))
+    # The exact integral of the two volumes together.
     reference = vtkMTPTReferenceRenderer()
-    assert reference.Render(pl.renderer, volume)
+    assert reference.RenderVolumes(pl.renderer, pl.renderer.GetVolumes())
     assert reference.GetExactTransferFunctions()
     width, height = reference.GetSize()
     exact = np.flipud(numpy_support.vtk_to_numpy(reference.GetImage()).reshape(height, width, 3))

@@ -12,6 +12,7 @@
 #include "vtkActor.h"
 #include "vtkActorCollection.h"
 #include "vtkAppendFilter.h"
+#include "vtkCamera.h"
 #include "vtkCellData.h"
 #include "vtkColorTransferFunction.h"
 #include "vtkDataSetTriangleFilter.h"
@@ -660,6 +661,33 @@ TEST_P(MapperComposite, TheGroupFollowsItsVolumes)
     shared.volumes[1]->GetMapper()->GetInputDataObject(0, 0));
   EXPECT_EQ(shared.Drawn(0), 2 * cells0);
   EXPECT_TRUE(shared.observer->warnings.empty());
+
+  // One tetrahedron beside thousands: drawn with them, in the same order.
+  Group tiny(scene, GetParam());
+  tiny.Add(scene.blocks[0], 0);
+  vtkNew<vtkUnstructuredGrid> one;
+  vtkNew<vtkPoints> corners;
+  const double corner[4][3] = { { 0.1, 0.1, 0.1 }, { 0.4, 0.1, 0.1 }, { 0.1, 0.4, 0.1 },
+    { 0.1, 0.1, 0.4 } };
+  for (const double* p : corner)
+  {
+    corners->InsertNextPoint(p);
+  }
+  one->SetPoints(corners);
+  const vtkIdType ids[4] = { 0, 1, 2, 3 };
+  one->InsertNextCell(VTK_TETRA, 4, ids);
+  vtkNew<vtkFloatArray> field;
+  field->SetName("field");
+  for (const float value : { 0.2f, 0.9f, 0.5f, 1.1f })
+  {
+    field->InsertNextValue(value);
+  }
+  one->GetPointData()->SetScalars(field);
+  tiny.Add(one, 1);
+  tiny.Render();
+  EXPECT_EQ(tiny.Drawn(0), cells0 + 1);
+  EXPECT_EQ(tiny.Drawn(1), 0);
+  EXPECT_TRUE(tiny.observer->warnings.empty()) << tiny.observer->warnings.front();
 
   // The second volume's cells as a multi-block of two: the same picture.
   Group tree(scene, GetParam());
