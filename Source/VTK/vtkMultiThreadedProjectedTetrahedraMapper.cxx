@@ -743,10 +743,25 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::GroupVolumes(
   // this volume's key are drawn together by the first of them. A volume the renderer's
   // culler left out of this frame (wholly outside the view: its render time multiplier 0)
   // is not drawn, so it neither leads a group nor adds cells to one.
+  vtkVolumeCollection* volumes = renderer->GetVolumes();
+  // The renderer's entry for the volume drawn: itself, or the prop that holds it and draws
+  // through this mapper (ParaView's vtkPVLODVolume draws an inner volume of its own).
+  vtkVolume* self = nullptr;
+  vtkCollectionSimpleIterator it;
+  volumes->InitTraversal(it);
+  while (vtkVolume* other = volumes->GetNextVolume(it))
+  {
+    if (other == volume || (!self && other->GetMapper() == this))
+    {
+      self = other;
+    }
+  }
+  if (!self)
+  {
+    return true; // not among the renderer's volumes: drawn by itself
+  }
   const GroupKey key = GroupKeyOf(volume, this);
   std::vector<vtkVolume*> members;
-  vtkVolumeCollection* volumes = renderer->GetVolumes();
-  vtkCollectionSimpleIterator it;
   volumes->InitTraversal(it);
   while (vtkVolume* other = volumes->GetNextVolume(it))
   {
@@ -758,7 +773,7 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::GroupVolumes(
       continue;
     }
     const std::string difference =
-      other == volume ? std::string() : Difference(key, GroupKeyOf(other, mapper));
+      other == self ? std::string() : Difference(key, GroupKeyOf(other, mapper));
     if (difference.empty())
     {
       members.push_back(other);
@@ -772,11 +787,11 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::GroupVolumes(
       vtkWarningMacro(<< warning);
     }
   }
-  if (members.size() <= 1 || std::find(members.begin(), members.end(), volume) == members.end())
+  if (members.size() <= 1 || std::find(members.begin(), members.end(), self) == members.end())
   {
-    return true; // alone, or not among the renderer's volumes (drawn by another prop)
+    return true; // alone (or hidden, or culled)
   }
-  if (members.front() != volume)
+  if (members.front() != self)
   {
     return false; // the first of the group draws this volume's cells with its own
   }
@@ -785,7 +800,7 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::GroupVolumes(
   bool placed = false;
   for (vtkVolume* member : members)
   {
-    placed = placed || !SameMatrix(member, volume);
+    placed = placed || !SameMatrix(member, self);
   }
   group.clear();
   for (vtkVolume* member : members)

@@ -23,6 +23,7 @@
 #include "vtkInformation.h"
 #include "vtkMultiBlockDataSet.h"
 #include "vtkMultiBlockUnstructuredGridVolumeMapper.h"
+#include "vtkObjectFactory.h"
 #include "vtkPartitionedDataSet.h"
 #include "vtkPiecewiseFunction.h"
 #include "vtkPlane.h"
@@ -820,6 +821,63 @@ TEST_P(MapperComposite, ClippingLightingPeelingAndRenderersKeepTheGroup)
   {
     mapper->ReleaseGraphicsResources(left.stage.window);
   }
+}
+
+/**
+ * A volume that draws through an inner volume of its own with its mapper, property and
+ * matrix, as ParaView's vtkPVLODVolume draws (the renderer lists the outer volume; the mapper
+ * is given the inner one).
+ */
+class OuterVolume : public vtkVolume
+{
+public:
+  static OuterVolume* New();
+  vtkTypeMacro(OuterVolume, vtkVolume);
+  int RenderVolumetricGeometry(vtkViewport* viewport) override
+  {
+    this->Inner->SetMapper(this->GetMapper());
+    this->Inner->SetProperty(this->GetProperty());
+    this->Inner->SetUserMatrix(this->GetMatrix());
+    this->Inner->SetAllocatedRenderTime(this->GetAllocatedRenderTime(), viewport);
+    return this->Inner->RenderVolumetricGeometry(viewport);
+  }
+
+protected:
+  OuterVolume() = default;
+  ~OuterVolume() override = default;
+
+private:
+  OuterVolume(const OuterVolume&) = delete;
+  void operator=(const OuterVolume&) = delete;
+  vtkNew<vtkVolume> Inner;
+};
+vtkStandardNewMacro(OuterVolume);
+
+TEST_P(MapperComposite, VolumesDrawnThroughInnerVolumesJoinTheirGroup)
+{
+  // Both volumes draw through inner volumes of their own: still one picture, the first
+  // volume's mapper drawing both.
+  const Parts scene = InterleavedScenes()[1];
+  Group plain(scene, GetParam());
+  plain.Add(scene.blocks[0], 0);
+  plain.Add(scene.blocks[1], 1);
+  auto expected = plain.Render();
+  Group outer(scene, GetParam());
+  for (std::size_t b = 0; b < 2; ++b)
+  {
+    vtkVolume* volume = outer.Add(scene.blocks[b], b);
+    vtkNew<OuterVolume> holder;
+    holder->SetMapper(volume->GetMapper());
+    holder->SetProperty(volume->GetProperty());
+    outer.stage.renderer->RemoveVolume(volume);
+    outer.stage.renderer->AddVolume(holder);
+    outer.volumes[b] = holder;
+  }
+  const ImageDifference d = Compare(outer.Render(), expected);
+  EXPECT_EQ(outer.Drawn(0), scene.merged->GetNumberOfCells());
+  EXPECT_EQ(outer.Drawn(1), 0);
+  EXPECT_EQ(d.worst, 0.0);
+  EXPECT_TRUE(outer.observer->warnings.empty());
 }
 
 TEST_P(MapperComposite, VolumesOfAnotherBlendModeAreDrawnApartWithOneWarning)
