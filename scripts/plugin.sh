@@ -8,7 +8,10 @@
 #   4. pvbatch on 2 MPI ranks: the mesh redistributed over the ranks (each must hold cells),
 #      drawn by the mapper on each and blended by ParaView's ordered compositing, compared
 #      with the same script's image from 1 rank;
-#   5. client-server: pvpython connected to a 2-rank pvserver, the plugin loaded on both
+#   5. pvpython, pvbatch and pvbatch on 2 MPI ranks: the mesh cut into two halves, each its
+#      own representation in one view: drawn together, the whole mesh's picture; with
+#      Composite With Other Volumes off, one after the other, visibly not;
+#   6. client-server: pvpython connected to a 2-rank pvserver, the plugin loaded on both
 #      sides, compared with the same 1-rank image.
 # Prints the figures (RMSE in [0,1] RGB) and exits non-zero on any failure.
 #
@@ -121,6 +124,12 @@ step pvbatch_1rank "$pvbatch" "$tests/test_plugin_parallel.py" "$plugin" "$data"
 step pvbatch_2ranks timeout 500 mpiexec --allow-run-as-root --oversubscribe -n 2 \
   "$pvbatch" "$tests/test_plugin_parallel.py" "$plugin" "$data" "$out" parallel_2ranks \
   "$out/parallel_1rank.png"
+step volumes_pvpython "$pvpython" "$tests/test_plugin_volumes.py" "$plugin" "$data" "$out" \
+  volumes_pvpython
+step volumes_pvbatch "$pvbatch" "$tests/test_plugin_volumes.py" "$plugin" "$data" "$out" \
+  volumes_pvbatch
+step volumes_2ranks timeout 500 mpiexec --allow-run-as-root --oversubscribe -n 2 \
+  "$pvbatch" "$tests/test_plugin_volumes.py" "$plugin" "$data" "$out" volumes_2ranks
 step pvserver_2ranks "$tests/client_server.sh" "$pvpython" "$plugin" "$data" "$out" \
   pvserver_2ranks "$out/parallel_1rank.png"
 
@@ -131,7 +140,7 @@ fi
 
 echo "plugin.sh: figures"
 grep -h -E 'RMSE [0-9]' "$out"/pvpython.log "$out"/pvbatch.log "$out"/peeling.log \
-  "$out"/pvbatch_2ranks.log \
+  "$out"/pvbatch_2ranks.log "$out"/volumes_*.log \
   "$out"/pvserver_2ranks.log \
   | grep -v -E '^(PASS|FAIL)' | sed 's/^/  /' || true
 echo "plugin.sh: all plugin tests passed (images in $out)"

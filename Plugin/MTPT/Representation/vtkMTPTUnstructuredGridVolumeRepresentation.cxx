@@ -191,6 +191,16 @@ int vtkMTPTUnstructuredGridVolumeRepresentation::GetAutoAdjustCellFraction()
   return this->MTPTMapper->GetAutoAdjustCellFraction();
 }
 
+void vtkMTPTUnstructuredGridVolumeRepresentation::SetCompositeWithOtherVolumes(int together)
+{
+  this->MTPTMapper->SetCompositeWithOtherVolumes(together != 0);
+}
+
+int vtkMTPTUnstructuredGridVolumeRepresentation::GetCompositeWithOtherVolumes()
+{
+  return this->MTPTMapper->GetCompositeWithOtherVolumes() ? 1 : 0;
+}
+
 void vtkMTPTUnstructuredGridVolumeRepresentation::SetMinimumCellFraction(double fraction)
 {
   this->MTPTMapper->SetMinimumCellFraction(static_cast<float>(fraction));

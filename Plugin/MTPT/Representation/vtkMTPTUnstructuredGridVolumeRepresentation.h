@@ -78,6 +78,8 @@ public:
   int GetAutoAdjustCellFraction();
   void SetMinimumCellFraction(double fraction);
   double GetMinimumCellFraction();
+  void SetCompositeWithOtherVolumes(int together);
+  int GetCompositeWithOtherVolumes();
   ///@}
 
   ///@{
