@@ -695,6 +695,26 @@ GroupKey GroupKeyOf(vtkVolume* volume, vtkMultiThreadedProjectedTetrahedraMapper
   return key;
 }
 
+/**
+ * The entry of `volumes` for `volume` drawn by `mapper`: the volume itself, or the prop that
+ * holds it and draws through the mapper (ParaView's vtkPVLODVolume draws an inner volume of
+ * its own); null when there is none.
+ */
+vtkVolume* EntryOf(vtkVolumeCollection* volumes, vtkVolume* volume, vtkAbstractVolumeMapper* mapper)
+{
+  vtkVolume* entry = nullptr;
+  vtkCollectionSimpleIterator it;
+  volumes->InitTraversal(it);
+  while (vtkVolume* other = volumes->GetNextVolume(it))
+  {
+    if (other == volume || (!entry && other->GetMapper() == mapper))
+    {
+      entry = other;
+    }
+  }
+  return entry;
+}
+
 /// Why volumes of keys `a` and `b` are drawn apart, or empty when they are drawn together.
 std::string Difference(const GroupKey& a, const GroupKey& b)
 {
@@ -744,24 +764,14 @@ bool vtkMultiThreadedProjectedTetrahedraMapper::GroupVolumes(
   // culler left out of this frame (wholly outside the view: its render time multiplier 0)
   // is not drawn, so it neither leads a group nor adds cells to one.
   vtkVolumeCollection* volumes = renderer->GetVolumes();
-  // The renderer's entry for the volume drawn: itself, or the prop that holds it and draws
-  // through this mapper (ParaView's vtkPVLODVolume draws an inner volume of its own).
-  vtkVolume* self = nullptr;
-  vtkCollectionSimpleIterator it;
-  volumes->InitTraversal(it);
-  while (vtkVolume* other = volumes->GetNextVolume(it))
-  {
-    if (other == volume || (!self && other->GetMapper() == this))
-    {
-      self = other;
-    }
-  }
+  vtkVolume* self = EntryOf(volumes, volume, this);
   if (!self)
   {
     return true; // not among the renderer's volumes: drawn by itself
   }
   const GroupKey key = GroupKeyOf(volume, this);
   std::vector<vtkVolume*> members;
+  vtkCollectionSimpleIterator it;
   volumes->InitTraversal(it);
   while (vtkVolume* other = volumes->GetNextVolume(it))
   {

@@ -482,6 +482,7 @@ struct PlacedVolume
   double low = 0, high = 1;                   ///< the range the nodes and data span
   double unitDistance = 1;
   bool cellData = false;
+  bool exact = true; ///< its functions converted node for node
 };
 
 /// `nodes` extended to [low, high] with its end values (a scalar beyond the nodes reads the
@@ -508,136 +509,128 @@ void Extend(std::vector<Node>& nodes, double low, double high)
     nodes.push_back(last);
   }
 }
-} // namespace
 
-bool vtkMTPTReferenceRenderer::RenderVolumes(vtkRenderer* renderer, vtkVolumeCollection* volumes)
+/// The visible volumes of `volumes`, in order.
+std::vector<vtkVolume*> VisibleVolumes(vtkVolumeCollection* volumes)
 {
-  this->Image->SetNumberOfTuples(0);
-  this->Size[0] = this->Size[1] = 0;
-  this->RenderSeconds = 0;
-  this->NumberOfSegments = 0;
   std::vector<vtkVolume*> visible;
-  if (volumes)
+  vtkCollectionSimpleIterator it;
+  volumes->InitTraversal(it);
+  while (vtkVolume* volume = volumes->GetNextVolume(it))
   {
-    vtkCollectionSimpleIterator it;
-    volumes->InitTraversal(it);
-    while (vtkVolume* volume = volumes->GetNextVolume(it))
+    if (volume->GetVisibility())
     {
-      if (volume->GetVisibility())
-      {
-        visible.push_back(volume);
-      }
+      visible.push_back(volume);
     }
   }
-  if (visible.empty())
+  return visible;
+}
+
+/// Whether the mapper of `volume` blends by composite (VTK's mappers keep the mode apart).
+bool Composites(vtkVolume* volume)
+{
+  if (auto* mapper = vtkVolumeMapper::SafeDownCast(volume->GetMapper()))
   {
-    vtkErrorMacro(<< "no visible volume to integrate");
+    return mapper->GetBlendMode() == vtkVolumeMapper::COMPOSITE_BLEND;
+  }
+  auto* grid = vtkUnstructuredGridVolumeMapper::SafeDownCast(volume->GetMapper());
+  return !grid || grid->GetBlendMode() == 0;
+}
+
+/// `tetrahedra` with its points taken to world coordinates by `matrix` and `values` (per
+/// point, or per cell with `cellData`) as its only scalars, "value".
+vtkSmartPointer<vtkUnstructuredGrid> WorldGrid(
+  vtkUnstructuredGridBase* tetrahedra, vtkMatrix4x4* matrix, const float* values, bool cellData)
+{
+  auto grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  grid->ShallowCopy(tetrahedra);
+  vtkNew<vtkPoints> world;
+  world->SetDataTypeToDouble();
+  world->SetNumberOfPoints(tetrahedra->GetNumberOfPoints());
+  for (vtkIdType i = 0; i < tetrahedra->GetNumberOfPoints(); ++i)
+  {
+    double point[4] = { 0, 0, 0, 1 };
+    tetrahedra->GetPoint(i, point);
+    matrix->MultiplyPoint(point, point);
+    world->SetPoint(i, point[0] / point[3], point[1] / point[3], point[2] / point[3]);
+  }
+  grid->SetPoints(world);
+  const vtkIdType tuples =
+    cellData ? tetrahedra->GetNumberOfCells() : tetrahedra->GetNumberOfPoints();
+  vtkNew<vtkDoubleArray> value;
+  value->SetName("value");
+  value->SetNumberOfTuples(tuples);
+  for (vtkIdType i = 0; i < tuples; ++i)
+  {
+    value->SetValue(i, values[i]);
+  }
+  grid->GetPointData()->Initialize();
+  grid->GetCellData()->Initialize();
+  (cellData ? static_cast<vtkDataSetAttributes*>(grid->GetCellData()) : grid->GetPointData())
+    ->SetScalars(value);
+  return grid;
+}
+
+/// `volume` (of grid `input`) as the reference of several volumes takes it; false, with
+/// `error` saying why, when it cannot.
+bool PlaceVolume(vtkVolume* volume, vtkUnstructuredGridBase* input, int samples, PlacedVolume& p,
+  std::string& error)
+{
+  vtkVolumeProperty* property = volume->GetProperty();
+  if (property->GetShade(0) || !property->GetIndependentComponents() || !Composites(volume))
+  {
+    error = "several volumes are integrated with composite blending, unlit, of independent "
+            "components; use Render for one volume otherwise";
     return false;
   }
-  int size[2] = { 0, 0 };
-  std::vector<PlacedVolume> placed;
-  bool exact = true;
-  for (std::size_t v = 0; v < visible.size(); ++v)
+  mtpt::Tetrahedralizer tetrahedralizer;
+  vtkUnstructuredGridBase* tetrahedra = tetrahedralizer.Update(input);
+  mtpt::MeshAdapter adapter;
+  if (tetrahedra->GetNumberOfCells() == 0 || !adapter.Update(tetrahedra))
   {
-    vtkVolume* volume = visible[v];
-    vtkUnstructuredGridBase* input = nullptr;
-    if (!this->CheckScene(renderer, volume, input, size))
-    {
-      return false;
-    }
-    vtkVolumeProperty* property = volume->GetProperty();
-    auto* mapper = vtkAbstractVolumeMapper::SafeDownCast(volume->GetMapper());
-    if (property->GetShade(0) || !property->GetIndependentComponents() ||
-      (mapper && vtkVolumeMapper::SafeDownCast(mapper) &&
-        vtkVolumeMapper::SafeDownCast(mapper)->GetBlendMode() != 0) ||
-      (vtkUnstructuredGridVolumeMapper::SafeDownCast(mapper) &&
-        vtkUnstructuredGridVolumeMapper::SafeDownCast(mapper)->GetBlendMode() != 0))
-    {
-      vtkErrorMacro(<< "volume " << v + 1
-                    << ": several volumes are integrated with composite blending, unlit, of "
-                       "independent components; use Render for one volume otherwise");
-      return false;
-    }
-    mtpt::Tetrahedralizer tetrahedralizer;
-    vtkUnstructuredGridBase* tetrahedra = tetrahedralizer.Update(input);
-    mtpt::MeshAdapter adapter;
-    if (tetrahedra->GetNumberOfCells() == 0 || !adapter.Update(tetrahedra))
-    {
-      vtkErrorMacro(<< "cannot integrate volume " << v + 1 << ": "
-                    << (tetrahedra->GetNumberOfCells() == 0 ? "it has no 3D cells"
-                                                            : adapter.Error()));
-      return false;
-    }
-    const mtpt::ScalarSelection selected = mtpt::SelectScalars(tetrahedra, mapper, property);
-    if (!selected.array)
-    {
-      vtkErrorMacro(<< "cannot integrate volume " << v + 1 << ": " << selected.error);
-      return false;
-    }
-    PlacedVolume p;
-    double dataRange[2];
-    vtkIdType nonFinite = 0;
-    const float* values = adapter.Scalars(selected.array, selected.component, dataRange, nonFinite);
-    exact = ConvertTransferFunctions(
-              property, dataRange, this->TransferFunctionSamples, p.functions) &&
-      exact;
-    p.low = dataRange[0];
-    p.high = dataRange[1];
-    for (const auto& node : p.functions.color)
-    {
-      p.low = std::min(p.low, node.scalar);
-      p.high = std::max(p.high, node.scalar);
-    }
-    for (const auto& node : p.functions.opacity)
-    {
-      p.low = std::min(p.low, node.scalar);
-      p.high = std::max(p.high, node.scalar);
-    }
-    Extend(p.functions.color, p.low, p.high);
-    Extend(p.functions.opacity, p.low, p.high);
-    p.unitDistance = mtpt::UnitDistance(property);
-    p.cellData = selected.cellData;
-    // Its tetrahedra with world points (its matrix applied) and the selected scalars.
-    p.grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
-    p.grid->ShallowCopy(tetrahedra);
-    vtkNew<vtkPoints> world;
-    world->SetDataTypeToDouble();
-    world->SetNumberOfPoints(tetrahedra->GetNumberOfPoints());
-    vtkMatrix4x4* matrix = volume->GetMatrix();
-    for (vtkIdType i = 0; i < tetrahedra->GetNumberOfPoints(); ++i)
-    {
-      double point[4] = { 0, 0, 0, 1 };
-      tetrahedra->GetPoint(i, point);
-      matrix->MultiplyPoint(point, point);
-      world->SetPoint(i, point[0] / point[3], point[1] / point[3], point[2] / point[3]);
-    }
-    p.grid->SetPoints(world);
-    const vtkIdType tuples =
-      selected.cellData ? tetrahedra->GetNumberOfCells() : tetrahedra->GetNumberOfPoints();
-    vtkNew<vtkDoubleArray> value;
-    value->SetName("value");
-    value->SetNumberOfTuples(tuples);
-    for (vtkIdType i = 0; i < tuples; ++i)
-    {
-      value->SetValue(i, values[i]);
-    }
-    p.grid->GetPointData()->Initialize();
-    p.grid->GetCellData()->Initialize();
-    (selected.cellData ? static_cast<vtkDataSetAttributes*>(p.grid->GetCellData())
-                       : p.grid->GetPointData())
-      ->SetScalars(value);
-    if (!placed.empty() && p.cellData != placed.front().cellData)
-    {
-      vtkErrorMacro(<< "volume " << v + 1 << "'s scalars are "
-                    << (p.cellData ? "cell" : "point") << " data where volume 1's are "
-                    << (placed.front().cellData ? "cell" : "point") << " data");
-      return false;
-    }
-    placed.push_back(p);
+    error = tetrahedra->GetNumberOfCells() == 0 ? "it has no 3D cells" : adapter.Error();
+    return false;
   }
-  // One mesh of all: volume k's scalars moved into a stretch of their own, its functions moved
-  // alike and each opacity scaled to the smallest unit distance, so that one pair of
-  // functions serves every cell exactly (a cell's scalars stay inside its volume's stretch).
+  auto* mapper = vtkAbstractVolumeMapper::SafeDownCast(volume->GetMapper());
+  const mtpt::ScalarSelection selected = mtpt::SelectScalars(tetrahedra, mapper, property);
+  if (!selected.array)
+  {
+    error = selected.error;
+    return false;
+  }
+  double dataRange[2];
+  vtkIdType nonFinite = 0;
+  const float* values = adapter.Scalars(selected.array, selected.component, dataRange, nonFinite);
+  p.exact = ConvertTransferFunctions(property, dataRange, samples, p.functions);
+  p.low = dataRange[0];
+  p.high = dataRange[1];
+  for (const auto& node : p.functions.color)
+  {
+    p.low = std::min(p.low, node.scalar);
+    p.high = std::max(p.high, node.scalar);
+  }
+  for (const auto& node : p.functions.opacity)
+  {
+    p.low = std::min(p.low, node.scalar);
+    p.high = std::max(p.high, node.scalar);
+  }
+  Extend(p.functions.color, p.low, p.high);
+  Extend(p.functions.opacity, p.low, p.high);
+  p.unitDistance = mtpt::UnitDistance(property);
+  p.cellData = selected.cellData;
+  p.grid = WorldGrid(tetrahedra, volume->GetMatrix(), values, selected.cellData);
+  return true;
+}
+
+/**
+ * The volumes as one mesh (`all`) and one pair of functions (`settings`' color and opacity):
+ * volume k's scalars moved into a stretch of their own, its functions moved alike and its
+ * opacity scaled to the smallest unit distance, so that one pair serves every cell exactly
+ * (a cell's scalars stay inside its volume's stretch). Returns that unit distance.
+ */
+double JoinVolumes(
+  std::vector<PlacedVolume>& placed, mtpt::ReferenceSettings& settings, vtkUnstructuredGrid* all)
+{
   double width = 0, unit = placed.front().unitDistance;
   for (const PlacedVolume& p : placed)
   {
@@ -645,7 +638,6 @@ bool vtkMTPTReferenceRenderer::RenderVolumes(vtkRenderer* renderer, vtkVolumeCol
     unit = std::min(unit, p.unitDistance);
   }
   const double stride = 2.0 * width + 1.0;
-  mtpt::ReferenceSettings settings;
   vtkNew<vtkAppendFilter> append;
   for (std::size_t k = 0; k < placed.size(); ++k)
   {
@@ -662,8 +654,8 @@ bool vtkMTPTReferenceRenderer::RenderVolumes(vtkRenderer* renderer, vtkVolumeCol
       node.opacity *= unit / p.unitDistance;
       settings.opacity.push_back(node);
     }
-    vtkDataArray* value = p.cellData ? p.grid->GetCellData()->GetScalars()
-                                     : p.grid->GetPointData()->GetScalars();
+    vtkDataArray* value =
+      p.cellData ? p.grid->GetCellData()->GetScalars() : p.grid->GetPointData()->GetScalars();
     for (vtkIdType i = 0; i < value->GetNumberOfTuples(); ++i)
     {
       value->SetTuple1(i, value->GetTuple1(i) + shift);
@@ -671,8 +663,49 @@ bool vtkMTPTReferenceRenderer::RenderVolumes(vtkRenderer* renderer, vtkVolumeCol
     append->AddInputData(p.grid);
   }
   append->Update();
-  vtkNew<vtkUnstructuredGrid> all;
   all->ShallowCopy(append->GetOutput());
+  return unit;
+}
+} // namespace
+
+bool vtkMTPTReferenceRenderer::RenderVolumes(vtkRenderer* renderer, vtkVolumeCollection* volumes)
+{
+  this->Image->SetNumberOfTuples(0);
+  this->Size[0] = this->Size[1] = 0;
+  this->RenderSeconds = 0;
+  this->NumberOfSegments = 0;
+  const std::vector<vtkVolume*> visible =
+    volumes ? VisibleVolumes(volumes) : std::vector<vtkVolume*>();
+  if (visible.empty())
+  {
+    vtkErrorMacro(<< "no visible volume to integrate");
+    return false;
+  }
+  int size[2] = { 0, 0 };
+  std::vector<PlacedVolume> placed(visible.size());
+  this->ExactTransferFunctions = true;
+  for (std::size_t v = 0; v < visible.size(); ++v)
+  {
+    vtkUnstructuredGridBase* input = nullptr;
+    std::string error;
+    if (!this->CheckScene(renderer, visible[v], input, size))
+    {
+      return false;
+    }
+    if (!PlaceVolume(visible[v], input, this->TransferFunctionSamples, placed[v], error) ||
+      placed[v].cellData != placed.front().cellData)
+    {
+      vtkErrorMacro(<< "cannot integrate volume " << v + 1 << ": "
+                    << (error.empty() ? "its scalars and volume 1's are not both point data "
+                                        "or both cell data"
+                                      : error));
+      return false;
+    }
+    this->ExactTransferFunctions = this->ExactTransferFunctions && placed[v].exact;
+  }
+  mtpt::ReferenceSettings settings;
+  vtkNew<vtkUnstructuredGrid> all;
+  settings.unitDistance = JoinVolumes(placed, settings, all);
   mtpt::MeshAdapter adapter;
   if (!adapter.Update(all))
   {
@@ -680,13 +713,12 @@ bool vtkMTPTReferenceRenderer::RenderVolumes(vtkRenderer* renderer, vtkVolumeCol
     return false;
   }
   const bool cellData = placed.front().cellData;
-  vtkDataArray* scalars =
-    cellData ? all->GetCellData()->GetScalars() : all->GetPointData()->GetScalars();
   double range[2];
   vtkIdType nonFinite = 0;
-  const float* values = adapter.Scalars(scalars, 0, range, nonFinite);
-  this->ExactTransferFunctions = exact;
-  // The view of the first volume's mapper (its clipping planes), in world coordinates.
+  const float* values =
+    adapter.Scalars(cellData ? all->GetCellData()->GetScalars() : all->GetPointData()->GetScalars(),
+      0, range, nonFinite);
+  // The first volume's clipping planes; the view in world coordinates.
   if (const int ignored = SetView(renderer, visible.front(), size, settings))
   {
     vtkWarningMacro(<< "clipping with the first " << mtpt::ClipPlanes::Max << " clipping "
@@ -698,11 +730,8 @@ bool vtkMTPTReferenceRenderer::RenderVolumes(vtkRenderer* renderer, vtkVolumeCol
     vtkWarningMacro(<< lit << " translucent actor(s) have lighting on; the reference draws "
                     << "them with their flat colour (lighting off)");
   }
-  settings.unitDistance = unit;
-  settings.blendMode = mtpt::BlendMode::Composite;
   settings.scalarRange[0] = range[0];
   settings.scalarRange[1] = range[1] > range[0] ? range[1] : range[0] + 1.0;
-  settings.mapping = mtpt::ScalarMapping::TransferFunctions;
   const mtpt::ScalarsView view{ values,
     cellData ? mtpt::ScalarsView::Association::Cells : mtpt::ScalarsView::Association::Points };
   return this->Integrate(adapter, view, settings, size);
