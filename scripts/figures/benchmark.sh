@@ -12,6 +12,7 @@
 #   work      mtpt_bench_work: culling, reuse, batching, peak memory
 #   interactive  mtpt_bench_interactive: moving frames at an asked rate, time and error
 #   large     mtpt_bench_large: 1M to 100M tetrahedra, frames, stages and memory, with a plot
+#   volumes   mtpt_bench_volumes: two volumes of n/2 tetrahedra in one order against one of n
 # Real meshes beyond the repository's (comb, kiefer, pulley, fire_ug, ironProt) come from
 # the folder in MTPT_DATA_DIR, when set; `--help` after the program name lists its options.
 set -euo pipefail
@@ -19,9 +20,9 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 build="${MTPT_BUILD_DIR:-$here/build}"
 program="${1:-}"
 case "$program" in
-  core | frames | scaling | accuracy | work | interactive | large) shift ;;
+  core | frames | scaling | accuracy | work | interactive | large | volumes) shift ;;
   *)
-    sed -n '2,16p' "$0" | sed 's/^# \{0,1\}//' >&2
+    sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//' >&2
     exit 2
     ;;
 esac
