@@ -1180,7 +1180,8 @@ mtpt::FrameSettings vtkMultiThreadedProjectedTetrahedraMapper::FrameSettingsOf(
   }
   if (this->Internal->Tables.Segments() > 1)
   {
-    settings.unitDistance = 1.0; // each segment's attenuation is per its own unit distance
+    // Each segment's attenuation is per its own unit distance, folded into the table.
+    settings.unitDistance = this->Internal->Tables.UnitDistance();
   }
   return settings;
 }
