@@ -199,6 +199,23 @@ vtkVolume* AddVolume(vtkRenderer* renderer, vtkUnstructuredGridVolumeMapper* map
   return volume;
 }
 
+/**
+ * `mapper`, drawing its volume by itself when it is MTPT's (CompositeWithOtherVolumes off):
+ * as VTK's PT draws the volumes of a renderer, one after the other, for the scenes that
+ * compare two volumes with VTK's PT. Where such volumes overlap on screen, VTK's PT lays the
+ * one drawn second over the other whatever their depth; MTPT draws them together by default
+ * (MapperComposite's tests).
+ */
+vtkSmartPointer<vtkUnstructuredGridVolumeMapper> Apart(
+  vtkSmartPointer<vtkUnstructuredGridVolumeMapper> mapper)
+{
+  if (auto* ours = Mapper::SafeDownCast(mapper))
+  {
+    ours->SetCompositeWithOtherVolumes(false);
+  }
+  return mapper;
+}
+
 class MapperVTKScenarios : public ::testing::Test
 {
 protected:
@@ -326,18 +343,10 @@ TEST_F(MapperVTKScenarios, TwoVolumesOneMovedByAUserTransformAmongCones)
   // Drawn one after the other, as VTK's PT draws them: together, the red cube lies over the
   // blue one behind it where the two overlap on screen, where VTK's PT, drawing the blue one
   // second, puts the blue over the red (MapperComposite's tests draw volumes together).
-  const auto apart = [](vtkSmartPointer<vtkUnstructuredGridVolumeMapper> mapper)
-  {
-    if (auto* ours = Mapper::SafeDownCast(mapper))
-    {
-      ours->SetCompositeWithOtherVolumes(false);
-    }
-    return mapper;
-  };
   const Build build = [&](vtkRenderer* renderer, const NewMapper& newMapper)
   {
-    vtkVolume* first = AddVolume(renderer, apart(newMapper()), cube, red);
-    vtkVolume* second = AddVolume(renderer, apart(newMapper()), cube, blue);
+    vtkVolume* first = AddVolume(renderer, Apart(newMapper()), cube, red);
+    vtkVolume* second = AddVolume(renderer, Apart(newMapper()), cube, blue);
     second->SetUserTransform(transform);
     renderer->AddActor(Cone(1, 0.5, 0.5, nullptr));
     renderer->AddActor(Cone(0.5, 0.5, 1, transform));
@@ -414,8 +423,8 @@ TEST_F(MapperVTKScenarios, OneWindowOnScreenThenOffScreenThenOnScreen)
       auto a = vtkSmartPointer<Mapper>::New(), b = vtkSmartPointer<Mapper>::New();
       a->SetBackend(backend);
       b->SetBackend(backend);
-      first = a;
-      second = b;
+      first = Apart(a); // compared with VTK's PT (see Apart)
+      second = Apart(b);
     }
     vtkNew<vtkRenderer> renderer;
     vtkNew<vtkRenderWindow> window;
