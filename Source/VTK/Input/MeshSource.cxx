@@ -351,14 +351,10 @@ void MeshSource::MakeViews(bool single)
   const auto association =
     first.Selected.cellData ? ScalarsView::Association::Cells : ScalarsView::Association::Points;
   const double inf = std::numeric_limits<double>::infinity();
-  this->ScalarRange[0] = inf;
-  this->ScalarRange[1] = -inf;
   this->SegmentData.clear();
   for (std::size_t g = 0; g < this->Used.size(); ++g)
   {
     const Grid* grid = this->Used[g];
-    this->ScalarRange[0] = std::min(this->ScalarRange[0], grid->Range[0]);
-    this->ScalarRange[1] = std::max(this->ScalarRange[1], grid->Range[1]);
     const auto segment = static_cast<std::size_t>(this->UsedSegments[g]);
     if (segment >= this->SegmentData.size())
     {

@@ -113,8 +113,6 @@ public:
   ScalarsView Scalars() const { return this->ScalarData; }
   /// Values per point or cell in Scalars(): 1, or 2 or 4 with dependent components.
   int Channels() const { return this->ScalarChannels; }
-  /// The finite range of the scalars over every grid drawn.
-  const double* Range() const { return this->ScalarRange; }
   /// Changes whenever the content the views show changes.
   std::uint64_t Version() const { return this->DataVersion; }
   /// Changes whenever a part's matrix (GroupedVolume::matrix) changes: the points' placement,
@@ -179,7 +177,6 @@ private:
   CellsView CellData;
   ScalarsView ScalarData;
   int ScalarChannels = 1;
-  double ScalarRange[2] = { 0, 1 };
 
   /// What the views were made from: a change of any of these is a new data version.
   struct Key
