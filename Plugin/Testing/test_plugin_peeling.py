@@ -16,10 +16,11 @@ surfaces, a volume drawn alone is not, so with FXAA on (as ParaView starts) the 
 taken away from the layers' edges, and the scene is checked again with FXAA off over every
 pixel. FXAA works on the window's pixels whichever backend drew them: the scene with FXAA on
 is drawn with the CPU backend, the one with FXAA off with both (on llvmpipe a capture with
-the OpenGL backend inside the peeling takes many times as long: Documentation/paraview.md). Inside, the sphere must be seen
-through the volume's front part and the volume's back part through the sphere: the picture
-differs from both layer composites. (The exact picture of a surface inside the volume is
-tested against the exact reference in Testing/Rendering/TestMapperDepthPeeling.cxx.)
+the OpenGL backend inside the peeling takes many times as long: Documentation/paraview.md).
+Inside, the sphere must be seen through the volume's front part and the volume's back part
+through the sphere: the picture differs from both layer composites. (The exact picture of a
+surface inside the volume is tested against the exact reference in
+Testing/Rendering/TestMapperDepthPeeling.cxx.)
 
 usage: pvpython test_plugin_peeling.py PLUGIN DATA OUTPUT_DIR NAME
 Writes OUTPUT_DIR/NAME_*.png; exits non-zero on failure.
