@@ -29,6 +29,8 @@ while [ $# -gt 0 ]; do
 done
 [[ "$shards" =~ ^[1-9][0-9]*$ ]] || { echo "shuffled-tests: --shards takes a count >= 1" >&2; exit 2; }
 build="$(cd "$build" && pwd)" || { echo "shuffled-tests: no build tree $build" >&2; exit 1; }
+# The programs whose tests carry the ctest label `shuffled` (Testing/ShuffledLabel.cmake):
+# scripts/test.sh --shuffled runs their tests here and nowhere else, so the two lists agree.
 programs=("$build/Testing/Core/mtpt_core_tests" "$build/Testing/Rendering/mtpt_rendering_tests")
 for program in "${programs[@]}"; do
   [ -x "$program" ] || { echo "shuffled-tests: no $program (scripts/test.sh builds it)" >&2; exit 1; }
