@@ -498,6 +498,10 @@ vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfNearClipPieces()
 {
   return static_cast<vtkIdType>(this->Internal->Statistics().counts.nearPieces);
 }
+vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfHiddenCells()
+{
+  return static_cast<vtkIdType>(this->Internal->Statistics().counts.hidden);
+}
 vtkIdType vtkMultiThreadedProjectedTetrahedraMapper::GetNumberOfTetrahedralizations()
 {
   return this->Internal->Source.Tetrahedralizations();
@@ -1356,9 +1360,9 @@ void vtkMultiThreadedProjectedTetrahedraMapper::PrintSelf(ostream& os, vtkIndent
      << this->ImageInUseSize[1] << "\n";
   const mtpt::FrameStats& stats = this->Internal->Pipeline.Stats();
   os << indent << "Last frame culled: " << stats.opacityCulled << " transparent, "
-     << stats.frustumCulled << " outside the view, " << stats.pixelCulled << " covering no pixel; "
-     << this->GetNumberOfBatches() << " batches; " << this->GetMemoryBytes()
-     << " bytes of buffers\n";
+     << stats.frustumCulled << " outside the view, " << stats.pixelCulled << " covering no pixel, "
+     << stats.hidden << " hidden behind opaque pixels; " << this->GetNumberOfBatches()
+     << " batches; " << this->GetMemoryBytes() << " bytes of buffers\n";
   os << indent << "Last frame: " << this->Internal->Tetrahedra << " tetrahedra; transform "
      << this->GetTransformSeconds() << " s, cull " << this->GetCullSeconds() << " s, depth keys "
      << this->GetDepthKeySeconds() << " s, order " << this->GetOrderSeconds() << " s, decompose "

@@ -396,6 +396,15 @@ public:
   ///@}
 
   /**
+   * Tetrahedra the last Render sorted but did not decompose or draw: every pixel they cover
+   * was opaque already. The CPU backend draws a frame of several batches (SetBatchSize)
+   * front to back and leaves out the cells of later batches behind the pixels the earlier
+   * ones made opaque, which changes no pixel. 0 with the OpenGL backend, in one batch, and
+   * in blend modes other than composite.
+   */
+  vtkIdType GetNumberOfHiddenCells();
+
+  /**
    * How many times the mapper has split its input into tetrahedra. Grids with other cells
    * (hexahedra, voxels, wedges, pyramids, polyhedra, higher-order or mixed) are split by
    * vtkDataSetTriangleFilter once per change of the input (its MTime), not every frame;

@@ -463,6 +463,112 @@ std::vector<float> CompositeFans(mtpt::FramePipeline& pipeline, const mtpt::Comp
   return rgba;
 }
 
+/**
+ * A frame drawn in batches front to back (FramePlan::frontToBack), the decomposition of each
+ * batch leaving out the cells behind the pixels the earlier batches made opaque
+ * (Compositor::Opaque): its premultiplied image, and the cells left out. With `garbage`,
+ * every fan the decomposition left unwritten is overwritten by a fan over the whole image
+ * first: the compositor must not read it (its class says so).
+ */
+std::vector<float> CompositeFrontToBack(mtpt::FramePipeline& pipeline,
+  const mtpt::CompositeSettings& s, std::size_t batch, bool garbage, std::size_t& hidden)
+{
+  mtpt::FramePlan plan;
+  plan.target = mtpt::BatchTarget::Fans;
+  plan.batchSize = batch;
+  plan.frontToBack = true;
+  plan.threads = 2;
+  mtpt::Compositor compositor;
+  compositor.Begin(s);
+  std::vector<mtpt::Fan> fans;
+  pipeline.DrawBatches(
+    plan,
+    [&](const mtpt::Batch& b)
+    {
+      fans.assign(b.fans, b.fans + b.count);
+      for (std::size_t k = 0; k < b.count && garbage; ++k)
+      {
+        if (b.classes[k] == mtpt::ProjectionClass::Hidden)
+        {
+          mtpt::Fan& f = fans[k];
+          f = mtpt::Fan{};
+          f.centre = TetVertex{ 0.0f, -0.2f, 0.0f, 0.5f, 0.5f, 2.0f };
+          f.boundary[0] = TetVertex{ -1.0f, -1.0f, 0.0f, 0.5f, 0.5f, 0.0f };
+          f.boundary[1] = TetVertex{ 1.0f, -1.0f, 0.0f, 0.5f, 0.5f, 0.0f };
+          f.boundary[2] = TetVertex{ 0.0f, 1.0f, 0.0f, 0.5f, 0.5f, 0.0f };
+          f.count = 3;
+          f.closed = 1;
+        }
+      }
+      compositor.CompositeBehind(fans.data(), b.count, 2, nullptr, b.classes);
+      return true;
+    },
+    &compositor.Opaque());
+  hidden = pipeline.Stats().hidden;
+  std::vector<float> rgba(4 * static_cast<std::size_t>(s.width) * s.height);
+  compositor.Resolve(
+    { 0, 0, s.width, s.height }, static_cast<const float*>(nullptr), rgba.data(), 2);
+  return rgba;
+}
+
+TEST_P(CompositorSimd, BatchesFrontToBackGiveTheOneBatchImageAndSkipWhatIsHidden)
+{
+  // A mesh that turns most of its pixels opaque halfway through, seen obliquely; batches of
+  // a few hundred cells. Drawn front to back the batches continue each tile's blending, so
+  // the image is the one batch's bit for bit; the cells behind what turned opaque are not
+  // decomposed, and their fans, left unwritten, are never read.
+  const mtpt::test::TetMesh mesh = mtpt::test::JitteredGrid(12, 7); // 10,368 tetrahedra
+  std::vector<float> table;
+  for (int i = 0; i < 64; ++i)
+  {
+    const float t = i / 63.0f;
+    table.insert(table.end(), { t, 1 - t, 0.5f, 12.0f * (0.2f + t) });
+  }
+  mtpt::PreIntegrationTable integrals;
+  for (const bool perspective : { false, true })
+  {
+    for (const mtpt::Shading shading :
+      { mtpt::Shading::VTKCompatible, mtpt::Shading::PreIntegrated })
+    {
+      mtpt::FrameInput input;
+      input.points = mesh.Points();
+      input.cells = mesh.Cells();
+      input.scalars = { mesh.scalars.data(), mtpt::ScalarsView::Association::Points };
+      mtpt::test::ObliqueView(input, perspective);
+      input.imageSize = { 90, 75 };
+      auto s = Settings(90, 75, table);
+      s.transferFunction.low = -1.0;
+      s.transferFunction.high = 2.0;
+      s.unitDistance = 0.5;
+      integrals.Build(s.transferFunction);
+      if (shading == mtpt::Shading::PreIntegrated)
+      {
+        s.UsePreIntegration(
+          integrals, mtpt::PerspectiveInterpolation::FromProjection(input.projection));
+      }
+      const std::string what = std::string(perspective ? "perspective" : "orthographic") +
+        (shading == mtpt::Shading::PreIntegrated ? ", pre-integrated" : ", VTK-compatible");
+      mtpt::FramePipeline pipeline;
+      ASSERT_TRUE(pipeline.Prepare(input, 2));
+      const std::vector<float> whole = CompositeFans(pipeline, s);
+      std::size_t opaque = 0;
+      for (std::size_t i = 3; i < whole.size(); i += 4)
+      {
+        opaque += whole[i] >= mtpt::OpaqueAlpha ? 1 : 0;
+      }
+      ASSERT_GT(opaque, whole.size() / 4 / 3) << what; // a third of the pixels turn opaque
+      for (const std::size_t batch : { std::size_t{ 300 }, std::size_t{ 2000 } })
+      {
+        std::size_t hidden = 0;
+        const std::vector<float> batches = CompositeFrontToBack(pipeline, s, batch, true, hidden);
+        EXPECT_EQ(0, std::memcmp(batches.data(), whole.data(), whole.size() * sizeof(float)))
+          << what << ", batches of " << batch;
+        EXPECT_GT(hidden, pipeline.SortedCount() / 10) << what << ", batches of " << batch;
+      }
+    }
+  }
+}
+
 /// The scene of the tests that split segments (by depth ranges, by planes): a jittered
 /// grid with a steep transfer function, seen from one point, in perspective or not.
 struct SplitScene

@@ -344,6 +344,26 @@ struct PlannedFrame
   }
 };
 
+TEST(FramePlan, TheCompositorsCompositeBatchesGoFrontToBack)
+{
+  mtpt::FrameSettings settings;
+  mtpt::FrameFacts facts = Facts();
+  EXPECT_TRUE(mtpt::PlanFrame(settings, facts).frontToBack);
+  settings.shading = Shading::PreIntegrated;
+  EXPECT_TRUE(mtpt::PlanFrame(settings, facts).frontToBack);
+  // OpenGL blends back to front; the reductions fold in any order.
+  facts.target = BatchTarget::Slots;
+  EXPECT_FALSE(mtpt::PlanFrame(settings, facts).frontToBack);
+  facts.target = BatchTarget::Fans;
+  settings.shading = Shading::VTKCompatible;
+  for (const BlendMode mode : { BlendMode::MaximumIntensity, BlendMode::MinimumIntensity,
+         BlendMode::AverageIntensity, BlendMode::Additive })
+  {
+    settings.blendMode = static_cast<int>(mode);
+    EXPECT_FALSE(mtpt::PlanFrame(settings, facts).frontToBack);
+  }
+}
+
 TEST(FramePipelineBatches, DrawBatchesGivesTheWindowsOfTheOrderInOrder)
 {
   for (const BatchTarget target : { BatchTarget::Fans, BatchTarget::Slots })
@@ -351,24 +371,29 @@ TEST(FramePipelineBatches, DrawBatchesGivesTheWindowsOfTheOrderInOrder)
     for (const std::size_t batch : { std::size_t{ 0 }, std::size_t{ 1 }, std::size_t{ 97 } })
     {
       PlannedFrame frame(target, batch, false);
+      // The compositor's fans front to back, OpenGL's slots back to front.
+      EXPECT_EQ(frame.plan.frontToBack, target == BatchTarget::Fans);
       mtpt::FramePipeline pipeline, whole;
       ASSERT_TRUE(pipeline.Prepare(frame.input, 2));
       ASSERT_TRUE(whole.Prepare(frame.input, 2));
       const std::size_t total = pipeline.SortedCount();
       ASSERT_GT(total, 100u);
-      std::size_t expectedFirst = 0;
+      const std::size_t size = batch > 0 ? batch : total;
+      const std::size_t windows = (total + size - 1) / size;
+      std::size_t given = 0;
       const mtpt::BatchesDrawn drawn = pipeline.DrawBatches(frame.plan,
         [&](const mtpt::Batch& b)
         {
-          EXPECT_EQ(b.first, expectedFirst);
+          const std::size_t w = frame.plan.frontToBack ? windows - 1 - given : given;
+          EXPECT_EQ(b.first, w * size);
           EXPECT_EQ(b.lights, nullptr);
-          const std::size_t size = batch > 0 ? batch : total;
           EXPECT_EQ(b.count, std::min(size, total - b.first));
           // The same window decomposed on its own gives the same records.
           if (target == BatchTarget::Fans)
           {
             whole.DecomposeFans(b.first, b.count, 1);
             EXPECT_EQ(std::memcmp(b.fans, whole.Fans().data(), b.count * sizeof(mtpt::Fan)), 0);
+            EXPECT_EQ(std::memcmp(b.classes, whole.FanClasses(), b.count), 0);
           }
           else
           {
@@ -377,15 +402,87 @@ TEST(FramePipelineBatches, DrawBatchesGivesTheWindowsOfTheOrderInOrder)
                         b.count * mtpt::VerticesPerTetrahedron * sizeof(mtpt::TetVertex)),
               0);
           }
-          expectedFirst += b.count;
+          ++given;
           return true;
         });
-      EXPECT_EQ(expectedFirst, total);
+      EXPECT_EQ(given, windows);
       EXPECT_FALSE(drawn.stopped || drawn.failed);
-      const std::size_t size = batch > 0 ? batch : total;
-      EXPECT_EQ(static_cast<std::size_t>(drawn.batches), (total + size - 1) / size);
+      EXPECT_EQ(static_cast<std::size_t>(drawn.batches), windows);
     }
   }
+}
+
+TEST(FramePipelineBatches, CellsBehindThePixelsEarlierBatchesMadeOpaqueAreNotDecomposed)
+{
+  PlannedFrame frame(BatchTarget::Fans, 97, false);
+  ASSERT_TRUE(frame.plan.frontToBack);
+  mtpt::FramePipeline pipeline, whole;
+  ASSERT_TRUE(pipeline.Prepare(frame.input, 2));
+  ASSERT_TRUE(whole.Prepare(frame.input, 2));
+  const std::size_t total = pipeline.SortedCount();
+  ASSERT_GT(total, 4 * 97u);
+  // The left half of the image opaque once two batches are drawn.
+  mtpt::OpaquePixels opaque;
+  opaque.Reset(frame.plan.imageSize.width, frame.plan.imageSize.height);
+  const int half = opaque.Width() / 2;
+  int given = 0;
+  std::size_t hidden = 0, drawnFans = 0;
+  pipeline.DrawBatches(
+    frame.plan,
+    [&](const mtpt::Batch& b)
+    {
+      whole.DecomposeFans(b.first, b.count, 1);
+      for (std::size_t k = 0; k < b.count; ++k)
+      {
+        const mtpt::ProjectionClass kind = b.classes[k];
+        if (given < 2)
+        {
+          // Nothing opaque yet: every fan as the window decomposed alone.
+          EXPECT_EQ(kind, whole.FanClasses()[k]);
+        }
+        // The last pixel centre its box reaches, in window x (the fan as drawn alone).
+        const mtpt::Fan& f = whole.Fans()[k];
+        float maxX = f.centre.x;
+        for (int c = 0; c < f.count; ++c)
+        {
+          maxX = std::max(maxX, f.boundary[c].x);
+        }
+        const float reach = (maxX + 1.0f) * 0.5f * static_cast<float>(opaque.Width()) - 0.5f;
+        if (kind == mtpt::ProjectionClass::Hidden)
+        {
+          // Hidden only where its box lies in the opaque half.
+          ++hidden;
+          EXPECT_TRUE(mtpt::Drawn(whole.FanClasses()[k]));
+          EXPECT_LT(reach, half + 0.01f);
+          continue;
+        }
+        // Every other fan written, as the window decomposed alone; once the half is opaque,
+        // those drawn reach past it.
+        EXPECT_EQ(kind, whole.FanClasses()[k]);
+        if (mtpt::Drawn(kind))
+        {
+          ++drawnFans;
+          EXPECT_EQ(std::memcmp(b.fans + k, whole.Fans().data() + k, sizeof(mtpt::Fan)), 0);
+          if (given >= 2)
+          {
+            EXPECT_GT(reach, half - 0.02f);
+          }
+        }
+      }
+      if (++given == 2)
+      {
+        for (int y = 0; y < opaque.Height(); ++y)
+        {
+          opaque.Row(y)[0] = (std::uint64_t{ 1 } << half) - 1;
+        }
+        opaque.Marked(true);
+      }
+      return true;
+    },
+    &opaque);
+  EXPECT_GT(hidden, 0u);
+  EXPECT_GT(drawnFans, 0u);
+  EXPECT_EQ(pipeline.Stats().hidden, hidden);
 }
 
 TEST(FramePipelineBatches, TheCallbackStopsAndAFailedBatchEndsTheLoop)

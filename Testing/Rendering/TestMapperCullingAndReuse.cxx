@@ -184,6 +184,39 @@ TEST_P(MapperWork, BatchedFramesEqualOneBatch)
   EXPECT_EQ(stage.mapper->GetBatchSize(), 7777);
 }
 
+TEST_P(MapperWork, BatchesFrontToBackLeaveOutWhatOpaquePixelsHide)
+{
+  // A box that turns opaque a short way in, drawn in batches: the CPU backend takes them
+  // front to back and leaves out the cells behind the pixels the nearer batches made
+  // opaque, and the image is the one batch's exactly; OpenGL draws every cell.
+  auto box = MakeTetrahedralBox(16);
+  auto property = MakeProperty(-0.3, 1.3, 0.01);
+  Stage stage(box, property, GetParam());
+  Mapper* m = stage.mapper;
+  m->SetBatchSize(0);
+  auto whole = stage.Frame();
+  EXPECT_EQ(m->GetNumberOfHiddenCells(), 0) << "one batch: nothing in front of it";
+  EXPECT_LT(CoveredFraction(whole, Background), 0.9); // the box, not the whole window
+  m->SetBatchSize(1500);
+  for (int view = 0; view < 2; ++view) // the second turned: a new order
+  {
+    auto batched = stage.Frame();
+    EXPECT_GT(m->GetNumberOfBatches(), 10);
+    // A fresh mapper draws the box in one batch (its default size).
+    EXPECT_EQ(Compare(batched, view == 0 ? whole.Get() : stage.Fresh().Get()).worst, 0.0)
+      << "view " << view;
+    if (GetParam() == Mapper::CPU_BACKEND)
+    {
+      EXPECT_GT(m->GetNumberOfHiddenCells(), m->GetNumberOfTetrahedra() / 3) << "view " << view;
+    }
+    else
+    {
+      EXPECT_EQ(m->GetNumberOfHiddenCells(), 0);
+    }
+    stage.renderer->GetActiveCamera()->Azimuth(7);
+  }
+}
+
 TEST_P(MapperWork, CulledCellsAreCountedAndChangeNothing)
 {
   auto box = MakeTetrahedralBox(10);

@@ -755,15 +755,6 @@ TEST_F(MapperRobustness, SeveralRenderersInOneWindowAndOneMapperInTwoWindows)
   EXPECT_TRUE(this->Observer->errors.empty());
 }
 
-/// How far a frame drawn in batches may be from one drawn whole, per channel: exactly the
-/// same with OpenGL (blended back to front); one 8-bit level with the CPU compositor, which
-/// draws each batch front to back on its own and composites it over the batches behind it
-/// (rounding, and the fragments each skips behind its own opaque pixels: Compositor.h).
-double BatchRounding(int backend)
-{
-  return backend == vtkMultiThreadedProjectedTetrahedraMapper::CPU_BACKEND ? 1.0 / 255 : 0.0;
-}
-
 /// Records the mapper's progress; optionally aborts the render when a value is reached.
 class ProgressRecorder : public vtkCommand
 {
@@ -808,9 +799,9 @@ TEST_F(MapperRobustness, ProgressIsReportedThroughTheStagesAndBatches)
       EXPECT_NEAR(progress->values[first + i], expected[i], 1e-12) << "event " << i;
     }
     EXPECT_FALSE(mapper->GetLastFrameStopped());
-    // The same image; the CPU compositor's batches (each drawn front to back, composited over
-    // those behind it) may round a pixel to the next 8-bit level.
-    EXPECT_LE(Compare(image, this->FreshFrame(backend)).worst, BatchRounding(backend))
+    // The same image: a frame in batches is the one-batch frame exactly with either backend
+    // (OpenGL blends them back to front, the CPU compositor front to back).
+    EXPECT_EQ(Compare(image, this->FreshFrame(backend)).worst, 0.0)
       << "observed frames draw the same";
   }
 }
@@ -849,8 +840,7 @@ TEST_F(MapperRobustness, AnAbortStopsTheFrameAndTheNextFrameIsWhole)
       progress->window = nullptr;
       stage.window->Render();
       EXPECT_FALSE(mapper->GetLastFrameStopped());
-      EXPECT_LE(
-        Compare(Grab(stage.window, false), this->FreshFrame(backend)).worst, BatchRounding(backend))
+      EXPECT_EQ(Compare(Grab(stage.window, false), this->FreshFrame(backend)).worst, 0.0)
         << "backend " << backend << ", abort at " << abortAt;
       mapper->ReleaseGraphicsResources(stage.window);
     }

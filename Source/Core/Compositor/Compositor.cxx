@@ -234,6 +234,7 @@ struct RasterScratch
   std::vector<Fan> chunk = std::vector<Fan>(FansPerChunk);
   std::vector<LightFactors> lit = std::vector<LightFactors>(FansPerChunk);
   detail::RasterCounts counts;
+  bool anyOpaque = false; ///< a tile it drew has an opaque pixel
 };
 
 struct Compositor::ThreadScratch
@@ -263,6 +264,15 @@ void Compositor::Begin(const CompositeSettings& settings)
   // Tiles are cleared when first drawn in: a frame that touches few pays for few.
   this->Cleared.assign(tiles, 0);
   this->Touched = PixelRegion{ width, height, 0, 0 };
+  // Reductions mark nothing: their alpha says only that a fragment came.
+  if (ReducesInAnyOrder(settings.blendMode))
+  {
+    this->OpaqueImage.Reset(0, 0);
+  }
+  else
+  {
+    this->OpaqueImage.Reset(width, height);
+  }
 }
 
 float* Compositor::Tile(int tile)
@@ -276,22 +286,35 @@ float* Compositor::Tile(int tile)
   return pixels;
 }
 
-void Compositor::Composite(
-  const Fan* fans, std::size_t count, int threads, const LightFactors* lights)
+void Compositor::Composite(const Fan* fans, std::size_t count, int threads,
+  const LightFactors* lights, const ProjectionClass* classes)
+{
+  this->Draw(fans, count, threads, lights, classes, false);
+}
+
+void Compositor::CompositeBehind(const Fan* fans, std::size_t count, int threads,
+  const LightFactors* lights, const ProjectionClass* classes)
+{
+  this->Draw(fans, count, threads, lights, classes, true);
+}
+
+void Compositor::Draw(const Fan* fans, std::size_t count, int threads, const LightFactors* lights,
+  const ProjectionClass* classes, bool behind)
 {
   if (count == 0 || !Usable(this->Settings))
   {
     return;
   }
   auto start = Clock::now();
-  this->Bin(fans, count, threads);
+  this->Bin(fans, count, threads, classes);
   this->Statistics.binSeconds += detail::SecondsSince(start);
   start = Clock::now();
-  this->Rasterize(fans, lights, threads);
+  this->Rasterize(fans, lights, threads, behind);
   this->Statistics.rasterSeconds += detail::SecondsSince(start);
 }
 
-void Compositor::Bin(const Fan* fans, std::size_t count, int threads)
+void Compositor::Bin(
+  const Fan* fans, std::size_t count, int threads, const ProjectionClass* classes)
 {
   // A counting sort of (fan, tile) pairs by tile: block b of the fans (contiguous in
   // visibility order) counts its pairs per tile, the counts become each (tile, block)'s
@@ -305,7 +328,7 @@ void Compositor::Bin(const Fan* fans, std::size_t count, int threads)
   std::size_t total = 0;
   detail::CountPlaceScatter(
     count, blocks, blocks,
-    [&](int b, detail::IndexRange r) { this->CountPairs(fans, b, r.begin, r.end); },
+    [&](int b, detail::IndexRange r) { this->CountPairs(fans, classes, b, r.begin, r.end); },
     [&]
     {
       total = this->PlaceEntries(blocks);
@@ -340,7 +363,8 @@ void Compositor::PrepareBins(std::size_t count, int blocks)
   this->BlockBinned.assign(static_cast<std::size_t>(blocks), 0);
 }
 
-void Compositor::CountPairs(const Fan* fans, int b, std::size_t begin, std::size_t end)
+void Compositor::CountPairs(
+  const Fan* fans, const ProjectionClass* classes, int b, std::size_t begin, std::size_t end)
 {
   const std::size_t tiles = static_cast<std::size_t>(this->TilesX) * this->TilesY;
   const ClipPlanes& planes = this->Settings.clipPlanes;
@@ -353,6 +377,11 @@ void Compositor::CountPairs(const Fan* fans, int b, std::size_t begin, std::size
   {
     int x0, x1, y0, y1;
     TileRange& range = this->Ranges[i];
+    if (classes && !Drawn(classes[i]))
+    {
+      range = TileRange{ 1, 0, 0, 0 }; // nothing to draw; a hidden fan was not even written
+      continue;
+    }
     const FanSide side = planes.count > 0 && fans[i].count >= 2
       ? SideOfPlanes(fans[i], planes, this->Settings.clipping)
       : FanSide::Kept;
@@ -425,9 +454,11 @@ void Compositor::ListEntries(int b, std::size_t begin, std::size_t end)
   }
 }
 
-void Compositor::Rasterize(const Fan* fans, const LightFactors* lights, int threads)
+namespace
 {
-  const CompositeSettings& s = this->Settings;
+/// What every tile of a frame of settings `s` shares.
+detail::RasterFrame RasterFrameOf(const CompositeSettings& s)
+{
   detail::RasterFrame frame;
   frame.width = s.width;
   frame.height = s.height;
@@ -442,6 +473,14 @@ void Compositor::Rasterize(const Fan* fans, const LightFactors* lights, int thre
   frame.blendMode = s.blendMode;
   frame.intensity = s.intensity;
   AverageRangeEntries(s.transferFunction, s.averageRange, AverageRangeBeyond, frame.averageRange);
+  return frame;
+}
+} // namespace
+
+void Compositor::Rasterize(const Fan* fans, const LightFactors* lights, int threads, bool behind)
+{
+  const CompositeSettings& s = this->Settings;
+  const detail::RasterFrame frame = RasterFrameOf(s);
   const bool reduce = ReducesInAnyOrder(s.blendMode);
   const std::uint8_t* straddles = s.clipPlanes.count > 0 ? this->Straddles.data() : nullptr;
   const auto jobs = static_cast<std::int64_t>(this->Tiles.size());
@@ -454,6 +493,7 @@ void Compositor::Rasterize(const Fan* fans, const LightFactors* lights, int thre
   for (RasterScratch& mine : scratch)
   {
     mine.counts = detail::RasterCounts{};
+    mine.anyOpaque = false;
   }
   detail::ParallelForDynamic(jobs, team,
     [&](std::int64_t job, int thread)
@@ -465,37 +505,69 @@ void Compositor::Rasterize(const Fan* fans, const LightFactors* lights, int thre
         return; // depth peeling: no pixel of the tile has a range to composite
       }
       // A tile drawn by an earlier Composite holds what lies behind these fans: they are
-      // drawn into a transparent image of their own, composited over it afterwards.
-      // (A reduction folds fragments in any order: into the tile itself.)
-      const bool behind = this->Cleared[tile] != 0 && !reduce;
+      // drawn into a transparent image of their own, composited over it afterwards. Behind
+      // an earlier batch (CompositeBehind), or in a reduction (which folds fragments in any
+      // order), they are drawn into the tile itself.
+      const bool apart = this->Cleared[tile] != 0 && !reduce && !behind;
       float* pixels = this->Tile(tile);
-      if (behind)
+      if (apart)
       {
         std::fill(mine.batch.begin(), mine.batch.end(), 0.0f);
       }
       detail::TileTarget target =
-        TargetOf(tile, this->TilesX, s, behind ? mine.batch.data() : pixels, mine.depth);
+        TargetOf(tile, this->TilesX, s, apart ? mine.batch.data() : pixels, mine.depth);
       target.range = s.depthRange ? mine.range.data() : nullptr;
       detail::RasterCounts counts;
       const std::size_t first = this->TileStart[tile];
       DrawFrontToBack(fans, straddles, lights, this->Entries.data() + first,
         this->TileStart[tile + 1] - first, frame, target, mine.chunk, mine.lit, counts);
-      if (behind)
+      if (apart)
       {
         Over(mine.batch.data(), pixels);
+      }
+      if (!reduce && this->MarkOpaque(tile, pixels))
+      {
+        mine.anyOpaque = true;
       }
       mine.counts.triangles += counts.triangles;
       mine.counts.fragments += counts.fragments;
       mine.counts.hidden += counts.hidden;
       mine.counts.fanVectors += counts.fanVectors;
     });
+  bool anyOpaque = !this->OpaqueImage.Empty(); // alpha only grows: opaque stays opaque
   for (const RasterScratch& mine : scratch)
   {
     this->Statistics.triangles += mine.counts.triangles;
     this->Statistics.fragments += mine.counts.fragments;
     this->Statistics.hiddenFans += mine.counts.hidden;
     this->Statistics.fanVectors += mine.counts.fanVectors;
+    anyOpaque = anyOpaque || mine.anyOpaque;
   }
+  if (!reduce)
+  {
+    this->OpaqueImage.Marked(anyOpaque);
+  }
+}
+
+bool Compositor::MarkOpaque(int tile, const float* pixels)
+{
+  const int tx = tile % this->TilesX, x0 = tx * TileSize, y0 = (tile / this->TilesX) * TileSize;
+  const int width = std::min(TileSize, this->Settings.width - x0);
+  const int height = std::min(TileSize, this->Settings.height - y0);
+  const float* alpha = pixels + 3 * TilePixels;
+  static_assert(TileSize == OpaquePixels::BitsPerWord, "a tile's row is one word");
+  std::uint64_t any = 0;
+  for (int j = 0; j < height; ++j)
+  {
+    std::uint64_t word = 0;
+    for (int i = 0; i < width; ++i)
+    {
+      word |= static_cast<std::uint64_t>(alpha[j * TileSize + i] >= OpaqueAlpha) << i;
+    }
+    this->OpaqueImage.Row(y0 + j)[tx] = word;
+    any |= word;
+  }
+  return any != 0;
 }
 
 const char* Compositor::InstructionSet()

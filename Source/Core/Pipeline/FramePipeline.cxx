@@ -102,14 +102,15 @@ OrderKey OrderKeyOf(std::uint64_t keys, std::uint64_t nearPlane, OrderMethod met
   return key;
 }
 
-DecompositionKey DecompositionKeyOf(
-  std::uint64_t order, std::size_t first, std::size_t count, const ImageSize& imageSize)
+DecompositionKey DecompositionKeyOf(std::uint64_t order, std::size_t first, std::size_t count,
+  const ImageSize& imageSize, const OpaquePixels* hidden)
 {
   DecompositionKey key;
   key.order = order;
   key.first = first;
   key.count = count;
   key.imageSize = imageSize;
+  key.hidden = hidden ? hidden->Version() : 0;
   return key;
 }
 
@@ -235,26 +236,34 @@ MemoryVerdict CheckMemory(const MemoryNeed& need, std::size_t limit, std::size_t
   return verdict;
 }
 
-BatchesDrawn FramePipeline::DrawBatches(const FramePlan& plan, const BatchDrawer& draw)
+BatchesDrawn FramePipeline::DrawBatches(
+  const FramePlan& plan, const BatchDrawer& draw, const OpaquePixels* hidden)
 {
-  return this->ForgettingOnFailure([&] { return this->DrawBatchesInOrder(plan, draw); });
+  return this->ForgettingOnFailure([&] { return this->DrawBatchesInOrder(plan, draw, hidden); });
 }
 
-BatchesDrawn FramePipeline::DrawBatchesInOrder(const FramePlan& plan, const BatchDrawer& draw)
+BatchesDrawn FramePipeline::DrawBatchesInOrder(
+  const FramePlan& plan, const BatchDrawer& draw, const OpaquePixels* hidden)
 {
   BatchesDrawn drawn;
   const std::size_t total = this->SortedSize;
   const std::size_t batch =
     std::max<std::size_t>(1, plan.batchSize > 0 ? std::min(total, plan.batchSize) : total);
-  for (std::size_t first = 0; first < total; first += batch)
+  const std::size_t windows = (total + batch - 1) / batch;
+  for (std::size_t w = 0; w < windows; ++w)
   {
+    // Back to front the windows start at rank 0; front to back at the last window.
+    const std::size_t first = (plan.frontToBack ? windows - 1 - w : w) * batch;
     Batch b;
     b.first = first;
     if (plan.target == BatchTarget::Fans)
     {
-      this->DecomposeFans(first, batch, plan.threads);
+      // Only pixels made opaque by the batches in front can hide cells.
+      const bool hides = plan.frontToBack && hidden && !hidden->Empty();
+      this->DecomposeFans(first, batch, plan.threads, hides ? hidden : nullptr);
       b.count = this->FanBatchCount;
       b.fans = this->FanBuffers.Fans().data();
+      b.classes = this->FanBuffers.Classes();
       b.version = this->FanBuffers.Version();
     }
     else
@@ -276,7 +285,7 @@ BatchesDrawn FramePipeline::DrawBatchesInOrder(const FramePlan& plan, const Batc
       drawn.failed = true;
       return drawn;
     }
-    const std::size_t done = std::min(total, first + batch);
+    const std::size_t done = std::min(total, (w + 1) * batch);
     if (done < total && this->AfterBatch &&
       !this->AfterBatch(static_cast<double>(done) / static_cast<double>(total)))
     {
@@ -492,12 +501,14 @@ bool FramePipeline::Continue(Stage finished)
   return true;
 }
 
-DecompositionKey FramePipeline::WindowKey(std::size_t& first, std::size_t& count)
+DecompositionKey FramePipeline::WindowKey(
+  std::size_t& first, std::size_t& count, const OpaquePixels* hidden)
 {
   first = std::min(first, this->SortedSize);
   count = std::min(count, this->SortedSize - first);
   ++this->LastStats.batches;
-  return DecompositionKeyOf(this->Order.Version(), first, count, this->DecomposeState.imageSize);
+  return DecompositionKeyOf(
+    this->Order.Version(), first, count, this->DecomposeState.imageSize, hidden);
 }
 
 DecomposeInput FramePipeline::WindowInput(std::size_t first, std::size_t count, int threads)
@@ -514,34 +525,40 @@ DecomposeInput FramePipeline::WindowInput(std::size_t first, std::size_t count, 
 }
 
 template <typename Buffers>
-void FramePipeline::DecomposeWindow(
-  Buffers& buffers, std::size_t first, std::size_t count, int threads, std::size_t& decomposed)
+void FramePipeline::DecomposeWindow(Buffers& buffers, std::size_t first, std::size_t count,
+  int threads, const OpaquePixels* hidden, std::size_t& decomposed)
 {
-  const DecompositionKey key = this->WindowKey(first, count);
+  const DecompositionKey key = this->WindowKey(first, count, hidden);
   // The decomposition by rank visits the candidate cells (DecomposeInput::cellList), or a
   // batch's rank groups.
   threads = ThreadsForWork(this->LastStats.cells + count, detail::CellsPerThread, threads);
   const bool computed = Timed(this->LastTimes.decompose,
     [&]
     {
-      return !buffers.Holds(key) &&
-        buffers.Update(key, this->WindowInput(first, count, threads), this->Order.Rank(),
-          this->NearPlaneCut.Pieces(), threads);
+      if (buffers.Holds(key))
+      {
+        return false;
+      }
+      DecomposeInput in = this->WindowInput(first, count, threads);
+      in.hidden = hidden;
+      return buffers.Update(key, in, this->Order.Rank(), this->NearPlaneCut.Pieces(), threads);
     });
   this->LastStats.decompositionReused |= !computed;
   this->LastStats.pixelCulled += buffers.PixelCulled();
   this->LastStats.notDrawable += buffers.NotDrawable();
+  this->LastStats.hidden += buffers.Hidden();
   decomposed = count;
 }
 
 void FramePipeline::DecomposeBatch(std::size_t first, std::size_t count, int threads)
 {
-  this->DecomposeWindow(this->Slots, first, count, threads, this->BatchCount);
+  this->DecomposeWindow(this->Slots, first, count, threads, nullptr, this->BatchCount);
 }
 
-void FramePipeline::DecomposeFans(std::size_t first, std::size_t count, int threads)
+void FramePipeline::DecomposeFans(
+  std::size_t first, std::size_t count, int threads, const OpaquePixels* hidden)
 {
-  this->DecomposeWindow(this->FanBuffers, first, count, threads, this->FanBatchCount);
+  this->DecomposeWindow(this->FanBuffers, first, count, threads, hidden, this->FanBatchCount);
 }
 
 void FramePipeline::LightWindow(std::size_t first, std::size_t count, const Lighting& lighting,

@@ -145,6 +145,10 @@ void PlanBatches(const FrameSettings& s, const FrameFacts& f, FramePlan& plan)
 {
   plan.target = f.target;
   plan.batchSize = s.batchSize;
+  // The CPU compositor blends front to back: batches in that order continue each tile's
+  // blending and let what turned opaque hide the cells behind it. OpenGL blends back to
+  // front; the reductions fold in any order.
+  plan.frontToBack = f.target == BatchTarget::Fans && plan.ordered;
   plan.threads = s.threads;
   MemoryNeed& need = plan.memory;
   need.points = f.points;

@@ -504,17 +504,26 @@ inline bool CoversNoPixel(const DecomposeInput& input, const ProjectedPoint* con
     !detail::CoversPixelCentre(corners, input.imageSize);
 }
 
+/// Whether the tetrahedron `corners`, drawable with `scalars`, is hidden behind the opaque
+/// pixels of `input` (DecomposeInput::hidden).
+inline bool Hidden(
+  const DecomposeInput& input, const ProjectedPoint* const corners[4], const float scalars[4])
+{
+  return input.hidden && Drawable(corners, scalars) && detail::HiddenBehind(corners, *input.hidden);
+}
+
 /// The tetrahedron `corners` into slot-local records with global index base `base`,
-/// culled when it covers no pixel centre of the viewport.
+/// culled when it covers no pixel centre of the viewport or is hidden.
 inline ProjectionClass DecomposeCorners(const DecomposeInput& input,
   const ProjectedPoint* const corners[4], const float scalars[4], const float* const* colours,
   std::uint32_t base, TetVertex slotVertices[VerticesPerTetrahedron],
   std::uint32_t slotIndices[IndicesPerTetrahedron])
 {
-  if (CoversNoPixel(input, corners))
+  const bool noPixel = CoversNoPixel(input, corners);
+  if (noPixel || Hidden(input, corners, scalars))
   {
     WriteDegenerateSlot(slotVertices, slotIndices, base);
-    return ProjectionClass::CoversNoPixel;
+    return noPixel ? ProjectionClass::CoversNoPixel : ProjectionClass::Hidden;
   }
   return Decompose(corners, scalars, colours, slotVertices, slotIndices, base).kind;
 }
@@ -626,6 +635,8 @@ struct SlotWriter
     }
   }
 #endif
+  /// Slot k of a hidden tetrahedron: degenerate, as OpenGL draws every slot.
+  void Hidden(std::int64_t k) const { this->NotDrawable(k); }
   /// Slot k drawing nothing (not drawable, or culled).
   void NotDrawable(std::int64_t k) const
   {
@@ -638,15 +649,16 @@ struct SlotWriter
   }
 };
 
-/// The tetrahedron `corners` as a fan, count 0 when it covers no pixel centre.
+/// The tetrahedron `corners` as a fan, count 0 when it covers no pixel centre or is hidden.
 inline ProjectionClass DecomposeFanCorners(const DecomposeInput& input,
   const ProjectedPoint* const corners[4], const float scalars[4], const float* const* colours,
   Fan& fan)
 {
-  if (CoversNoPixel(input, corners))
+  const bool noPixel = CoversNoPixel(input, corners);
+  if (noPixel || Hidden(input, corners, scalars))
   {
     fan = Fan{};
-    return ProjectionClass::CoversNoPixel;
+    return noPixel ? ProjectionClass::CoversNoPixel : ProjectionClass::Hidden;
   }
   return DecomposeToFan(corners, scalars, colours, fan).kind;
 }
@@ -710,6 +722,8 @@ struct FanWriter
     FillFan(corners, scalars, nullptr, g, fan);
     detail::StoreFan(fan, fans + k, streaming);
   }
+  /// Fan k of a hidden tetrahedron: not written (its class tells the reader to skip it).
+  void Hidden(std::int64_t) const {}
   /// Fan k drawing nothing (not drawable, or culled).
   void NotDrawable(std::int64_t k) const
   {
@@ -819,6 +833,20 @@ public:
     if (!Drawable(corners, scalars))
     {
       this->Skip(k, ProjectionClass::NotDrawable);
+      return;
+    }
+    if (this->Input.hidden && detail::HiddenBehind(corners, *this->Input.hidden))
+    {
+      // Left unwritten where its class says so; without classes, written empty.
+      if (this->Classes)
+      {
+        this->Out.Hidden(k);
+        this->Classes[k] = ProjectionClass::Hidden;
+      }
+      else
+      {
+        this->Out.NotDrawable(k);
+      }
       return;
     }
     for (int i = 0; i < 4; ++i)
@@ -1050,11 +1078,11 @@ bool DecompositionStage::Run(const Key& key, const DecomposeInput& input, const 
     return false;
   }
   const std::size_t first = key.first, count = key.count;
-  if (this->Classes.size() < count)
+  if (this->SlotClasses.size() < count)
   {
-    this->Classes.resize(count);
+    this->SlotClasses.resize(count);
   }
-  cells(input, first, count, this->Classes.data(), threads);
+  cells(input, first, count, this->SlotClasses.data(), threads);
   // Pieces of cells cut by the near plane: ranks after the cells'.
   const auto pieceCount = static_cast<std::int64_t>(pieces.size());
   // Few pieces are not worth waking the threads.
@@ -1069,26 +1097,31 @@ bool DecompositionStage::Run(const Key& key, const DecomposeInput& input, const 
         const ProjectedPoint* corners[4] = { &p.corners[0], &p.corners[1], &p.corners[2],
           &p.corners[3] };
         const float* colours[4] = { p.colours[0], p.colours[1], p.colours[2], p.colours[3] };
-        this->Classes[k] = piece(input, corners, p.scalars, input.colours ? colours : nullptr, k);
+        this->SlotClasses[k] =
+          piece(input, corners, p.scalars, input.colours ? colours : nullptr, k);
       }
     });
-  // The window's slots that draw nothing: covering no pixel centre, or not drawable.
+  // The window's slots that draw nothing: covering no pixel centre, not drawable, or hidden.
   struct Undrawn
   {
-    std::size_t pixelCulled = 0, notDrawable = 0;
+    std::size_t pixelCulled = 0, notDrawable = 0, hidden = 0;
   };
   const Undrawn undrawn = detail::ParallelReduce(
     0, static_cast<std::int64_t>(count), threads, Undrawn{},
-    [](Undrawn a, Undrawn b) {
-      return Undrawn{ a.pixelCulled + b.pixelCulled, a.notDrawable + b.notDrawable };
+    [](Undrawn a, Undrawn b)
+    {
+      return Undrawn{ a.pixelCulled + b.pixelCulled, a.notDrawable + b.notDrawable,
+        a.hidden + b.hidden };
     },
     [&](std::int64_t k)
     {
-      return Undrawn{ this->Classes[k] == ProjectionClass::CoversNoPixel ? 1u : 0u,
-        this->Classes[k] == ProjectionClass::NotDrawable ? 1u : 0u };
+      const ProjectionClass kind = this->SlotClasses[k];
+      return Undrawn{ kind == ProjectionClass::CoversNoPixel ? 1u : 0u,
+        kind == ProjectionClass::NotDrawable ? 1u : 0u, kind == ProjectionClass::Hidden ? 1u : 0u };
     });
   this->CoversNoPixel = undrawn.pixelCulled;
   this->Undrawable = undrawn.notDrawable;
+  this->Concealed = undrawn.hidden;
   this->Record.Store(key);
   return true;
 }
@@ -1125,14 +1158,14 @@ void SlotStage::Release()
 {
   LargeVector<TetVertex>().swap(this->VertexBuffer);
   LargeVector<std::uint32_t>().swap(this->IndexBuffer);
-  LargeVector<ProjectionClass>().swap(this->Classes);
+  LargeVector<ProjectionClass>().swap(this->SlotClasses);
   this->Forget();
 }
 
 std::size_t SlotStage::MemoryBytes() const
 {
   return this->VertexBuffer.capacity() * sizeof(TetVertex) +
-    this->IndexBuffer.capacity() * sizeof(std::uint32_t) + this->Classes.capacity();
+    this->IndexBuffer.capacity() * sizeof(std::uint32_t) + this->SlotClasses.capacity();
 }
 
 bool FanStage::Update(const Key& key, const DecomposeInput& input, const std::uint32_t* rank,
@@ -1158,13 +1191,13 @@ bool FanStage::Update(const Key& key, const DecomposeInput& input, const std::ui
 void FanStage::Release()
 {
   LargeVector<Fan>().swap(this->FanBuffer);
-  LargeVector<ProjectionClass>().swap(this->Classes);
+  LargeVector<ProjectionClass>().swap(this->SlotClasses);
   this->Forget();
 }
 
 std::size_t FanStage::MemoryBytes() const
 {
-  return this->FanBuffer.capacity() * sizeof(Fan) + this->Classes.capacity();
+  return this->FanBuffer.capacity() * sizeof(Fan) + this->SlotClasses.capacity();
 }
 
 } // namespace mtpt

@@ -143,18 +143,33 @@ void CPUBackend::Composite(const BackendFrame& frame, DrawTimes& times, const fl
     *frame.plan, tables.Table(), tables.PreIntegration(), tables.Intensity(), frame.UnitDistance());
   this->Settings.opaqueDepth = ranges ? nullptr : this->Path.OpaqueDepth();
   this->Settings.depthRange = ranges;
-  // Batch after batch, back to front, into one image: the tiles keep what earlier batches
-  // drew. Decomposition and compositing both use every thread, so they take turns.
+  // Batch after batch into one image: the tiles keep what earlier batches drew. Composite
+  // blending takes the batches front to back (FramePlan::frontToBack): each tile goes on
+  // blending under what it holds, and the cells of later batches behind the pixels made
+  // opaque are not decomposed (Compositor::Opaque). Decomposition and compositing both use
+  // every thread, so they take turns.
   this->Compositing.Begin(this->Settings);
   const int threads = frame.plan->threads;
-  Drawn(frame.pipeline->DrawBatches(*frame.plan,
+  const bool behind = frame.plan->frontToBack;
+  Drawn(frame.pipeline->DrawBatches(
+          *frame.plan,
           [&](const Batch& batch)
           {
             const auto start = Clock::now();
-            this->Compositing.Composite(batch.fans, batch.count, threads, batch.lights);
+            if (behind)
+            {
+              this->Compositing.CompositeBehind(
+                batch.fans, batch.count, threads, batch.lights, batch.classes);
+            }
+            else
+            {
+              this->Compositing.Composite(
+                batch.fans, batch.count, threads, batch.lights, batch.classes);
+            }
             times.composite += SecondsSince(start);
             return true;
-          }),
+          },
+          &this->Compositing.Opaque()),
     times);
 }
 

@@ -14,6 +14,8 @@
 #define MTPT_COMPOSITOR_RASTER_PIXELS_INL_H_
 #endif
 
+#include "mtpt/OpaquePixels.h"
+
 #include "detail/TileRaster.h"
 
 #include "detail/RasterCorners-inl.h"
@@ -89,11 +91,12 @@ HWY_INLINE V OpacityOfDensity(D d, V density)
 }
 
 /**
- * A pixel whose coverage alpha reached this hides what lies behind it: fragments drawn there
- * later (farther: fans are drawn front to back) are skipped. They could add at most
- * 1 - OpaqueAlpha = 2^-11 of full intensity to the pixel, an eighth of an 8-bit step.
+ * A pixel whose coverage alpha reached mtpt::OpaqueAlpha (OpaquePixels.h) hides what lies
+ * behind it: fragments drawn there later (farther: fans are drawn front to back) are
+ * skipped. They could add at most 2^-11 of full intensity to the pixel, an eighth of an
+ * 8-bit step.
  */
-constexpr float OpaqueAlpha = 1.0f - 1.0f / 2048;
+using mtpt::OpaqueAlpha;
 
 /// The lanes of the vector at tile column x of `row` that are not yet opaque.
 template <class D>

@@ -50,7 +50,9 @@
  *    span by span (exact row spans), SIMD lanes wide (Google Highway, the widest instruction
  *    set the processor has, chosen at run time). A fan whose box is all opaque already is
  *    skipped. A tile's pixels stay in its own cache-sized buffer; a tile drawn by an earlier
- *    Composite gets the new fans drawn apart and composited over it.
+ *    Composite gets the new fans drawn apart and composited over it, and one drawn by an
+ *    earlier CompositeBehind goes on blending under what it holds.
+ * 3. Composite blending: each tile drawn marks its opaque pixels (Opaque()).
  * The image is therefore bit-identical for any thread count.
  */
 #ifndef mtpt_Compositor_h
@@ -59,6 +61,7 @@
 #include "mtpt/LargeBuffer.h"
 #include "mtpt/Lighting.h"
 #include "mtpt/MeshView.h"
+#include "mtpt/OpaquePixels.h"
 #include "mtpt/Records.h"
 #include "mtpt/Shading.h"
 #include "mtpt/TransferFunctionTable.h"
@@ -180,9 +183,29 @@ public:
    * farthest (visibility order). Shading (Lighting.h): with `lights` (count entries), each
    * fragment of fan k has its colour c lit as clamp(scale c + offset, 0, 1) by lights[k]
    * (composite blending only: the other blend modes ignore it, as VTK's ray caster does).
+   * With `classes` (count entries, the decomposition's), a fan whose class is not Drawn
+   * (Records.h) is not read: a hidden fan may be left unwritten.
    */
-  void Composite(
-    const Fan* fans, std::size_t count, int threads, const LightFactors* lights = nullptr);
+  void Composite(const Fan* fans, std::size_t count, int threads,
+    const LightFactors* lights = nullptr, const ProjectionClass* classes = nullptr);
+
+  /**
+   * As Composite, but the fans lie behind everything composited since Begin: the batches of
+   * a frame given front to back (FramePlan::frontToBack), each in visibility order. Every
+   * tile goes on blending under what it holds, so the image is the one of all the batches
+   * given to one Composite, bit for bit, and the pixels earlier batches made opaque hide
+   * what lies behind them (Opaque()). A blend mode other than Composite reduces in any
+   * order: the same as Composite.
+   */
+  void CompositeBehind(const Fan* fans, std::size_t count, int threads,
+    const LightFactors* lights = nullptr, const ProjectionClass* classes = nullptr);
+
+  /**
+   * The pixels of the image opaque so far (OpaquePixels.h), as of the last Composite or
+   * CompositeBehind: what a decomposition of cells behind them may leave out
+   * (DecomposeInput::hidden). Empty in a blend mode other than Composite.
+   */
+  const OpaquePixels& Opaque() const { return this->OpaqueImage; }
 
   /// The pixels a fan was drawn in since Begin may lie in this region; outside it the image
   /// is transparent.
@@ -228,18 +251,24 @@ public:
   static std::vector<std::string> InstructionSets();
 
 private:
-  void Bin(const Fan* fans, std::size_t count, int threads);
+  void Draw(const Fan* fans, std::size_t count, int threads, const LightFactors* lights,
+    const ProjectionClass* classes, bool behind);
+  void Bin(const Fan* fans, std::size_t count, int threads, const ProjectionClass* classes);
   /// Binning's buffers for `count` fans in `blocks` blocks, before its three steps: count a
   /// block's (fan, tile) pairs and touched region; turn the counts into places (returns the
   /// pairs); list a block's fans' indices in their places.
   void PrepareBins(std::size_t count, int blocks);
-  void CountPairs(const Fan* fans, int block, std::size_t begin, std::size_t end);
+  void CountPairs(
+    const Fan* fans, const ProjectionClass* classes, int block, std::size_t begin, std::size_t end);
   std::size_t PlaceEntries(int blocks);
   void ListEntries(int block, std::size_t begin, std::size_t end);
   template <typename T>
   void ResolveInto(const PixelRegion& region, const T* below, T* rgba, int threads);
-  void Rasterize(const Fan* fans, const LightFactors* lights, int threads);
+  void Rasterize(const Fan* fans, const LightFactors* lights, int threads, bool behind);
   float* Tile(int tile);
+  /// Marks the opaque pixels of tile `tile`, whose pixels are `pixels`, in OpaqueImage;
+  /// returns whether any is opaque.
+  bool MarkOpaque(int tile, const float* pixels);
 
   /// Tiles a fan touches (inclusive; empty when x0 > x1).
   struct TileRange
@@ -265,6 +294,7 @@ private:
   struct ThreadScratch;
   std::unique_ptr<ThreadScratch> Scratch;
   PixelRegion Touched;
+  OpaquePixels OpaqueImage;             ///< composite blending: the pixels opaque so far (Opaque())
   std::vector<Fan> SlotFans;            ///< the slot entry point's fans
   std::vector<LightFactors> SlotLights; ///< and their lighting
 };

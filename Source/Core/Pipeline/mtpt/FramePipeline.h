@@ -73,10 +73,13 @@ struct FrameStats
   /// What the backends multiply every attenuation by: visible / drawn cells (1 without a
   /// level of detail), so that a ray keeps its expected optical depth (LevelOfDetail.h).
   double attenuationScale = 1;
-  std::size_t frustumCulled = 0;    ///< entirely outside the view volume
-  std::size_t sorted = 0;           ///< cells sorted and given a slot
-  std::size_t pixelCulled = 0;      ///< covering no pixel centre (before the sort; pieces after)
-  std::size_t notDrawable = 0;      ///< slots that cannot be drawn (bad cells, behind the eye)
+  std::size_t frustumCulled = 0; ///< entirely outside the view volume
+  std::size_t sorted = 0;        ///< cells sorted and given a slot
+  std::size_t pixelCulled = 0;   ///< covering no pixel centre (before the sort; pieces after)
+  std::size_t notDrawable = 0;   ///< slots that cannot be drawn (bad cells, behind the eye)
+  /// Sorted, then left undecomposed: every pixel they cover was opaque already (batches front
+  /// to back, DrawBatches).
+  std::size_t hidden = 0;
   std::size_t nearClipped = 0;      ///< cells cut by the near plane (NearPlane.h)
   std::size_t nearPieces = 0;       ///< tetrahedra drawn in their place (in `sorted`)
   std::size_t batches = 0;          ///< decomposition windows run this frame
@@ -180,6 +183,9 @@ struct Batch
   const std::uint32_t* indices = nullptr;
   /// Lit frames: each fan's or slot's lighting (Lighting.h); null when unlit.
   const LightFactors* lights = nullptr;
+  /// Each fan's or slot's class (`count` of them): a reader skips those not Drawn
+  /// (Records.h), a hidden fan being left unwritten.
+  const ProjectionClass* classes = nullptr;
   /// Change whenever the buffers' (the lights') content changes: a consumer that copied
   /// them (an OpenGL upload) is current exactly when it holds these.
   std::uint64_t version = 0, lightsVersion = 0;
@@ -273,10 +279,12 @@ public:
 
   /**
    * As DecomposeBatch, into fans (Decompose.h), the CPU compositor's input: fan 0 is rank
-   * `first`; culled and undrawable cells have count 0. Kept apart from the slot buffers: a
-   * frame may use either, or both.
+   * `first`; culled and undrawable cells have count 0. With `hidden` (DecomposeInput::hidden)
+   * the cells behind its opaque pixels are left unwritten, their class Hidden (FanClasses).
+   * Kept apart from the slot buffers: a frame may use either, or both.
    */
-  void DecomposeFans(std::size_t first, std::size_t count, int threads);
+  void DecomposeFans(
+    std::size_t first, std::size_t count, int threads, const OpaquePixels* hidden = nullptr);
 
   /**
    * Shading (Lighting.h): the factors of the order's window [first, first + count) (clamped
@@ -295,12 +303,16 @@ public:
 
   /**
    * Stage 5 for the whole frame: after Prepare, the order in windows of `plan.batchSize`
-   * cells (all at once for 0), back to front; each decomposed into the plan's target,
-   * lit (FrameInput::lit), then handed to `draw`. Between batches the batch callback may stop
-   * the frame. The backends draw what this gives them; they decompose nothing themselves.
+   * cells (all at once for 0), back to front, or front to back with `plan.frontToBack`; each
+   * decomposed into the plan's target, lit (FrameInput::lit), then handed to `draw`. Front
+   * to back, `hidden` (null: none) holds the pixels the batches drawn so far made opaque,
+   * as `draw` leaves them: the cells of later batches behind them are not decomposed
+   * (DecomposeFans). Between batches the batch callback may stop the frame. The backends
+   * draw what this gives them; they decompose nothing themselves.
    * Deterministic: the batches' content is the same for any thread count.
    */
-  BatchesDrawn DrawBatches(const FramePlan& plan, const BatchDrawer& draw);
+  BatchesDrawn DrawBatches(
+    const FramePlan& plan, const BatchDrawer& draw, const OpaquePixels* hidden = nullptr);
 
   const StageTimes& Times() const { return LastTimes; }
   const FrameStats& Stats() const { return LastStats; }
@@ -314,8 +326,10 @@ public:
   const LargeVector<TetVertex>& Vertices() const { return this->Slots.Vertices(); }
   const LargeVector<std::uint32_t>& Indices() const { return this->Slots.Indices(); }
 
-  /// Fans of the last DecomposeFans.
+  /// Fans of the last DecomposeFans, and their classes (FanCount() of each: a fan whose class
+  /// is not Drawn holds nothing to draw, or was not written).
   const LargeVector<Fan>& Fans() const { return this->FanBuffers.Fans(); }
+  const ProjectionClass* FanClasses() const { return this->FanBuffers.Classes(); }
   std::size_t FanCount() const { return FanBatchCount; }
   /// Changes whenever the fans' content changes (as BufferVersion for the slots).
   std::uint64_t FanVersion() const { return this->FanBuffers.Version(); }
@@ -360,22 +374,23 @@ private:
   /// Prepare, PrepareLevelOfDetail and DrawBatches inside ForgettingOnFailure.
   bool PrepareStages(const FrameInput& input, int threads);
   void PrepareImportance(const FrameInput& input, int threads);
-  BatchesDrawn DrawBatchesInOrder(const FramePlan& plan, const BatchDrawer& draw);
+  BatchesDrawn DrawBatchesInOrder(
+    const FramePlan& plan, const BatchDrawer& draw, const OpaquePixels* hidden);
   /// Runs `stage`, adds its seconds to `seconds` when it computed, and returns whether it did.
   template <typename Body>
   static bool Timed(double& seconds, Body&& stage);
   bool Continue(Stage finished);
   /// Stages 3 and 4 (keys, near plane, order); false when the callback stopped the frame.
   bool UpdateOrder(const FrameInput& input, const MeshKey& mesh, int threads);
-  DecompositionKey WindowKey(std::size_t& first, std::size_t& count);
+  DecompositionKey WindowKey(std::size_t& first, std::size_t& count, const OpaquePixels* hidden);
   /// DecomposeBatch and DecomposeFans: the window into `buffers` (Slots or FanBuffers), its
   /// size into `decomposed`.
   /// The decomposition's input for the window [first, first + count) of the order: for a
   /// window smaller than the order, the cells of its rank groups (OrderStage::Group).
   DecomposeInput WindowInput(std::size_t first, std::size_t count, int threads);
   template <typename Buffers>
-  void DecomposeWindow(
-    Buffers& buffers, std::size_t first, std::size_t count, int threads, std::size_t& decomposed);
+  void DecomposeWindow(Buffers& buffers, std::size_t first, std::size_t count, int threads,
+    const OpaquePixels* hidden, std::size_t& decomposed);
   /// The stages in the order a frame runs them; ForgetFrom(k) forgets the results of stages
   /// k and later.
   static constexpr std::size_t StageCount = 8;

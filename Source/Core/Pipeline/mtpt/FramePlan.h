@@ -166,6 +166,9 @@ struct FramePlan
   // How it is drawn.
   BatchTarget target = BatchTarget::Fans;
   std::size_t batchSize = 0; ///< tetrahedra per batch; 0: the whole order at once
+  /// The batches from the front of the order to its back (the CPU compositor's composite
+  /// blending: FramePipeline::DrawBatches), else from the back.
+  bool frontToBack = false;
   int threads = 0;
   MemoryNeed memory; ///< what FramePipeline::BytesNeeded bounds before the frame allocates
 

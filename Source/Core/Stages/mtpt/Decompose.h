@@ -32,6 +32,7 @@
 #include "mtpt/LargeBuffer.h"
 #include "mtpt/MeshView.h"
 #include "mtpt/NearPlane.h"
+#include "mtpt/OpaquePixels.h"
 #include "mtpt/Records.h"
 #include "mtpt/Stage.h"
 
@@ -42,24 +43,6 @@
 
 namespace mtpt
 {
-
-/**
- * Shirley-Tuchman classes of a projected tetrahedron. Classes 3 and 4 are the limits of
- * class 1 and are drawn as class 1 with a degenerate triangle or two.
- */
-enum class ProjectionClass : std::uint8_t
-{
-  NotDrawable = 0,
-  Triangle = 1,           ///< class 1: one point projects strictly inside the other three
-  Quadrilateral = 2,      ///< class 2: two opposite edges cross
-  VertexOnEdge = 3,       ///< class 3: one point projects onto an edge of the other three
-  CoincidentVertices = 4, ///< class 4: two points project onto the same position
-  /// Culled (only with DecomposeInput::imageSize set): the projection's bounding box
-  /// contains no pixel centre of the image, so no rasterizer that samples at pixel
-  /// centres (OpenGL without multisampling, the CPU compositor) would produce a fragment.
-  /// The slot is degenerate, as for NotDrawable.
-  CoversNoPixel = 5,
-};
 
 struct Projection
 {
@@ -121,6 +104,15 @@ struct DecomposeInput
   /// keys' culling, KeyCulling): the by-rank decompositions then skip the test for cells
   /// and keep it for near-plane pieces (DecomposeIntoSlot, DecomposeIntoFan).
   bool cellsCoverPixels = false;
+  /**
+   * The pixels already opaque in the image the cells are composited behind, front to back
+   * (OpaquePixels.h; the CPU compositor's, FramePipeline::DrawBatches). When set, a
+   * tetrahedron every pixel centre of whose bounding box is opaque there is Hidden: where
+   * the by-rank decomposition (DecomposeFansByRank) keeps classes, its fan is left
+   * unwritten (the class tells the reader to skip it); elsewhere its fan is count 0 and its
+   * slot degenerate. Null: nothing is hidden.
+   */
+  const OpaquePixels* hidden = nullptr;
   /// The by-rank decompositions: the ascending list of the cells the order was made from
   /// (the depth keys' candidates), so that they visit those only and read no other rank;
   /// null: every cell of the mesh.
@@ -187,7 +179,7 @@ Projection DecomposeTetrahedronToFan(const ProjectedPoint* const corners[4], con
 
 /**
  * As DecomposeIntoSlot, into a fan: `fan` receives the tetrahedron's fan, or count 0 when it
- * is not drawable or covers no pixel centre. Returns its class.
+ * is not drawable, covers no pixel centre or is hidden. Returns its class.
  */
 ProjectionClass DecomposeIntoFan(const DecomposeInput& input,
   const ProjectedPoint* const corners[4], const float scalars[4], Fan& fan,
@@ -236,9 +228,11 @@ struct DecompositionKey
   std::uint64_t order = 0; ///< OrderStage::Version()
   std::size_t first = 0, count = 0;
   ImageSize imageSize;
+  std::uint64_t hidden = 0; ///< DecomposeInput::hidden's OpaquePixels::Version(); 0: none
   bool operator==(const DecompositionKey& o) const
   {
-    return order == o.order && first == o.first && count == o.count && imageSize == o.imageSize;
+    return order == o.order && first == o.first && count == o.count && imageSize == o.imageSize &&
+      hidden == o.hidden;
   }
 };
 
@@ -255,9 +249,14 @@ class DecompositionStage : public StageOf<DecompositionKey>
 public:
   /// Tetrahedra of the held window.
   std::size_t Count() const { return this->Record.Inputs().count; }
-  /// Slots or fans of the held window that cover no pixel centre, or cannot be drawn.
+  /// Slots or fans of the held window that cover no pixel centre, cannot be drawn, or are
+  /// hidden behind opaque pixels (DecomposeInput::hidden).
   std::size_t PixelCulled() const { return this->CoversNoPixel; }
   std::size_t NotDrawable() const { return this->Undrawable; }
+  std::size_t Hidden() const { return this->Concealed; }
+  /// Each slot's or fan's class, of the held window (Count() of them): what a reader of the
+  /// fans skips (Drawn, Records.h).
+  const ProjectionClass* Classes() const { return this->SlotClasses.data(); }
 
 protected:
   /// The window of `key` through `cells(input, first, count, classes, threads)` (the cells by
@@ -267,8 +266,8 @@ protected:
   bool Run(const Key& key, const DecomposeInput& input, const std::uint32_t* rank,
     const std::vector<NearPiece>& pieces, int threads, Cells&& cells, Piece&& piece);
 
-  LargeVector<ProjectionClass> Classes; ///< per slot of the window
-  std::size_t CoversNoPixel = 0, Undrawable = 0;
+  LargeVector<ProjectionClass> SlotClasses; ///< per slot of the window
+  std::size_t CoversNoPixel = 0, Undrawable = 0, Concealed = 0;
 };
 
 /// The OpenGL backend's buffers: slots of VerticesPerTetrahedron records and

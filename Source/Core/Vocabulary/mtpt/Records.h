@@ -2,10 +2,10 @@
 /**
  * @file Records.h
  * @brief The records that pass from one stage of a frame to the next: projected points
- * (stage 1), sort keys (stages 3 and 4), the decomposition's vertex records and fans
- * (stage 5), and the size of the CPU compositor's tiles and its pixel regions (stage 6).
- * The lowest floor of the core with MeshView.h: every stage reads these, none of them
- * includes a stage.
+ * (stage 1), sort keys (stages 3 and 4), the decomposition's vertex records, fans and
+ * projection classes (stage 5), and the size of the CPU compositor's tiles and its pixel
+ * regions (stage 6). The lowest floor of the core with MeshView.h: every stage reads these,
+ * none of them includes a stage.
  *
  * Conventions: see MeshView.h (row-major matrices on column vectors, OpenGL NDC, the
  * camera looking down -z in eye space) and the stage headers.
@@ -136,6 +136,35 @@ constexpr std::size_t IndicesPerTetrahedron = 3 * TrianglesPerTetrahedron;
 /// The most tetrahedra (cells and near-plane pieces) one frame can hold: slot k's vertices
 /// are numbered from VerticesPerTetrahedron * k with 32-bit indices, and keys hold 32-bit ids.
 constexpr std::size_t MaxFrameTetrahedra = 0xffffffffu / VerticesPerTetrahedron;
+
+/**
+ * Shirley-Tuchman classes of a projected tetrahedron (Decompose.h), and why a slot or fan
+ * draws nothing. Classes 3 and 4 are the limits of class 1 and are drawn as class 1 with a
+ * degenerate triangle or two.
+ */
+enum class ProjectionClass : std::uint8_t
+{
+  NotDrawable = 0,
+  Triangle = 1,           ///< class 1: one point projects strictly inside the other three
+  Quadrilateral = 2,      ///< class 2: two opposite edges cross
+  VertexOnEdge = 3,       ///< class 3: one point projects onto an edge of the other three
+  CoincidentVertices = 4, ///< class 4: two points project onto the same position
+  /// Culled (only with DecomposeInput::imageSize set): the projection's bounding box
+  /// contains no pixel centre of the image, so no rasterizer that samples at pixel
+  /// centres (OpenGL without multisampling, the CPU compositor) would produce a fragment.
+  /// The slot is degenerate, as for NotDrawable.
+  CoversNoPixel = 5,
+  /// Hidden (only with DecomposeInput::hidden set, fans only): every pixel centre of the
+  /// projection's bounding box is opaque already (OpaquePixels.h), so no fragment of it could
+  /// show. Its fan is not written: whoever reads the fans skips it by its class.
+  Hidden = 6,
+};
+
+/// Whether a slot or fan of class `kind` holds something to draw (classes 1 to 4).
+inline bool Drawn(ProjectionClass kind)
+{
+  return kind >= ProjectionClass::Triangle && kind <= ProjectionClass::CoincidentVertices;
+}
 
 /**
  * One tetrahedron's projection as the CPU compositor draws it: a fan of triangles around the
