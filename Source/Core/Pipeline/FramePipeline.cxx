@@ -511,14 +511,15 @@ DecompositionKey FramePipeline::WindowKey(
     this->Order.Version(), first, count, this->DecomposeState.imageSize, hidden);
 }
 
-DecomposeInput FramePipeline::WindowInput(std::size_t first, std::size_t count, int threads)
+DecomposeInput FramePipeline::WindowInput(
+  std::size_t first, std::size_t count, std::size_t size, int threads)
 {
   DecomposeInput in = this->DecomposeState;
   if (count < this->SortedSize)
   {
     // A batch: the cells of the rank groups it overlaps, not every candidate.
     LargeVector<SortKey>& storage = this->DepthKeys.Consume();
-    this->Order.Group(count, in.cells.cellCount, in.cellList, in.cellListCount, storage, threads);
+    this->Order.Group(size, in.cells.cellCount, in.cellList, in.cellListCount, storage, threads);
     in.rankedCells = this->Order.CellsOfRanks(first, count, storage, in.rankedCellCount);
   }
   return in;
@@ -528,6 +529,7 @@ template <typename Buffers>
 void FramePipeline::DecomposeWindow(Buffers& buffers, std::size_t first, std::size_t count,
   int threads, const OpaquePixels* hidden, std::size_t& decomposed)
 {
+  const std::size_t size = count;
   const DecompositionKey key = this->WindowKey(first, count, hidden);
   // The decomposition by rank visits the candidate cells (DecomposeInput::cellList), or a
   // batch's rank groups.
@@ -539,7 +541,7 @@ void FramePipeline::DecomposeWindow(Buffers& buffers, std::size_t first, std::si
       {
         return false;
       }
-      DecomposeInput in = this->WindowInput(first, count, threads);
+      DecomposeInput in = this->WindowInput(first, count, size, threads);
       in.hidden = hidden;
       return buffers.Update(key, in, this->Order.Rank(), this->NearPlaneCut.Pieces(), threads);
     });
@@ -565,6 +567,7 @@ void FramePipeline::LightWindow(std::size_t first, std::size_t count, const Ligh
   const float* normals, const Matrix4& modelView, std::vector<LightFactors>& factors, int threads)
 {
   const auto start = Clock::now();
+  const std::size_t size = count;
   first = std::min(first, this->SortedSize);
   count = std::min(count, this->SortedSize - first);
   factors.assign(count, Unlit());
@@ -574,7 +577,7 @@ void FramePipeline::LightWindow(std::size_t first, std::size_t count, const Ligh
     this->LastTimes.light += SecondsSince(start);
     return;
   }
-  const DecomposeInput in = this->WindowInput(first, count, threads);
+  const DecomposeInput in = this->WindowInput(first, count, size, threads);
   const std::uint32_t* rank = this->Order.Rank();
   const std::vector<NearPiece>& pieces = this->NearPlaneCut.Pieces();
   const std::size_t cellCount = in.cells.cellCount;

@@ -383,11 +383,16 @@ private:
   /// Stages 3 and 4 (keys, near plane, order); false when the callback stopped the frame.
   bool UpdateOrder(const FrameInput& input, const MeshKey& mesh, int threads);
   DecompositionKey WindowKey(std::size_t& first, std::size_t& count, const OpaquePixels* hidden);
+  /**
+   * The decomposition's input for the window [first, first + count) of the order: for a
+   * window smaller than the order, the cells of its rank groups (OrderStage::Group). `size`
+   * is the size asked for (at least `count`: the last window of the order may be shorter),
+   * the length of the groups when the order is grouped now: every window of a frame then
+   * overlaps one group, whichever window comes first.
+   */
+  DecomposeInput WindowInput(std::size_t first, std::size_t count, std::size_t size, int threads);
   /// DecomposeBatch and DecomposeFans: the window into `buffers` (Slots or FanBuffers), its
   /// size into `decomposed`.
-  /// The decomposition's input for the window [first, first + count) of the order: for a
-  /// window smaller than the order, the cells of its rank groups (OrderStage::Group).
-  DecomposeInput WindowInput(std::size_t first, std::size_t count, int threads);
   template <typename Buffers>
   void DecomposeWindow(Buffers& buffers, std::size_t first, std::size_t count, int threads,
     const OpaquePixels* hidden, std::size_t& decomposed);
