@@ -747,7 +747,9 @@ TEST(FramePipelineMemory, BytesNeededBoundsTheBuffersOfEveryFrame)
   const std::vector<float> opacity = { 0, 0, 0, 0, 1, 1, 1, 0.5f, 1, 1, 1, 2 };
   for (const bool inside : { false, true })
   {
-    for (const std::size_t batch : { std::size_t{ 1 }, std::size_t{ 37 }, std::size_t{ 1 } << 20 })
+    // 0: batches of 5/13 of the order, so that its last window holds 0.6 of a batch.
+    for (const std::size_t asked :
+      { std::size_t{ 1 }, std::size_t{ 37 }, std::size_t{ 0 }, std::size_t{ 1 } << 20 })
     {
       for (const double fraction : { 1.0, 0.5 })
       {
@@ -765,11 +767,17 @@ TEST(FramePipelineMemory, BytesNeededBoundsTheBuffersOfEveryFrame)
         mtpt::FramePipeline pipeline;
         pipeline.PrepareLevelOfDetail(input, 2);
         ASSERT_TRUE(pipeline.Prepare(input, 2));
-        for (std::size_t first = 0; first < pipeline.SortedCount(); first += batch)
-        {
-          pipeline.DecomposeBatch(first, batch, 2);
-          pipeline.DecomposeFans(first, batch, 2);
-        }
+        const std::size_t batch = asked > 0 ? asked : pipeline.SortedCount() * 5 / 13;
+        // The windows as the batch loop gives them: slots back to front, fans front to back
+        // (the first of them the order's shorter last window).
+        mtpt::FramePlan plan;
+        plan.batchSize = batch;
+        plan.threads = 2;
+        plan.target = mtpt::BatchTarget::Slots;
+        pipeline.DrawBatches(plan, [](const mtpt::Batch&) { return true; });
+        plan.target = mtpt::BatchTarget::Fans;
+        plan.frontToBack = true;
+        pipeline.DrawBatches(plan, [](const mtpt::Batch&) { return true; });
         mtpt::MemoryNeed need;
         need.points = mesh.Points().count;
         need.cells = mesh.Cells().cellCount;

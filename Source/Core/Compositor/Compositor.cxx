@@ -259,6 +259,7 @@ void Compositor::Begin(const CompositeSettings& settings)
   const std::size_t tiles = static_cast<std::size_t>(this->TilesX) * this->TilesY;
   if (this->Image.size() < 4 * TilePixels * tiles)
   {
+    ReserveDiscarding(this->Image, 4 * TilePixels * tiles); // every tile cleared when drawn
     this->Image.resize(4 * TilePixels * tiles);
   }
   // Tiles are cleared when first drawn in: a frame that touches few pays for few.
@@ -351,12 +352,15 @@ void Compositor::PrepareBins(std::size_t count, int blocks)
   AllocationPoint(AllocationSite::Tiles); // the image begun already: halfway through
   const std::size_t tiles = static_cast<std::size_t>(this->TilesX) * this->TilesY;
   this->Counts.assign(static_cast<std::size_t>(blocks) * tiles, 0);
+  // Every Composite writes them anew: grown to the size asked, never doubled.
   if (this->Ranges.size() < count)
   {
+    ReserveDiscarding(this->Ranges, count);
     this->Ranges.resize(count);
   }
   if (this->Settings.clipPlanes.count > 0 && this->Straddles.size() < count)
   {
+    ReserveDiscarding(this->Straddles, count);
     this->Straddles.resize(count);
   }
   this->BlockTouched.assign(static_cast<std::size_t>(blocks), this->Touched);
@@ -432,6 +436,7 @@ std::size_t Compositor::PlaceEntries(int blocks)
   this->TileStart[tiles] = total;
   if (this->Entries.size() < total)
   {
+    ReserveDiscarding(this->Entries, total);
     this->Entries.resize(total);
   }
   return total;

@@ -541,6 +541,7 @@ void FramePipeline::DecomposeWindow(Buffers& buffers, std::size_t first, std::si
       {
         return false;
       }
+      buffers.Reserve(std::min(size, this->SortedSize));
       DecomposeInput in = this->WindowInput(first, count, size, threads);
       in.hidden = hidden;
       return buffers.Update(key, in, this->Order.Rank(), this->NearPlaneCut.Pieces(), threads);

@@ -1154,6 +1154,26 @@ bool SlotStage::Update(const Key& key, const DecomposeInput& input, const std::u
     });
 }
 
+bool DecompositionStage::ReserveClasses(std::size_t slots)
+{
+  return ReserveDiscarding(this->SlotClasses, slots);
+}
+
+void SlotStage::Reserve(std::size_t slots)
+{
+  if (this->VertexBuffer.capacity() >= VerticesPerTetrahedron * slots &&
+    this->IndexBuffer.capacity() >= IndicesPerTetrahedron * slots &&
+    this->SlotClasses.capacity() >= slots)
+  {
+    return;
+  }
+  AllocationPoint(AllocationSite::Decomposition);
+  this->Forget(); // the held window's buffers are dropped
+  ReserveDiscarding(this->VertexBuffer, VerticesPerTetrahedron * slots);
+  ReserveDiscarding(this->IndexBuffer, IndicesPerTetrahedron * slots);
+  this->ReserveClasses(slots);
+}
+
 void SlotStage::Release()
 {
   LargeVector<TetVertex>().swap(this->VertexBuffer);
@@ -1186,6 +1206,18 @@ bool FanStage::Update(const Key& key, const DecomposeInput& input, const std::ui
     [&](const DecomposeInput& in, const ProjectedPoint* const corners[4], const float* scalars,
       const float* const* colours, std::uint64_t k)
     { return DecomposeIntoFan(in, corners, scalars, this->FanBuffer[k], colours); });
+}
+
+void FanStage::Reserve(std::size_t slots)
+{
+  if (this->FanBuffer.capacity() >= slots && this->SlotClasses.capacity() >= slots)
+  {
+    return;
+  }
+  AllocationPoint(AllocationSite::Decomposition);
+  this->Forget(); // the held window's buffers are dropped
+  ReserveDiscarding(this->FanBuffer, slots);
+  this->ReserveClasses(slots);
 }
 
 void FanStage::Release()

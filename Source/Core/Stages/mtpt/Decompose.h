@@ -257,6 +257,13 @@ public:
   /// Each slot's or fan's class, of the held window (Count() of them): what a reader of the
   /// fans skips (Drawn, Records.h).
   const ProjectionClass* Classes() const { return this->SlotClasses.data(); }
+  /**
+   * Room for windows of `slots` tetrahedra (the batch size), allocated at once: the first
+   * window of a frame may be the order's shorter last one (batches front to back), and
+   * growing from it would hold more than a window (LargeBuffer.h, ReserveDiscarding). A
+   * buffer that grows drops the held window.
+   */
+  virtual void Reserve(std::size_t slots) = 0;
 
 protected:
   /// The window of `key` through `cells(input, first, count, classes, threads)` (the cells by
@@ -265,6 +272,9 @@ protected:
   template <typename Cells, typename Piece>
   bool Run(const Key& key, const DecomposeInput& input, const std::uint32_t* rank,
     const std::vector<NearPiece>& pieces, int threads, Cells&& cells, Piece&& piece);
+
+  /// Reserve's part for the classes; true when a buffer dropped its content.
+  bool ReserveClasses(std::size_t slots);
 
   LargeVector<ProjectionClass> SlotClasses; ///< per slot of the window
   std::size_t CoversNoPixel = 0, Undrawable = 0, Concealed = 0;
@@ -279,6 +289,7 @@ public:
     const std::vector<NearPiece>& pieces, int threads);
   const LargeVector<TetVertex>& Vertices() const { return this->VertexBuffer; }
   const LargeVector<std::uint32_t>& Indices() const { return this->IndexBuffer; }
+  void Reserve(std::size_t slots) override;
   void Release() override;
   std::size_t MemoryBytes() const override;
 
@@ -294,6 +305,7 @@ public:
   bool Update(const Key& key, const DecomposeInput& input, const std::uint32_t* rank,
     const std::vector<NearPiece>& pieces, int threads);
   const LargeVector<Fan>& Fans() const { return this->FanBuffer; }
+  void Reserve(std::size_t slots) override;
   void Release() override;
   std::size_t MemoryBytes() const override;
 

@@ -83,6 +83,25 @@ public:
 template <typename T>
 using LargeVector = std::vector<T, LargeBufferAllocator<T>>;
 
+/**
+ * Gives `buffer` room for `capacity` elements, dropping what it holds where it must grow: it
+ * is freed first and allocated at exactly `capacity`. std::vector's own growth would hold
+ * both blocks while it copies, and up to twice the elements asked for after, which the
+ * memory bound of a frame does not allow (FramePipeline::BytesNeeded). For buffers a frame
+ * writes anew. Returns whether it dropped the content.
+ */
+template <typename T>
+bool ReserveDiscarding(LargeVector<T>& buffer, std::size_t capacity)
+{
+  if (buffer.capacity() >= capacity)
+  {
+    return false;
+  }
+  LargeVector<T>().swap(buffer);
+  buffer.reserve(capacity);
+  return true;
+}
+
 } // namespace mtpt
 
 #endif
