@@ -122,18 +122,20 @@ try
   csv << "scene,tetrahedra,width,height,multisampling,threads,instruction_set,grid_mib,mtpt_ms,"
          "mtpt_slow,cpu_stages_ms,composite_ms,raster_ms,fragments,mtpt_mib,mtpt_peak_mib,"
          "moving_rate,moving_ms,moving_cell_fraction,moving_sample_distance,vtk_pt_ms,"
-         "vtk_pt_slow,vtk_pt_peak_mib,moving_mtpt_mib,moving_peak_mib\n";
+         "vtk_pt_slow,vtk_pt_peak_mib,moving_mtpt_mib,moving_peak_mib,sorted,hidden\n";
   std::printf("%dx%d, %s, %d threads, camera turning %.2f degrees per frame, median of %d (* one "
               "frame, slower than %.0f s); MTPT shading %s, its CPU compositor %s\n\n",
     width, height, WindowName(multisampling), threads, o.common.timing.step, o.common.timing.repeat,
     o.common.timing.slowLimit, o.common.mapper.shading.c_str(), instructionSet);
   std::printf("| tetrahedra | MTPT frame ms | CPU stages ms | tetrahedra a second | "
-              "rasterization ms | fragments | ns per fragment x core | moving at %g fps asked: "
+              "rasterization ms | fragments | ns per fragment x core | sorted cells: fans, "
+              "hidden | moving at %g fps asked: "
               "ms, cells, distance | grid MiB | MTPT MiB | MTPT bytes per tet | peak MiB, "
               "MTPT | moving: MTPT MiB, bytes per tet, peak MiB | VTK PT ms | peak MiB, VTK PT | "
               "VTK PT / MTPT |\n",
     o.rate);
-  std::printf("|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---|---:|---:|---:|\n");
+  std::printf(
+    "|---:|---:|---:|---:|---:|---:|---:|---|---|---:|---:|---:|---:|---|---:|---:|---:|\n");
   Series full{ "MTPT CPU, full frame", {}, {} }, atRate{ "", {}, {} }, pt{ "VTK PT", {}, {} },
     stages{ "MTPT CPU stages", {}, {} };
   atRate.label = "MTPT CPU, moving at " + Fixed(o.rate, 0) + " fps asked";
@@ -161,11 +163,13 @@ try
     const double cellFraction = tets > 0 ? static_cast<double>(lod.m.mtpt.sorted) / tets : 0;
     const double rasterNs = NsPerFragmentCore(f, threads);
     const double movingMiB = static_cast<double>(lod.m.mtpt.memoryBytes) / (1 << 20);
-    std::printf("| %lld | %s | %.0f | %.1fM | %.0f | %.0fM | %.1f | %s, %.0f%%, %.2f | %.0f | "
+    const double hiddenShare = f.sorted > 0 ? static_cast<double>(f.hidden) / f.sorted : 0;
+    std::printf("| %lld | %s | %.0f | %.1fM | %.0f | %.0fM | %.1f | %.0f%%, %.0f%% | %s, %.0f%%, "
+                "%.2f | %.0f | "
                 "%.0f | %.1f | %.0f | %.0f, %.1f, %.0f | %s | %s | %s |\n",
       tets, Ms(ours).c_str(), f.cpuStages, f.cpuStages > 0 ? tets / f.cpuStages / 1e3 : 0.0,
-      f.raster, f.fragments / 1e6, rasterNs, Ms(lod).c_str(), 100 * cellFraction,
-      lod.m.mtpt.imageSampleDistance, gridMiB, mtptMiB,
+      f.raster, f.fragments / 1e6, rasterNs, 100 * (1 - hiddenShare), 100 * hiddenShare,
+      Ms(lod).c_str(), 100 * cellFraction, lod.m.mtpt.imageSampleDistance, gridMiB, mtptMiB,
       tets > 0 ? static_cast<double>(f.memoryBytes) / tets : 0.0, ours.peakMiB, movingMiB,
       tets > 0 ? static_cast<double>(lod.m.mtpt.memoryBytes) / tets : 0.0, lod.peakMiB,
       Ms(vtk).c_str(), vtk.measured ? Fixed(vtk.peakMiB, 0).c_str() : "-",
@@ -180,7 +184,7 @@ try
         << (vtk.measured ? std::to_string(vtk.m.moving.median) : "") << ','
         << (vtk.measured ? (vtk.m.moving.slow ? "1" : "0") : "") << ','
         << (vtk.measured ? std::to_string(vtk.peakMiB) : "") << ',' << movingMiB << ','
-        << lod.peakMiB << '\n';
+        << lod.peakMiB << ',' << f.sorted << ',' << f.hidden << '\n';
     csv.flush();
     for (Series* s : { &full, &atRate, &stages })
     {

@@ -689,6 +689,7 @@ StageFigures FiguresOf(vtkAbstractVolumeMapper* mapper)
   f.fragments = static_cast<double>(ours->GetNumberOfFragments());
   f.sorted = static_cast<long long>(ours->GetNumberOfTetrahedra());
   f.pixelCulled = static_cast<long long>(ours->GetNumberOfPixelCulledCells());
+  f.hidden = static_cast<long long>(ours->GetNumberOfHiddenCells());
   f.memoryBytes = static_cast<long long>(ours->GetMemoryBytes());
   f.imageSampleDistance = ours->GetImageSampleDistance();
   f.imageSize[0] = ours->GetImageInUseSize()[0];

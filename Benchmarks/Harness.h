@@ -286,6 +286,7 @@ struct StageFigures
   double composite = 0, bin = 0, raster = 0, upload = 0, draw = 0;
   double fragments = 0;
   long long sorted = 0, pixelCulled = 0;
+  long long hidden = 0; ///< sorted, then left out behind opaque pixels (GetNumberOfHiddenCells)
   long long memoryBytes = 0;      ///< the mapper's buffers after the frame (GetMemoryBytes)
   double imageSampleDistance = 1; ///< the distance the frame was composited at
   int imageSize[2] = { 0, 0 };    ///< the composited image's size (ImageInUseSize)

@@ -242,22 +242,25 @@ def large_table(rows):
     sets = "/".join(sorted({r["instruction_set"] for r in rows}))
     lines = [f"| tetrahedra (compositor: {sets}) | full frame, ms | "
              "CPU stages, ms (tetrahedra a second) | "
-             "rasterization, ms (ns per fragment and core) | fragments | moving at "
+             "rasterization, ms (ns per fragment and core) | fragments | "
+             "sorted cells: as fans; hidden, not decomposed | moving at "
              f"{rows[0]['moving_rate']:g} fps asked: ms, cells drawn, sample distance | "
              "grid, MiB | MTPT's buffers, MiB (bytes per tetrahedron): full frames; moving "
              "frames | peak resident, MiB: full; moving | "
              "VTK's PT, ms (peak MiB) | VTK's PT / MTPT |",
-             "|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|"]
+             "|---:|---:|---:|---:|---:|---|---|---:|---:|---:|---:|---:|"]
     for r in rows:
         tets = r["tetrahedra"]
         ns = 1e6 * r["raster_ms"] * r["threads"] / r["fragments"] if r["fragments"] else 0
+        hidden = r["hidden"] / r["sorted"] if r["sorted"] else 0
         pt = (f"{slow(r, 'vtk_pt')} ({r['vtk_pt_peak_mib']:.0f})"
               if r["vtk_pt_ms"] is not None else "not run")
         ratio = f"{r['vtk_pt_ms'] / r['mtpt_ms']:.1f}x" if r["vtk_pt_ms"] is not None else "-"
         lines.append(
             f"| {tetrahedra(tets)} | {slow(r, 'mtpt')} | {ms(r['cpu_stages_ms'])} "
             f"({tets / r['cpu_stages_ms'] / 1e3:.1f}M) | {ms(r['raster_ms'])} ({ns:.1f}) | "
-            f"{r['fragments'] / 1e6:.0f}M | {ms(r['moving_ms'])}, "
+            f"{r['fragments'] / 1e6:.0f}M | {100 * (1 - hidden):.0f}%; {100 * hidden:.0f}% | "
+            f"{ms(r['moving_ms'])}, "
             f"{100 * r['moving_cell_fraction']:.2g}%, {r['moving_sample_distance']:.2f} | "
             f"{r['grid_mib']:.0f} | {r['mtpt_mib']:.0f} ({r['mtpt_mib'] * 2**20 / tets:.0f}); "
             f"{r['moving_mtpt_mib']:.0f} ({r['moving_mtpt_mib'] * 2**20 / tets:.0f}) | "
