@@ -32,52 +32,43 @@ inline void CornerBounds(
   }
 }
 
+/// How far beyond the corners' box a pixel centre may still be covered: rasterizers snap
+/// vertices to a 1/256-pixel grid (the CPU compositor, Mesa), which moves a vertex by up to
+/// 1/512 pixel.
+constexpr double SnapMargin = 1.0 / 256;
+
 /**
- * The pixels of the image (width x height) whose centres the window-space bounding box of
- * the corners contains, clamped to the image: columns [x0, x1], rows [y0, y1], empty when
- * x0 > x1 or y0 > y1 (or a bound is not a number). Conservative by 1/256 pixel: rasterizers
- * snap vertices to a 1/256-pixel grid (the CPU compositor, Mesa), which moves a vertex by up
- * to 1/512 pixel, so no pixel centre outside the box is covered after snapping either.
+ * Whether the window-space bounding box of the corners contains a pixel centre of the
+ * image. Conservative by SnapMargin, so a cell this rejects covers no pixel centre after
+ * snapping either.
  */
-struct PixelBox
-{
-  double x0, x1, y0, y1;
-
-  PixelBox(const ProjectedPoint* const c[4], int width, int height)
-  {
-    double minX, maxX, minY, maxY;
-    CornerBounds(c, minX, maxX, minY, maxY);
-    constexpr double Margin = 1.0 / 256;
-    // Pixel centres x + 0.5 for x in [0, width): window x = (ndc + 1) / 2 * width.
-    x0 = std::max(0.0, std::ceil((minX + 1.0) * 0.5 * width - 0.5 - Margin));
-    x1 = std::min(width - 1.0, std::floor((maxX + 1.0) * 0.5 * width - 0.5 + Margin));
-    y0 = std::max(0.0, std::ceil((minY + 1.0) * 0.5 * height - 0.5 - Margin));
-    y1 = std::min(height - 1.0, std::floor((maxY + 1.0) * 0.5 * height - 0.5 + Margin));
-  }
-
-  /// Whether the box holds a pixel centre (false for a bound that is not a number).
-  bool Holds() const { return x0 <= x1 && y0 <= y1; }
-};
-
-/// Whether the window-space bounding box of the corners contains a pixel centre of the
-/// image (PixelBox).
 inline bool CoversPixelCentre(const ProjectedPoint* const c[4], const ImageSize& image)
 {
-  return PixelBox(c, image.width, image.height).Holds();
+  const int width = image.width, height = image.height;
+  double minX, maxX, minY, maxY;
+  CornerBounds(c, minX, maxX, minY, maxY);
+  // Pixel centres x + 0.5 for x in [0, width): window x = (ndc + 1) / 2 * width.
+  const double x0 = std::max(0.0, std::ceil((minX + 1.0) * 0.5 * width - 0.5 - SnapMargin));
+  const double x1 =
+    std::min(width - 1.0, std::floor((maxX + 1.0) * 0.5 * width - 0.5 + SnapMargin));
+  const double y0 = std::max(0.0, std::ceil((minY + 1.0) * 0.5 * height - 0.5 - SnapMargin));
+  const double y1 =
+    std::min(height - 1.0, std::floor((maxY + 1.0) * 0.5 * height - 0.5 + SnapMargin));
+  return x0 <= x1 && y0 <= y1;
 }
 
 /**
- * PixelBox's pixels along one axis of `size` pixels, for the box [low, high] (NDC), as ints:
- * [first, last], clamped to [-1, size] before rounding so that every conversion is exact
- * (the clamp keeps an empty box empty). Integer rounding instead of std::ceil and
- * std::floor, which the baseline instruction set has no instruction for.
+ * The pixels along one axis of `size` pixels whose centres the box [low, high] (NDC) holds,
+ * widened by SnapMargin, as CoversPixelCentre finds them but as ints: [first, last], the
+ * bounds clamped to [-1, size] before rounding so that every conversion is exact (the clamp
+ * keeps an empty span empty). Integer rounding instead of std::ceil and std::floor, which the
+ * baseline instruction set has no instruction for.
  */
 inline void PixelSpan(double low, double high, int size, int& first, int& last)
 {
-  constexpr double Margin = 1.0 / 256;
   const double s = size;
-  const double lo = std::min(std::max((low + 1.0) * 0.5 * s - 0.5 - Margin, -1.0), s);
-  const double hi = std::min(std::max((high + 1.0) * 0.5 * s - 0.5 + Margin, -1.0), s);
+  const double lo = std::min(std::max((low + 1.0) * 0.5 * s - 0.5 - SnapMargin, -1.0), s);
+  const double hi = std::min(std::max((high + 1.0) * 0.5 * s - 0.5 + SnapMargin, -1.0), s);
   const int l = static_cast<int>(lo), h = static_cast<int>(hi); // towards zero
   first = l + (lo > l ? 1 : 0);                                 // ceil
   last = h - (hi < h ? 1 : 0);                                  // floor
@@ -85,8 +76,9 @@ inline void PixelSpan(double low, double high, int size, int& first, int& last)
 
 /**
  * Whether every pixel centre the projection of the corners (usable: finite, ProjectedPoint)
- * can cover is opaque in `opaque`: its PixelBox in that image holds a pixel and each pixel
- * of the box is opaque. Such a tetrahedron, drawn behind those pixels, changes none of them.
+ * can cover is opaque in `opaque`: their box (PixelSpan) in that image holds a pixel and
+ * each pixel of the box is opaque. Such a tetrahedron, drawn behind those pixels, changes
+ * none of them.
  */
 inline bool HiddenBehind(const ProjectedPoint* const c[4], const OpaquePixels& opaque)
 {

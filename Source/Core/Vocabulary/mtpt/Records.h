@@ -154,9 +154,10 @@ enum class ProjectionClass : std::uint8_t
   /// centres (OpenGL without multisampling, the CPU compositor) would produce a fragment.
   /// The slot is degenerate, as for NotDrawable.
   CoversNoPixel = 5,
-  /// Hidden (only with DecomposeInput::hidden set, fans only): every pixel centre of the
-  /// projection's bounding box is opaque already (OpaquePixels.h), so no fragment of it could
-  /// show. Its fan is not written: whoever reads the fans skips it by its class.
+  /// Hidden (only with DecomposeInput::hidden set): every pixel centre of the projection's
+  /// bounding box is opaque already (OpaquePixels.h), so no fragment of it could show. The
+  /// by-rank decomposition leaves its fan unwritten: whoever reads the fans skips it by its
+  /// class (Drawn).
   Hidden = 6,
 };
 
