@@ -12,6 +12,7 @@
 #include "vtkDataArray.h"
 #include "vtkImageData.h"
 #include "vtkPiecewiseFunction.h"
+#include "vtkPlane.h"
 #include "vtkPointData.h"
 #include "vtkPolyDataMapper.h"
 #include "vtkProperty.h"
@@ -188,33 +189,60 @@ TEST_P(MapperWork, BatchesFrontToBackLeaveOutWhatOpaquePixelsHide)
 {
   // A box that turns opaque a short way in, drawn in batches: the CPU backend takes them
   // front to back and leaves out the cells behind the pixels the nearer batches made
-  // opaque, and the image is the one batch's exactly; OpenGL draws every cell.
+  // opaque, and the image is the one batch's exactly, in either shading, cut by a plane or
+  // lit; OpenGL draws every cell.
   auto box = MakeTetrahedralBox(16);
   auto property = MakeProperty(-0.3, 1.3, 0.01);
   Stage stage(box, property, GetParam());
   Mapper* m = stage.mapper;
-  m->SetBatchSize(0);
-  auto whole = stage.Frame();
-  EXPECT_EQ(m->GetNumberOfHiddenCells(), 0) << "one batch: nothing in front of it";
-  EXPECT_LT(CoveredFraction(whole, Background), 0.9); // the box, not the whole window
-  m->SetBatchSize(1500);
-  for (int view = 0; view < 2; ++view) // the second turned: a new order
+  vtkNew<vtkPlane> plane; // keeps the half of the box on the camera's side of its centre
+  plane->SetOrigin(0.0, 0.0, 0.0);
+  plane->SetNormal(stage.renderer->GetActiveCamera()->GetDirectionOfProjection());
+  plane->SetNormal(-plane->GetNormal()[0], -plane->GetNormal()[1], -plane->GetNormal()[2]);
+  vtkSmartPointer<vtkImageData> plain;
+  for (const char* variant : { "VTK-compatible", "pre-integrated", "clipped", "lit" })
   {
-    auto batched = stage.Frame();
-    EXPECT_GT(m->GetNumberOfBatches(), 10);
-    // A fresh mapper draws the box in one batch (its default size).
-    EXPECT_EQ(Compare(batched, view == 0 ? whole.Get() : stage.Fresh().Get()).worst, 0.0)
-      << "view " << view;
-    if (GetParam() == Mapper::CPU_BACKEND)
+    const std::string what = variant;
+    m->SetShadingMode(what == "pre-integrated" ? Mapper::PRE_INTEGRATED_SHADING
+                                                   : Mapper::VTK_COMPATIBLE_SHADING);
+    m->RemoveAllClippingPlanes();
+    if (what == "clipped")
     {
-      EXPECT_GT(m->GetNumberOfHiddenCells(), m->GetNumberOfTetrahedra() / 3) << "view " << view;
+      m->AddClippingPlane(plane);
+    }
+    property->SetShade(what == "lit");
+    m->SetBatchSize(0);
+    auto whole = stage.Frame();
+    EXPECT_EQ(m->GetNumberOfHiddenCells(), 0) << what << ": one batch, nothing in front of it";
+    EXPECT_LT(CoveredFraction(whole, Background), 0.9) << what; // the box, not the window
+    if (!plain)
+    {
+      plain = whole;
     }
     else
     {
-      EXPECT_EQ(m->GetNumberOfHiddenCells(), 0);
+      EXPECT_GT(Compare(whole, plain).worst, 0.01) << what << " draws its own image";
     }
-    stage.renderer->GetActiveCamera()->Azimuth(7);
+    m->SetBatchSize(1500);
+    auto batched = stage.Frame();
+    EXPECT_GT(m->GetNumberOfBatches(), 10) << what;
+    EXPECT_EQ(Compare(batched, whole).worst, 0.0) << what;
+    if (GetParam() == Mapper::CPU_BACKEND)
+    {
+      EXPECT_GT(m->GetNumberOfHiddenCells(), m->GetNumberOfTetrahedra() / 5) << what;
+    }
+    else
+    {
+      EXPECT_EQ(m->GetNumberOfHiddenCells(), 0) << what;
+    }
   }
+  // Turned: a new order, and a fresh mapper's image (one batch, its default size).
+  m->SetShadingModeToVTKCompatible();
+  m->RemoveAllClippingPlanes();
+  property->ShadeOff();
+  stage.renderer->GetActiveCamera()->Azimuth(7);
+  auto turned = stage.Frame();
+  EXPECT_EQ(Compare(turned, stage.Fresh()).worst, 0.0);
 }
 
 TEST_P(MapperWork, CulledCellsAreCountedAndChangeNothing)
