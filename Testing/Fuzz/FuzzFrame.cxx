@@ -615,6 +615,62 @@ void CheckImage(const std::vector<float>& rgba, int width, int height)
   }
 }
 
+/**
+ * The pipeline's order composited into `tiles` (Begin with `s`) as the CPU backend does it:
+ * windows of `batch` cells front to back, each behind those before it, the cells behind what
+ * they made opaque left undecomposed (FramePipeline::DrawBatches, Compositor::Opaque). Every
+ * fan written is checked; a hidden one is not read.
+ */
+void FansFrontToBack(mtpt::FramePipeline& pipeline, const mtpt::CompositeSettings& s,
+  std::size_t batch, int threads, mtpt::Compositor& tiles)
+{
+  mtpt::FramePlan plan;
+  plan.target = mtpt::BatchTarget::Fans;
+  plan.batchSize = batch;
+  plan.frontToBack = true;
+  plan.threads = threads;
+  tiles.Begin(s);
+  std::size_t windows = 0;
+  pipeline.DrawBatches(
+    plan,
+    [&](const mtpt::Batch& b)
+    {
+      ++windows;
+      FUZZ_CHECK(b.count == std::min(batch, pipeline.SortedCount() - b.first),
+        "%zu fans in the batch from %zu", b.count, b.first);
+      for (std::size_t k = 0; k < b.count; ++k)
+      {
+        const mtpt::Fan& fan = b.fans[k];
+        FUZZ_CHECK(b.classes[k] == mtpt::ProjectionClass::Hidden || fan.count == 0 ||
+            ((fan.count == 3 || fan.count == 4) && fan.closed == 1),
+          "fan %zu: %d corners, closed %d", b.first + k, fan.count, fan.closed);
+        FUZZ_CHECK(windows > 1 || b.classes[k] != mtpt::ProjectionClass::Hidden,
+          "fan %zu hidden in the first batch", b.first + k);
+      }
+      tiles.CompositeBehind(b.fans, b.count, threads, nullptr, b.classes);
+      return true;
+    },
+    &tiles.Opaque());
+}
+
+/**
+ * The CPU backend's batches, front to back with the cells behind what they made opaque left
+ * undecomposed (FansFrontToBack), in windows of `batch`: the image of one batch of the whole
+ * order bit for bit, whatever the frame.
+ */
+void CheckFrontToBack(mtpt::FramePipeline& pipeline, const mtpt::CompositeSettings& s,
+  std::size_t batch, int threadsA, int threadsB)
+{
+  std::vector<float> whole(4u * s.width * s.height), batched(whole.size());
+  mtpt::Compositor one, several;
+  FansFrontToBack(pipeline, s, pipeline.SortedCount(), threadsA, one);
+  one.Resolve({ 0, 0, s.width, s.height }, nullptr, whole.data(), threadsB);
+  FansFrontToBack(pipeline, s, batch, threadsB, several);
+  several.Resolve({ 0, 0, s.width, s.height }, nullptr, batched.data(), threadsA);
+  CheckImage(batched, s.width, s.height);
+  FUZZ_CHECK(batched == whole, "fans front to back in batches of %zu differ from one batch", batch);
+}
+
 /// The pipeline's fans (decomposed already) composited with `s` on `threads` threads.
 std::vector<float> CompositeFans(const mtpt::FramePipeline& pipeline,
   const mtpt::CompositeSettings& s, int threads, const mtpt::LightFactors* lights = nullptr)
@@ -982,17 +1038,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     a.Vertices().data(), a.Indices().data(), a.TetrahedronCount(), settings, imageB, threadsB);
   FUZZ_CHECK(imageA == imageB, "compositor: %d and %d threads differ", threadsA, threadsB);
 
-  // The CPU backend's path: the order decomposed into fans, batch after batch, binned into
-  // tiles and rasterized there. The same triangles in the same order as the slots. In one
-  // batch: the same image up to the fan path's set-up rounding (fans drawn whole, within
-  // 2e-6 of their triangles VTK-compatible, 2e-5 pre-integrated). In several: each batch is
-  // drawn front to back on its own and composited over those behind it, so a batch's own
-  // opaque pixels skip only what adds at most 2^-11 (OpaqueAlpha), plus the rounding of the
-  // extra compositing. Pre-integrated, the slots' triangles queue their fragments and skip
+  // The order decomposed into fans, batch after batch, binned into tiles and rasterized
+  // there. The same triangles in the same order as the slots. In one batch: the same image up
+  // to the fan path's set-up rounding (fans drawn whole, within 2e-6 of their triangles
+  // VTK-compatible, 2e-5 pre-integrated). Batches given back to front (Compositor::Composite):
+  // each drawn front to back on its own and composited over those behind it, so a batch's
+  // own opaque pixels skip only what adds at most 2^-11 (OpaqueAlpha), plus the rounding of
+  // the extra compositing. Pre-integrated, the slots' triangles queue their fragments and skip
   // them by the alpha a pixel had when they were queued, the fans by the alpha they leave:
   // where a pixel turns opaque they may differ by that 2^-11 in one batch too (found by the
   // fuzzer: 1.6e-4). Pre-integrated, the bound holds on well-conditioned frames
   // (WellConditioned); on the others the images are only checked to be finite and in range.
+  // The CPU backend's own order of batches, front to back, is checked against one batch below.
   const std::size_t batch = in.PickValueInArray<std::size_t>({ 1, 3, 7, 1u << 20 });
   std::vector<float> fanImage(imageA.size());
   mtpt::Compositor tiles;
@@ -1017,6 +1074,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     touched.y1, width, height);
   tiles.Resolve({ 0, 0, width, height }, nullptr, fanImage.data(), threadsB);
   CheckImage(fanImage, width, height);
+  CheckFrontToBack(b, settings, batch, threadsA, threadsB);
   const bool batched = batch < b.SortedCount();
   const bool queued = settings.shading == mtpt::Shading::PreIntegrated;
   const float fanBound = (batched || queued ? 1.0f / 2048 : 0.0f) + (queued ? 2e-5f : 1e-5f);
