@@ -232,18 +232,67 @@ HWY_INLINE void SplitLanes(
   fraction = hn::Sub(u, whole);
 }
 
-/// Partial per lane: integrals of tau and c tau from the interval's start to fraction f.
+/**
+ * PieceMeans per lane: the means of tau and c tau over the fractions [fa, fb] of interval v,
+ * from the values at the two ends, every term positive.
+ */
 template <class D, class V = hn::Vec<D>>
-HWY_INLINE void PartialLanes(D d, const IntervalLanes<D>& v, V f, V& t, V e[3])
+HWY_INLINE void PieceMeansLanes(D d, const IntervalLanes<D>& v, V fa, V fb, V& t, V e[3])
 {
-  const V half = hn::Set(d, 0.5f), third = hn::Set(d, 1.0f / 3.0f);
-  t = hn::Mul(f, hn::Add(v.tau, hn::Mul(hn::Mul(half, f), v.dTau)));
+  const V zero = hn::Zero(d), sixth = hn::Set(d, 1.0f / 6.0f);
+  const V ta = hn::Max(zero, hn::MulAdd(fa, v.dTau, v.tau));
+  const V tb = hn::Max(zero, hn::MulAdd(fb, v.dTau, v.tau));
+  t = hn::Mul(hn::Set(d, 0.5f), hn::Add(ta, tb));
+  const V wa = hn::Add(hn::Add(ta, ta), tb), wb = hn::Add(hn::Add(tb, tb), ta);
   for (int k = 0; k < 3; ++k)
   {
-    const V linear =
-      hn::Mul(hn::Mul(half, f), hn::Add(hn::Mul(v.c[k], v.dTau), hn::Mul(v.dC[k], v.tau)));
-    const V quadratic = hn::Mul(hn::Mul(hn::Mul(hn::Mul(f, f), v.dC[k]), v.dTau), third);
-    e[k] = hn::Mul(f, hn::Add(hn::Add(hn::Mul(v.c[k], v.tau), linear), quadratic));
+    const V ca = hn::MulAdd(fa, v.dC[k], v.c[k]), cb = hn::MulAdd(fb, v.dC[k], v.c[k]);
+    e[k] = hn::Mul(sixth, hn::MulAdd(ca, wa, hn::Mul(cb, wb)));
+  }
+}
+
+/// Lane by lane interval a where `pick` is set, b elsewhere.
+template <class D, class M>
+HWY_INLINE IntervalLanes<D> PickInterval(
+  M pick, const IntervalLanes<D>& a, const IntervalLanes<D>& b)
+{
+  IntervalLanes<D> v;
+  v.tau = hn::IfThenElse(pick, a.tau, b.tau);
+  v.dTau = hn::IfThenElse(pick, a.dTau, b.dTau);
+  for (int k = 0; k < 3; ++k)
+  {
+    v.c[k] = hn::IfThenElse(pick, a.c[k], b.c[k]);
+    v.dC[k] = hn::IfThenElse(pick, a.dC[k], b.dC[k]);
+  }
+  return v;
+}
+
+/**
+ * The means of tau and c tau over [u0, u1] where its ends lie in different intervals
+ * (SpanMeans): from the lower end to the end of its interval, the whole intervals between as
+ * prefix integrals, from the start of the upper end's interval to it. Lanes whose ends share
+ * an interval get 1 / 0 here and are replaced by the caller.
+ */
+template <class D, class VI, class V = hn::Vec<D>>
+HWY_INLINE void MeansAcrossLanes(D d, const TableRows& r, V u0, V u1, VI i0, VI i1, V f0, V f1,
+  const IntervalLanes<D>& v0, const IntervalLanes<D>& v1, V& tau, V e[3])
+{
+  const hn::RebindToSigned<D> di;
+  const auto forward = hn::Le(u0, u1);
+  const auto forwardIndex = hn::RebindMask(di, forward);
+  const V fl = hn::IfThenElse(forward, f0, f1), fh = hn::IfThenElse(forward, f1, f0);
+  const VI il = hn::IfThenElse(forwardIndex, i0, i1), ih = hn::IfThenElse(forwardIndex, i1, i0);
+  const V one = hn::Set(d, 1.0f);
+  V tl, th, el[3], eh[3], sums[4];
+  PieceMeansLanes(d, PickInterval(forward, v0, v1), fl, one, tl, el);
+  PieceMeansLanes(d, PickInterval(forward, v1, v0), hn::Zero(d), fh, th, eh);
+  r.IntegralsBetween(d, hn::Add(il, hn::Set(di, 1)), ih, sums);
+  const V wl = hn::Sub(one, fl);
+  const V inverse = hn::Div(one, hn::Sub(hn::Max(u0, u1), hn::Min(u0, u1)));
+  tau = hn::Mul(hn::MulAdd(wl, tl, hn::MulAdd(fh, th, sums[0])), inverse);
+  for (int k = 0; k < 3; ++k)
+  {
+    e[k] = hn::Mul(hn::MulAdd(wl, el[k], hn::MulAdd(fh, eh[k], sums[1 + k])), inverse);
   }
 }
 
@@ -272,33 +321,17 @@ HWY_INLINE StepLanes<D> StepOfLanes(D d, const TableRows& r, V u0, V u1, V depth
   V e[3];
   if (!oneInterval)
   {
-    // Across intervals: the prefix integrals' difference and the two partial intervals.
-    V t0, t1, e0[3], e1[3], sums[4];
-    PartialLanes(d, v0, f0, t0, e0);
-    PartialLanes(d, v1, f1, t1, e1);
-    r.IntegralsBetween(d, i0, i1, sums);
-    const V inverse = hn::Div(hn::Set(d, 1.0f), hn::Sub(u1, u0)); // 1 / 0 where same
-    step.tau = hn::Mul(hn::Sub(hn::Add(sums[0], t1), t0), inverse);
-    for (int k = 0; k < 3; ++k)
-    {
-      e[k] = hn::Mul(hn::Sub(hn::Add(sums[1 + k], e1[k]), e0[k]), inverse);
-    }
+    MeansAcrossLanes(d, r, u0, u1, i0, i1, f0, f1, v0, v1, step.tau, e);
   }
   if (!hn::AllFalse(d, same))
   {
-    // Means inside one interval in factored form, exact as u1 -> u0 (SpanMeans).
-    const V s1 = hn::Mul(hn::Set(d, 0.5f), hn::Add(f0, f1));
-    const V s2 = hn::Mul(
-      hn::Add(hn::Add(hn::Mul(f0, f0), hn::Mul(f0, f1)), hn::Mul(f1, f1)), hn::Set(d, 1.0f / 3.0f));
-    const V tau = hn::Add(v0.tau, hn::Mul(s1, v0.dTau));
+    // Inside one interval (SpanMeans).
+    V tau, inside[3];
+    PieceMeansLanes(d, v0, f0, f1, tau, inside);
     step.tau = oneInterval ? tau : hn::IfThenElse(same, tau, step.tau);
     for (int k = 0; k < 3; ++k)
     {
-      const V inside =
-        hn::Add(hn::Add(hn::Mul(v0.c[k], v0.tau),
-                  hn::Mul(s1, hn::Add(hn::Mul(v0.c[k], v0.dTau), hn::Mul(v0.dC[k], v0.tau)))),
-          hn::Mul(hn::Mul(s2, v0.dC[k]), v0.dTau));
-      e[k] = oneInterval ? inside : hn::IfThenElse(same, inside, e[k]);
+      e[k] = oneInterval ? inside[k] : hn::IfThenElse(same, inside[k], e[k]);
     }
   }
   const auto seen = hn::Gt(step.tau, hn::Zero(d));

@@ -77,16 +77,19 @@ vec4 EntryAt(float u)
   return mix(Entry(i), Entry(min(i + 1, tableSize - 1)), f);
 }
 
-// Integrals of tau and c tau from the start of interval i to fraction f.
-void Partial(int i, float f, out float t, out vec3 e)
+// Means of tau and c tau over the fractions [fa, fb] of interval i, from the values at its
+// two ends, every term positive (PieceMeans).
+void PieceMeans(int i, float fa, float fb, out float t, out vec3 e)
 {
   vec4 a = Entry(i);
   vec4 d = Entry(min(i + 1, tableSize - 1)) - a;
-  t = f * (a.a + 0.5 * f * d.a);
-  e = f * (a.rgb * a.a + 0.5 * f * (a.rgb * d.a + d.rgb * a.a) + f * f * d.rgb * d.a / 3.0);
+  float ta = max(0.0, a.a + fa * d.a);
+  float tb = max(0.0, a.a + fb * d.a);
+  t = 0.5 * (ta + tb);
+  e = ((a.rgb + fa * d.rgb) * (2.0 * ta + tb) + (a.rgb + fb * d.rgb) * (ta + 2.0 * tb)) / 6.0;
 }
 
-// Means of tau and c tau over the entry interval [u0, u1].
+// Means of tau and c tau over the entry interval [u0, u1] (either orientation).
 void SpanMeans(float u0, float u1, out float tau, out vec3 e)
 {
   int i0, i1;
@@ -95,23 +98,23 @@ void SpanMeans(float u0, float u1, out float tau, out vec3 e)
   Split(u1, i1, f1);
   if (i0 == i1)
   {
-    vec4 a = Entry(i0);
-    vec4 d = Entry(min(i0 + 1, tableSize - 1)) - a;
-    float s1 = 0.5 * (f0 + f1);
-    float s2 = (f0 * f0 + f0 * f1 + f1 * f1) / 3.0;
-    tau = a.a + s1 * d.a;
-    e = a.rgb * a.a + s1 * (a.rgb * d.a + d.rgb * a.a) + s2 * d.rgb * d.a;
+    PieceMeans(i0, f0, f1, tau, e);
     return;
   }
-  float t0, t1;
-  vec3 e0, e1;
-  Partial(i0, f0, t0, e0);
-  Partial(i1, f1, t1, e1);
-  vec4 sums = (texelFetch(integralsHigh, TableTexel(i1), 0) - texelFetch(integralsHigh, TableTexel(i0), 0)) +
-    (texelFetch(integralsLow, TableTexel(i1), 0) - texelFetch(integralsLow, TableTexel(i0), 0));
-  float inverse = 1.0 / (u1 - u0);
-  tau = (sums.x + t1 - t0) * inverse;
-  e = (sums.yzw + e1 - e0) * inverse;
+  bool forward = u0 <= u1;
+  int il = forward ? i0 : i1;
+  int ih = forward ? i1 : i0;
+  float fl = forward ? f0 : f1;
+  float fh = forward ? f1 : f0;
+  float tl, th;
+  vec3 el, eh;
+  PieceMeans(il, fl, 1.0, tl, el);
+  PieceMeans(ih, 0.0, fh, th, eh);
+  vec4 sums = (texelFetch(integralsHigh, TableTexel(ih), 0) - texelFetch(integralsHigh, TableTexel(il + 1), 0)) +
+    (texelFetch(integralsLow, TableTexel(ih), 0) - texelFetch(integralsLow, TableTexel(il + 1), 0));
+  float inverse = 1.0 / abs(u1 - u0);
+  tau = ((1.0 - fl) * tl + sums.x + fh * th) * inverse;
+  e = ((1.0 - fl) * el + sums.yzw + fh * eh) * inverse;
 }
 
 vec4 PreIntegrated(float ua, float ub, float len)
