@@ -4,6 +4,7 @@
 // again for each); the dispatch at the end picks the best the processor has. Compiled
 // without floating-point contraction (CMakeLists.txt), as DepthKeys.cxx is.
 #include "detail/KeyBatch.h"
+#include "detail/PixelCoverage.h"
 
 #include <cstddef>
 
@@ -73,7 +74,7 @@ template <class D>
 HWY_INLINE hn::Mask<D> HoldsCentre(D d, hn::Vec<D> low, hn::Vec<D> high, int size)
 {
   const auto one = hn::Set(d, 1.0), half = hn::Set(d, 0.5), pixels = hn::Set(d, size);
-  const auto margin = hn::Set(d, 1.0 / 256);
+  const auto margin = hn::Set(d, SnapMargin);
   const auto first = hn::Max(hn::Zero(d),
     hn::Ceil(hn::Sub(hn::Sub(hn::Mul(hn::Mul(hn::Add(low, one), half), pixels), half), margin)));
   const auto last = hn::Min(hn::Set(d, size - 1.0),
