@@ -353,8 +353,8 @@ inline void FanValues(const TableLookup& lookup, const Fan& fan, hn::Vec<CornerT
  * ValueCorner gives them for `mode`, arranged so that front = value[0] / value[1] and
  * back = value[2] / value[3] (Mode::Integrated: the scalars over 1; Mode::ExactIntegral: the
  * scalars times 1 / w over 1 / w, affine in screen space), value[4] = the segment's length
- * (Mode::Integrated; in perspective views ReduceFanLanes finds it from the faces' 1 / w),
- * value[5] = z.
+ * (Mode::Integrated) or the back face's 1 / w less the front face's (Mode::ExactIntegral,
+ * whose LaneSegments finds the length from it), value[5] = z.
  */
 inline void ScalarFanValues(const RasterFrame& f, Mode mode, const Fan& fan,
   hn::Vec<CornerTag> value[6], hn::Vec<CornerTag> centre[6])
@@ -368,8 +368,9 @@ inline void ScalarFanValues(const RasterFrame& f, Mode mode, const Fan& fan,
     c.vertex = k < MaxFanTriangles ? &fan.boundary[k < fan.count ? k : 0] : &fan.centre;
     ValueCorner(f, mode, c);
     const bool exact = mode == Mode::ExactIntegral;
-    const double v[6] = { c.values[0], exact ? c.values[1] : 1.0, exact ? c.values[2] : c.values[1],
-      exact ? c.values[3] : 1.0, exact ? 0.0 : c.values[2], exact ? c.values[6] : c.values[3] };
+    const double v[6] = { c.values[0], exact ? c.values[1] : 1.0,
+      exact ? c.values[2] : c.values[1], exact ? c.values[3] : 1.0,
+      exact ? c.values[7] : c.values[2], exact ? c.values[6] : c.values[3] };
     for (int a = 0; a < 6; ++a)
     {
       (k < MaxFanTriangles ? corners[a][k] : own[a]) = static_cast<float>(v[a]);
@@ -593,9 +594,7 @@ HWY_INLINE void LaneSegments(D d, const RasterFrame& f, const TileTarget& tile, 
       hn::Set(d, static_cast<float>(view.scaleX)));
     const auto rayY = hn::Set(d, static_cast<float>((ndcY + view.shiftY) * view.scaleY));
     const auto ray = hn::Sqrt(hn::MulAdd(rayX, rayX, hn::MulAdd(rayY, rayY, hn::Set(d, 1.0f))));
-    length = hn::Mul(hn::ZeroIfNegative(hn::Sub(
-                       hn::Div(hn::Set(d, 1.0f), value[3]), hn::Div(hn::Set(d, 1.0f), value[1]))),
-      ray);
+    length = ExactSegmentLength(value[1], value[3], value[4], ray);
   }
 }
 

@@ -43,19 +43,20 @@ constexpr double FixedPointLimit = 4194304.0;
 /// Triangles reaching beyond the fixed-point range are clipped this far around the image.
 constexpr double GuardBand = 1 << 20;
 /// Attributes interpolated per triangle, at most.
-constexpr int MaxAttributes = 7;
+constexpr int MaxAttributes = 8;
 
 /// What is interpolated, per shading mode (the layout of Corner::values and Planes).
 enum class Mode
 {
   Compatible,   ///< r, g, b, attenuation, length, z
   Integrated,   ///< front scalar, back scalar, length, z (linear in screen space)
-  ExactIntegral ///< front scalar / w, 1 / w, back scalar / w, 1 / w, ray x, ray y, z
+  /// front scalar / w, 1 / w, back scalar / w, 1 / w, ray x, ray y, z, 1 / w back - front
+  ExactIntegral
 };
 
 inline int AttributeCount(Mode mode)
 {
-  return mode == Mode::Compatible ? 6 : (mode == Mode::Integrated ? 4 : 7);
+  return mode == Mode::Compatible ? 6 : (mode == Mode::Integrated ? 4 : 8);
 }
 
 /// A fan vertex as the rasterizer uses it. Its attribute values are computed when the
@@ -138,13 +139,16 @@ inline void ValueCorner(const RasterFrame& f, Mode mode, Corner& c)
     return;
   }
   // Perspective-exact: 1 / w of the front and back faces and the eye ray are affine in
-  // screen space over each triangle (PerspectiveInterpolation).
+  // screen space over each triangle (PerspectiveInterpolation), and so is their difference,
+  // formed here without cancellation: a segment thin against its depth (a small cell far
+  // off) changes 1 / w by less than a float resolves, and the two faces' 1 / w, each
+  // rounded, would give its length from their last bits (ExactSegmentLength).
   const PerspectiveInterpolation& view = f.interpolation;
   const double rayX = (v.x + view.shiftX) * view.scaleX;
   const double rayY = (v.y + view.shiftY) * view.scaleY;
   const double ray = std::sqrt(1.0 + rayX * rayX + rayY * rayY);
   const double w = 1.0 / (view.inverseWScale * v.z + view.inverseWOffset);
-  const double frontW = 1.0 / w, backW = 1.0 / (w + v.thickness / ray);
+  const double depth = v.thickness / ray, frontW = 1.0 / w, backW = 1.0 / (w + depth);
   c.values[0] = frontW * v.scalarFront;
   c.values[1] = frontW;
   c.values[2] = backW * v.scalarBack;
@@ -152,6 +156,7 @@ inline void ValueCorner(const RasterFrame& f, Mode mode, Corner& c)
   c.values[4] = rayX;
   c.values[5] = rayY;
   c.values[6] = v.z;
+  c.values[7] = -depth * frontW * backW; // backW - frontW
 }
 
 /// The planes of the triangle (a, b, c) over the tile; false for a triangle without area.

@@ -114,9 +114,7 @@ HWY_INLINE void WholeFragments(
   front = hn::Div(value(0), frontW);
   back = hn::Div(value(2), backW);
   const V ray = hn::Sqrt(hn::MulAdd(rayX, rayX, hn::MulAdd(rayY, rayY, hn::Set(d, 1.0f))));
-  length = hn::Mul(hn::ZeroIfNegative(
-                     hn::Sub(hn::Div(hn::Set(d, 1.0f), backW), hn::Div(hn::Set(d, 1.0f), frontW))),
-    ray);
+  length = ExactSegmentLength(frontW, backW, value(7), ray);
   z = value(6);
 }
 

@@ -597,6 +597,30 @@ inline void ShadeWaiting(const RasterFrame& f, const TileTarget& tile, WaitingFr
   w.lanes = 0;
 }
 
+/**
+ * The eye length of a perspective-exact fragment's segment (Mode::ExactIntegral) from the
+ * faces' 1 / w, their difference deltaW = backW - frontW and the eye ray's length per unit of
+ * depth: (1 / backW - 1 / frontW) ray = (-deltaW / frontW) / backW ray. Each factor keeps
+ * float's relative precision: deltaW however thin the segment is against its depth, where
+ * frontW - backW would keep only the last bits of the two; backW however deep the back face
+ * lies behind the front one, where frontW + deltaW would keep only the last bits of the two.
+ * 0 where that is not a length: where rounding left deltaW above 0, and where it is NaN
+ * (planes that vanish in frames of extreme depth ranges).
+ */
+template <class V>
+HWY_INLINE V ExactSegmentLength(V frontW, V backW, V deltaW, V ray)
+{
+  const V length = hn::Mul(hn::Div(hn::Div(hn::Neg(deltaW), frontW), backW), ray);
+  return hn::IfThenElseZero(hn::Gt(length, hn::Zero(hn::DFromV<V>())), length);
+}
+
+/// ExactSegmentLength of one fragment, in double precision.
+inline double ExactSegmentLength(double frontW, double backW, double deltaW, double ray)
+{
+  const double length = -deltaW / frontW / backW * ray;
+  return length > 0.0 ? length : 0.0;
+}
+
 /// A fragment's ray segment: eye depths of its ends, eye length, and the scalars at its ends
 /// (pre-integrated shading), from the planes at one pixel, and the pixel centre's NDC.
 struct FragmentSegment
@@ -619,7 +643,8 @@ inline FragmentSegment SegmentAt(
     s.back = 1.0 / backW;
     s.scalarFront = value(0) / frontW;
     s.scalarBack = value(2) / backW;
-    s.length = std::max(0.0, s.back - s.front) * std::sqrt(1.0 + rayX * rayX + rayY * rayY);
+    s.length =
+      ExactSegmentLength(frontW, backW, value(7), std::sqrt(1.0 + rayX * rayX + rayY * rayY));
     s.z = value(6);
     return s;
   }

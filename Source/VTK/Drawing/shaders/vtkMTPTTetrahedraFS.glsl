@@ -10,6 +10,7 @@ in vec4 classified;
 in vec3 preIntegration; // front and back scalar (table entry units), segment length
 in vec4 exactFrontBack;  // perspective-exact: see the vertex shader
 in vec2 exactRay;
+in float exactDelta;
 uniform int perspectiveExact;
 
 uniform float inverseUnitDistance; // 1 / ScalarOpacityUnitDistance
@@ -200,10 +201,14 @@ FragmentSegment SegmentOfFragment(bool depths)
   FragmentSegment s;
   if (perspectiveExact == 1) // scalars only (the plan's perspectiveExact)
   {
-    // Front and back faces are planes: their 1 / depth is affine in screen space.
+    // Front and back faces are planes: their 1 / depth is affine in screen space. The
+    // length (1 / back - 1 / front) |ray| = (-delta / front) / back |ray|, each factor
+    // without cancellation (the compositor's ExactSegmentLength).
     s.front = 1.0 / exactFrontBack.y;
     s.back = 1.0 / exactFrontBack.w;
-    s.len = max(0.0, s.back - s.front) * sqrt(1.0 + dot(exactRay, exactRay));
+    float len = -exactDelta / exactFrontBack.y / exactFrontBack.w *
+      sqrt(1.0 + dot(exactRay, exactRay));
+    s.len = len > 0.0 ? len : 0.0; // and 0 for NaN
     s.scalarFront = exactFrontBack.x / exactFrontBack.y;
     s.scalarBack = exactFrontBack.z / exactFrontBack.w;
     return s;

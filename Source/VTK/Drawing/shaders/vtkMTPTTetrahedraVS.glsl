@@ -36,9 +36,13 @@ uniform vec2 rayShift;
 out vec4 classified;
 out vec3 preIntegration;
 // Perspective-exact only: (front scalar / front depth, 1 / front depth, back scalar / back
-// depth, 1 / back depth) and the eye ray; all affine in screen space over a triangle.
+// depth, 1 / back depth), the eye ray and 1 / back depth - 1 / front depth; all affine in
+// screen space over a triangle. The difference is formed here without cancellation (a
+// segment thin against its depth would otherwise get its length from the last bits of two
+// nearly equal values).
 out vec4 exactFrontBack;
 out vec2 exactRay;
+out float exactDelta;
 
 // The table at entry coordinate u, clamped to the table, read texel by texel.
 vec4 EntryAt(float u)
@@ -88,13 +92,16 @@ void main()
   }
   exactFrontBack = vec4(0.0);
   exactRay = vec2(0.0);
+  exactDelta = 0.0;
   if (perspectiveExact == 1)
   {
     exactRay = (vertexNDC.xy + rayShift) * rayScale;
     float depth = 1.0 / (inverseDepthScale * vertexNDC.z + inverseDepthOffset);
+    float along = thickness / sqrt(1.0 + dot(exactRay, exactRay));
     float front = 1.0 / depth;
-    float back = 1.0 / (depth + thickness / sqrt(1.0 + dot(exactRay, exactRay)));
+    float back = 1.0 / (depth + along);
     exactFrontBack = vec4(preIntegration.x * front, front, preIntegration.y * back, back);
+    exactDelta = -along * front * back;
   }
   gl_Position = vec4(vertexNDC, 1.0);
 }
