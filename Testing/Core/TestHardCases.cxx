@@ -2,11 +2,10 @@
 // Numerical hard cases (far from the origin, tiny and huge scales, a wide perspective view,
 // saturated and vanishing attenuation, cells thin against their depth, non-convex meshes,
 // huge cells beside tiny ones, edge-on faces, stacked vertices, slivers), each against an
-// expected image: the exact
-// reference (ReferenceRenderer.h) or the same scene without the difficulty. MTPT renders
-// through the whole CPU path (FramePipeline + Compositor) in pre-integrated shading, whose
-// perspective interpolation is exact, so the remaining differences are rounding and
-// rasterization.
+// expected image: the exact reference (ReferenceRenderer.h) or the same scene without the
+// difficulty. MTPT renders through the whole CPU path (FramePipeline + Compositor) in
+// pre-integrated shading, whose perspective interpolation is exact, so the remaining
+// differences are rounding and rasterization.
 #include "TestHelpers.h"
 
 #include "mtpt/Compositor.h"
