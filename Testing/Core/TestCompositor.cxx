@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -964,6 +965,47 @@ TEST_P(CompositorSimd, PreIntegratedSegmentsMatchTheScalarIntegration)
   }
   EXPECT_LE(worst, 5e-5) << mtpt::detail::RasterTargetName();
   EXPECT_GT(opaque, 400) << "thick segments reach high opacity";
+}
+
+TEST_P(CompositorSimd, PreIntegratedStepsOfSubnormalAttenuationStayFinite)
+{
+  // An attenuation below the smallest normal float (a table entry of 1e-39, or a mean that
+  // rounds there): 1 / tau overflows, and a colour channel whose integral is 0 must not turn
+  // NaN. Every channel finite and in [0, 1], and the premultiplied colour what the
+  // double-precision function gives, for one-step and many-step segments alike.
+  const float tiny = 1e-39f;
+  ASSERT_LT(tiny, std::numeric_limits<float>::min());
+  const std::vector<float> table = { 1.0f, 0.0f, 0.5f, tiny, 1.0f, 0.0f, 0.5f, tiny };
+  const mtpt::TransferFunctionTable tf{ table.data(), 2, 0.0, 1.0 };
+  mtpt::PreIntegrationTable integrals;
+  integrals.Build(tf);
+  std::vector<float> front, back, length;
+  for (const float l : { 1e-3f, 1.0f, 1e20f, 1e30f, 1e38f })
+  {
+    for (const float u : { 0.0f, 0.3f, 1.0f })
+    {
+      front.push_back(u);
+      back.push_back(1.0f - u);
+      length.push_back(l);
+    }
+  }
+  std::vector<float> rgba(4 * front.size());
+  mtpt::detail::PreIntegratedSegments(
+    tf, integrals, front.data(), back.data(), length.data(), 1.0f, rgba.data(), front.size());
+  for (std::size_t i = 0; i < front.size(); ++i)
+  {
+    float expected[4];
+    integrals.Segment(tf, front[i], back[i], length[i], 1.0f, expected);
+    for (int c = 0; c < 4; ++c)
+    {
+      ASSERT_TRUE(std::isfinite(rgba[4 * i + c]) && rgba[4 * i + c] >= 0.0f &&
+        rgba[4 * i + c] <= 1.0f)
+        << "segment " << i << " channel " << c << ": " << rgba[4 * i + c];
+      const double premultiplied = c < 3 ? rgba[4 * i + 3] * rgba[4 * i + c] : rgba[4 * i + 3];
+      const double exact = c < 3 ? expected[3] * expected[c] : expected[3];
+      EXPECT_NEAR(premultiplied, exact, 5e-5) << "segment " << i << " channel " << c;
+    }
+  }
 }
 
 TEST_P(CompositorSimd, PreIntegratedSegmentsKeepTheirDigitsOnASteepTable)
