@@ -356,17 +356,28 @@ HWY_INLINE StepLanes<D> StepOfLanes(D d, const TableRows& r, V u0, V u1, V depth
   const V shift = hn::Sub(half, h);
   // 1 / tau overflows for a subnormal tau, and a colour integral of 0 times it would be NaN
   // (found by the fuzzer): there tau and the integrals are scaled by 2^64 first, exactly,
-  // which leaves their quotient, the mean, as it is.
-  const V scale = hn::IfThenElse(hn::Lt(step.tau, hn::Set(d, std::numeric_limits<float>::min())),
-    hn::Set(d, 18446744073709551616.0f), one);
-  const V inverseTau = hn::Div(one, hn::IfThenElse(seen, hn::Mul(step.tau, scale), one));
+  // which leaves their quotient, the mean, as it is. Such lanes are rare: the common vector
+  // pays one comparison.
+  V tau = step.tau;
+  const auto subnormal =
+    hn::And(seen, hn::Lt(tau, hn::Set(d, std::numeric_limits<float>::min())));
+  if (!hn::AllFalse(d, subnormal))
+  {
+    const V scale = hn::IfThenElse(subnormal, hn::Set(d, 18446744073709551616.0f), one);
+    tau = hn::Mul(tau, scale);
+    for (int k = 0; k < 3; ++k)
+    {
+      e[k] = hn::Mul(e[k], scale);
+    }
+  }
+  const V inverseTau = hn::Div(one, hn::IfThenElse(seen, tau, one));
   for (int k = 0; k < 3; ++k)
   {
     // The colours at the step's ends (LookupEntry), the mean kept in [0, 1] and the colour
     // within the three, as in Segment.
     const V c0 = hn::MulAdd(f0, v0.dC[k], v0.c[k]);
     const V c1 = hn::MulAdd(f1, v1.dC[k], v1.c[k]);
-    const V mean = hn::Min(one, hn::Max(hn::Zero(d), hn::Mul(hn::Mul(e[k], scale), inverseTau)));
+    const V mean = hn::Min(one, hn::Max(hn::Zero(d), hn::Mul(e[k], inverseTau)));
     const V lowest = hn::Min(hn::Min(mean, c0), c1), highest = hn::Max(hn::Max(mean, c0), c1);
     const V c = hn::MulAdd(hn::Sub(c0, c1), shift, mean);
     step.colour[k] = hn::IfThenElseZero(seen, hn::Min(highest, hn::Max(lowest, c)));
