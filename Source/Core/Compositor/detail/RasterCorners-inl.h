@@ -393,6 +393,26 @@ inline int ClipToBox(const double X[3], const double Y[3], double lo, double hiX
   return n;
 }
 
+/// Covers a triangle (X, Y) beyond the fixed-point range (a near-plane piece far off
+/// screen): clipped to a guard band, as OpenGL does, and its pieces covered with `span`,
+/// whose planes stay those of the whole triangle.
+template <class Span>
+void CoverGuardBand(const RasterFrame& f, const double X[3], const double Y[3], int x0, int x1,
+  int y0, int y1, Span& span)
+{
+  double px[9], py[9];
+  const int n = ClipToBox(X, Y, -GuardBand, f.width + GuardBand, f.height + GuardBand, px, py);
+  Edges edges;
+  for (int k = 1; k + 1 < n; ++k)
+  {
+    const double fanX[3] = { px[0], px[k], px[k + 1] }, fanY[3] = { py[0], py[k], py[k + 1] };
+    if (SetUpEdges(fanX, fanY, edges))
+    {
+      CoverSpans(edges, x0, x1, y0, y1, span);
+    }
+  }
+}
+
 } // namespace HWY_NAMESPACE
 } // namespace detail
 } // namespace mtpt
