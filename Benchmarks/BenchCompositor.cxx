@@ -19,8 +19,13 @@
  * (FragmentFloor.h; Documentation/compositor.md, "The floor"), on one thread, with every
  * instruction set this processor runs, beside the frame's nanoseconds per covered fragment
  * with the same instruction set. --instruction-set runs everything with one instruction set.
+ *
+ * --coverage adds a table of the fans by the pixel centres each covers (FanCoverage.h), from
+ * the frame with nothing opaque; their sum must be the compositor's count of the fragments
+ * covered in that frame, or the program says so and exits with 1.
  */
 #include "Camera.h"
+#include "FanCoverage.h"
 #include "FragmentFloor.h"
 #include "Statistics.h"
 #include "TetrahedralGrid.h"
@@ -36,6 +41,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace
@@ -57,6 +63,7 @@ struct Options
   std::string shading = "vtk";
   double attenuation = 1.0; ///< the table's attenuations times this
   bool floor = false;
+  bool coverage = false;      ///< count the pixel centres each fan covers
   std::string instructionSet; ///< empty: the best this processor has
 };
 
@@ -144,6 +151,10 @@ struct SizeFigures
   FrameFigures median;
   double covered = 0;        ///< every fragment covered, with nothing opaque
   double coveredVectors = 0; ///< the fan path's vectors then
+  /// --coverage: the fans of that frame by the pixel centres each covers (FanCoverage.h),
+  /// and the centres they cover in all.
+  std::size_t fansByCentres[mtpt::bench::CoverageBins] = {};
+  std::size_t centres = 0;
 
   /// The rasterization's time per covered fragment and core.
   double NanosecondsPerFragment(int threads) const
@@ -151,6 +162,44 @@ struct SizeFigures
     return this->covered > 0 ? 1e6 * this->median.raster * threads / this->covered : 0;
   }
 };
+
+/// The pixel centres each of the pipeline's fans covers in a size x size image, counted by
+/// `threads` threads, a range of the fans each, into `result`.
+void CountCentres(const mtpt::FramePipeline& pipeline, int size, int threads, SizeFigures& result)
+{
+  const mtpt::Fan* fans = pipeline.Fans().data();
+  const std::size_t count = pipeline.FanCount();
+  struct Part
+  {
+    std::size_t fans[mtpt::bench::CoverageBins] = {};
+    std::size_t centres = 0;
+  };
+  std::vector<Part> parts(static_cast<std::size_t>(threads));
+  std::vector<std::thread> team;
+  for (int t = 0; t < threads; ++t)
+  {
+    team.emplace_back(
+      [&, t]
+      {
+        const std::size_t first = count * t / threads, end = count * (t + 1) / threads;
+        Part& part = parts[static_cast<std::size_t>(t)];
+        mtpt::bench::CountCoveredCentres(
+          fans + first, end - first, size, size, part.fans, part.centres);
+      });
+  }
+  for (std::thread& member : team)
+  {
+    member.join();
+  }
+  for (const Part& part : parts)
+  {
+    for (int c = 0; c < mtpt::bench::CoverageBins; ++c)
+    {
+      result.fansByCentres[c] += part.fans[c];
+    }
+    result.centres += part.centres;
+  }
+}
 
 /// `o.frames` timed frames of `mesh` at size x size after one warm-up, the view turning.
 SizeFigures MeasureSize(const mtpt::bench::TetMesh& mesh, int size, const Options& o, int threads)
@@ -219,6 +268,10 @@ SizeFigures MeasureSize(const mtpt::bench::TetMesh& mesh, int size, const Option
   const FrameFigures all = Frame(pipeline, compositor, input, faintSettings, image, threads);
   result.covered = all.fragments;
   result.coveredVectors = all.vectors;
+  if (o.coverage)
+  {
+    CountCentres(pipeline, size, threads, result);
+  }
   return result;
 }
 
@@ -310,6 +363,50 @@ int Floor(const mtpt::bench::TetMesh& mesh, const Options& o)
   return 0;
 }
 
+/// --coverage: the table of the fans by the pixel centres each covers, per image size;
+/// 1 (with a message) where the count disagrees with the compositor's covered fragments.
+int PrintCoverage(const std::vector<int>& sizes, const std::vector<SizeFigures>& figures)
+{
+  constexpr int bins = mtpt::bench::CoverageBins;
+  std::printf("\nThe fans by the pixel centres each covers, at the first timed frame's view:\n\n"
+              "| image | fans with triangles |");
+  for (int c = 0; c < bins; ++c)
+  {
+    std::printf(c + 1 < bins ? " %d |" : " %d or more |", c);
+  }
+  std::printf("\n|---|---:|");
+  for (int c = 0; c < bins; ++c)
+  {
+    std::printf("---:|");
+  }
+  std::printf("\n");
+  int status = 0;
+  for (std::size_t i = 0; i < figures.size(); ++i)
+  {
+    const SizeFigures& f = figures[i];
+    std::size_t fans = 0;
+    for (int c = 0; c < bins; ++c)
+    {
+      fans += f.fansByCentres[c];
+    }
+    std::printf("| %dx%d | %zu |", sizes[i], sizes[i], fans);
+    for (int c = 0; c < bins; ++c)
+    {
+      std::printf(" %.1f%% |", fans > 0 ? 100.0 * f.fansByCentres[c] / fans : 0.0);
+    }
+    std::printf("\n");
+    if (static_cast<double>(f.centres) != f.covered)
+    {
+      std::fprintf(stderr,
+        "mtpt_bench_compositor: at %dx%d the fans cover %zu pixel centres by this count, but "
+        "the compositor drew %.0f fragments of them\n",
+        sizes[i], sizes[i], f.centres, f.covered);
+      status = 1;
+    }
+  }
+  return status;
+}
+
 } // namespace
 
 int main(int argc, char* argv[])
@@ -332,6 +429,9 @@ int main(int argc, char* argv[])
     .add_option("--attenuation", o.attenuation,
       "the opacity ramp's top (1: opaque pixels behind most of the image; 0.01: nearly none)")
     ->check(CLI::PositiveNumber);
+  app.add_flag("--coverage", o.coverage,
+    "also the fans by the pixel centres each covers, at the view of the first timed frame "
+    "(checked against the compositor's count of covered fragments)");
   app.add_flag("--floor", o.floor,
     "the fragment loop's floor and its rungs, with every instruction set, on one thread");
   app
@@ -359,9 +459,11 @@ int main(int argc, char* argv[])
               "resolve | frame | fragments covered | of the fans drawn | fans skipped behind "
               "opaque pixels | ns per covered fragment x core |\n"
               "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+  std::vector<SizeFigures> figures;
   for (int size : o.sizes)
   {
     const SizeFigures f = MeasureSize(mesh, size, o, threads);
+    figures.push_back(f);
     std::printf(
       "| %dx%d | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.0f | %.0f | %.0f | %.1f |\n",
       size, size, f.median.stages, f.median.decompose, 1e-3 * mesh.CellCount() / f.median.stages,
@@ -369,5 +471,5 @@ int main(int argc, char* argv[])
       f.median.fragments, f.median.hidden, f.NanosecondsPerFragment(threads));
     std::fflush(stdout);
   }
-  return 0;
+  return o.coverage ? PrintCoverage(o.sizes, figures) : 0;
 }

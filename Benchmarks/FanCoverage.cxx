@@ -1,0 +1,121 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// How many pixel centres each fan covers (FanCoverage.h): the rasterizer's coverage
+// (detail/RasterCorners-inl.h) applied triangle by triangle as the triangle path applies it,
+// compiled once per instruction set as the rasterizer compiles it, so that the count is the
+// rasterizer's own. Coverage is exact fixed-point arithmetic, the same on every instruction
+// set; the fan path covers the same pixels (detail/FanPath-inl.h).
+#include "FanCoverage.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "FanCoverage.cxx"
+#include <hwy/foreach_target.h> // IWYU pragma: keep
+
+#include <hwy/highway.h>
+
+#include "detail/RasterCorners-inl.h"
+
+HWY_BEFORE_NAMESPACE();
+namespace mtpt
+{
+namespace bench
+{
+namespace HWY_NAMESPACE
+{
+using namespace mtpt::detail::HWY_NAMESPACE;
+using mtpt::detail::RasterFrame;
+
+/// The pixel centres of the image that the triangle of corners v covers (DrawTriangle's
+/// coverage, the whole image as its tile).
+std::size_t TriangleCentres(const RasterFrame& f, const Corner* const v[3])
+{
+  double X[3], Y[3];
+  for (int k = 0; k < 3; ++k)
+  {
+    X[k] = v[k]->X;
+    Y[k] = v[k]->Y;
+  }
+  const auto [minX, maxX] = std::minmax({ X[0], X[1], X[2] });
+  const auto [minY, maxY] = std::minmax({ Y[0], Y[1], Y[2] });
+  const double bx0 = std::max(0.0, std::ceil(minX - 0.5)),
+               bx1 = std::min(f.width - 1.0, std::floor(maxX - 0.5));
+  const double by0 = std::max(0.0, std::ceil(minY - 0.5)),
+               by1 = std::min(f.height - 1.0, std::floor(maxY - 0.5));
+  if (!(bx0 <= bx1 && by0 <= by1))
+  {
+    return 0;
+  }
+  const int x0 = static_cast<int>(bx0), x1 = static_cast<int>(bx1);
+  const int y0 = static_cast<int>(by0), y1 = static_cast<int>(by1);
+  std::size_t covered = 0;
+  auto span = [&](int, int lo, int hi) { covered += static_cast<std::size_t>(hi - lo + 1); };
+  if (std::max(std::max(-minX, maxX), std::max(-minY, maxY)) < FixedPointLimit)
+  {
+    Edges edges;
+    if (SetUpEdges(X, Y, edges))
+    {
+      CoverSpans(edges, x0, x1, y0, y1, span);
+    }
+    return covered;
+  }
+  CoverGuardBand(f, X, Y, x0, x1, y0, y1, span);
+  return covered;
+}
+
+void CountCoveredCentresImpl(const Fan* fans, std::size_t count, int width, int height,
+  std::size_t* histogram, std::size_t& fragments)
+{
+  RasterFrame f;
+  f.width = width;
+  f.height = height;
+  for (std::size_t i = 0; i < count; ++i)
+  {
+    const Fan& fan = fans[i];
+    const int n = fan.count;
+    if (n < 2)
+    {
+      continue;
+    }
+    Corner corners[5];
+    bool finite = PlaceCorner(f, fan.centre, corners[n]);
+    for (int k = 0; k < n; ++k)
+    {
+      finite = finite && PlaceCorner(f, fan.boundary[k], corners[k]);
+    }
+    std::size_t covered = 0;
+    const int triangles = fan.closed ? n : n - 1;
+    for (int k = 0; finite && k < triangles; ++k)
+    {
+      const Corner* const v[3] = { &corners[k], &corners[(k + 1) % n], &corners[n] };
+      covered += TriangleCentres(f, v);
+    }
+    fragments += covered;
+    ++histogram[std::min<std::size_t>(covered, CoverageBins - 1)];
+  }
+}
+
+} // namespace HWY_NAMESPACE
+} // namespace bench
+} // namespace mtpt
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace mtpt
+{
+namespace bench
+{
+
+HWY_EXPORT(CountCoveredCentresImpl);
+
+void CountCoveredCentres(const Fan* fans, std::size_t count, int width, int height,
+  std::size_t histogram[CoverageBins], std::size_t& fragments)
+{
+  HWY_DYNAMIC_DISPATCH(CountCoveredCentresImpl)(fans, count, width, height, histogram, fragments);
+}
+
+} // namespace bench
+} // namespace mtpt
+#endif

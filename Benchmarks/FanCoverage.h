@@ -1,0 +1,34 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// How many pixel centres each fan covers, for measurements (mtpt_bench_compositor
+// --coverage; Documentation/compositor.md, "Where a small fan's time goes"): the
+// rasterizer's own coverage, fan by fan over the whole image.
+#ifndef mtpt_bench_FanCoverage_h
+#define mtpt_bench_FanCoverage_h
+
+#include "mtpt/Records.h"
+
+#include <cstddef>
+
+namespace mtpt
+{
+namespace bench
+{
+
+/// Bins of CountCoveredCentres: 0 to CoverageBins - 2 centres, and the last for more.
+constexpr int CoverageBins = 12;
+
+/**
+ * Adds one to histogram[c] for each fan of fans[0, count) that has something to draw
+ * (Fan::count at least 2), c the pixel centres of a width x height image its triangles
+ * cover by the rasterizer's rule (1/256-pixel snapping, the top-left rule), the last bin
+ * for CoverageBins - 1 or more; adds the centres covered to `fragments`. A fan that
+ * covers a centre with two triangles (a projection folded over) counts it twice, as the
+ * compositor draws it.
+ */
+void CountCoveredCentres(const Fan* fans, std::size_t count, int width, int height,
+  std::size_t histogram[CoverageBins], std::size_t& fragments);
+
+} // namespace bench
+} // namespace mtpt
+
+#endif
