@@ -7,7 +7,6 @@
 #include "FanCoverage.h"
 
 #include <algorithm>
-#include <cmath>
 #include <cstddef>
 
 #undef HWY_TARGET_INCLUDE
@@ -32,36 +31,23 @@ using mtpt::detail::RasterFrame;
 /// coverage, the whole image as its tile).
 std::size_t TriangleCentres(const RasterFrame& f, const Corner* const v[3])
 {
-  double X[3], Y[3];
-  for (int k = 0; k < 3; ++k)
-  {
-    X[k] = v[k]->X;
-    Y[k] = v[k]->Y;
-  }
-  const auto [minX, maxX] = std::minmax({ X[0], X[1], X[2] });
-  const auto [minY, maxY] = std::minmax({ Y[0], Y[1], Y[2] });
-  const double bx0 = std::max(0.0, std::ceil(minX - 0.5)),
-               bx1 = std::min(f.width - 1.0, std::floor(maxX - 0.5));
-  const double by0 = std::max(0.0, std::ceil(minY - 0.5)),
-               by1 = std::min(f.height - 1.0, std::floor(maxY - 0.5));
-  if (!(bx0 <= bx1 && by0 <= by1))
+  const double X[3] = { v[0]->X, v[1]->X, v[2]->X }, Y[3] = { v[0]->Y, v[1]->Y, v[2]->Y };
+  int x0, x1, y0, y1;
+  if (!TrianglePixels(X, Y, 0, f.width - 1, 0, f.height - 1, x0, x1, y0, y1))
   {
     return 0;
   }
-  const int x0 = static_cast<int>(bx0), x1 = static_cast<int>(bx1);
-  const int y0 = static_cast<int>(by0), y1 = static_cast<int>(by1);
   std::size_t covered = 0;
   auto span = [&](int, int lo, int hi) { covered += static_cast<std::size_t>(hi - lo + 1); };
-  if (std::max(std::max(-minX, maxX), std::max(-minY, maxY)) < FixedPointLimit)
+  Edges edges;
+  if (!WithinFixedPoint(X, Y))
   {
-    Edges edges;
-    if (SetUpEdges(X, Y, edges))
-    {
-      CoverSpans(edges, x0, x1, y0, y1, span);
-    }
-    return covered;
+    CoverGuardBand(f, X, Y, x0, x1, y0, y1, span);
   }
-  CoverGuardBand(f, X, Y, x0, x1, y0, y1, span);
+  else if (SetUpEdges(X, Y, edges))
+  {
+    CoverSpans(edges, x0, x1, y0, y1, span);
+  }
   return covered;
 }
 
@@ -80,11 +66,7 @@ void CountCoveredCentresImpl(const Fan* fans, std::size_t count, int width, int 
       continue;
     }
     Corner corners[5];
-    bool finite = PlaceCorner(f, fan.centre, corners[n]);
-    for (int k = 0; k < n; ++k)
-    {
-      finite = finite && PlaceCorner(f, fan.boundary[k], corners[k]);
-    }
+    const bool finite = PlaceFanCorners(f, fan, corners);
     std::size_t covered = 0;
     const int triangles = fan.closed ? n : n - 1;
     for (int k = 0; finite && k < triangles; ++k)

@@ -66,12 +66,7 @@ void RasterizeTileImpl(const RasterFrame& f, const TileTarget& target, const Fan
     }
     const int n = fan.count;
     Corner corners[5];
-    bool finite = PlaceCorner(f, fan.centre, corners[n]);
-    for (int k = 0; k < n; ++k)
-    {
-      finite = finite && PlaceCorner(f, fan.boundary[k], corners[k]);
-    }
-    if (!finite)
+    if (!PlaceFanCorners(f, fan, corners))
     {
       continue;
     }

@@ -93,6 +93,19 @@ inline bool PlaceCorner(const RasterFrame& f, const TetVertex& v, Corner& c)
   return std::isfinite(c.X) && std::isfinite(c.Y);
 }
 
+/// The corners of `fan` placed (PlaceCorner): corners[k] its boundary's, corners[count] its
+/// centre's; false if any is not finite.
+inline bool PlaceFanCorners(const RasterFrame& f, const Fan& fan, Corner corners[5])
+{
+  const int n = fan.count;
+  bool finite = PlaceCorner(f, fan.centre, corners[n]);
+  for (int k = 0; k < n; ++k)
+  {
+    finite = finite && PlaceCorner(f, fan.boundary[k], corners[k]);
+  }
+  return finite;
+}
+
 /// The attribute values of a placed corner, per shading mode (see Mode).
 inline void ValueCorner(const RasterFrame& f, Mode mode, Corner& c)
 {
@@ -245,6 +258,43 @@ inline void Narrow(const EdgeRow& e, int& lo, int& hi)
     }
     hi = std::min(hi, x);
   }
+}
+
+/// The pixels [x0, x1] x [y0, y1] within [firstX, lastX] x [firstY, lastY] whose centres
+/// lie in the bounding box of the triangle (X, Y), snapped; false if there are none.
+inline bool TrianglePixels(const double X[3], const double Y[3], int firstX, int lastX,
+  int firstY, int lastY, int& x0, int& x1, int& y0, int& y1)
+{
+  const auto [minX, maxX] = std::minmax({ X[0], X[1], X[2] });
+  const auto [minY, maxY] = std::minmax({ Y[0], Y[1], Y[2] });
+  // Pixel centres x + 0.5 within the bounding box and the bounds.
+  const double bx0 = std::max<double>(firstX, std::ceil(minX - 0.5)),
+               bx1 = std::min<double>(lastX, std::floor(maxX - 0.5));
+  const double by0 = std::max<double>(firstY, std::ceil(minY - 0.5)),
+               by1 = std::min<double>(lastY, std::floor(maxY - 0.5));
+  if (!(bx0 <= bx1 && by0 <= by1))
+  {
+    return false;
+  }
+  x0 = static_cast<int>(bx0);
+  x1 = static_cast<int>(bx1);
+  y0 = static_cast<int>(by0);
+  y1 = static_cast<int>(by1);
+  return true;
+}
+
+/// Whether every corner of the triangle (X, Y), finite, lies within FixedPointLimit, so that
+/// its edges can be set up exactly (SetUpEdges); else it is clipped first (CoverGuardBand).
+inline bool WithinFixedPoint(const double X[3], const double Y[3])
+{
+  for (int k = 0; k < 3; ++k)
+  {
+    if (!(std::fabs(X[k]) < FixedPointLimit && std::fabs(Y[k]) < FixedPointLimit))
+    {
+      return false;
+    }
+  }
+  return true;
 }
 
 /// A triangle's edges in fixed point: E_k(p) = A p.x + B p.y + C, positive inside, and

@@ -226,22 +226,10 @@ bool DrawSmall(const RasterFrame& f, const TileTarget& tile, Mode mode, const Ed
 void DrawTriangle(const RasterFrame& f, const TileTarget& tile, Mode mode, Corner* const v[3],
   WaitingFragments& waiting, RasterCounts& counts, bool cut)
 {
-  double minX = v[0]->X, maxX = minX, minY = v[0]->Y, maxY = minY;
-  for (int k = 1; k < 3; ++k)
-  {
-    minX = std::min(minX, v[k]->X);
-    maxX = std::max(maxX, v[k]->X);
-    minY = std::min(minY, v[k]->Y);
-    maxY = std::max(maxY, v[k]->Y);
-  }
-  // Pixel centres x + 0.5 within the bounding box and the tile.
-  const double tx0 = tile.x0, tx1 = tile.x0 + tile.width - 1.0;
-  const double ty0 = tile.y0, ty1 = tile.y0 + tile.height - 1.0;
-  const double bx0 = std::max(tx0, std::ceil(minX - 0.5)),
-               bx1 = std::min(tx1, std::floor(maxX - 0.5));
-  const double by0 = std::max(ty0, std::ceil(minY - 0.5)),
-               by1 = std::min(ty1, std::floor(maxY - 0.5));
-  if (!(bx0 <= bx1 && by0 <= by1))
+  const double X[3] = { v[0]->X, v[1]->X, v[2]->X }, Y[3] = { v[0]->Y, v[1]->Y, v[2]->Y };
+  int x0, x1, y0, y1;
+  if (!TrianglePixels(X, Y, tile.x0, tile.x0 + tile.width - 1, tile.y0, tile.y0 + tile.height - 1,
+        x0, x1, y0, y1))
   {
     return;
   }
@@ -272,11 +260,8 @@ void DrawTriangle(const RasterFrame& f, const TileTarget& tile, Mode mode, Corne
       ShadeSpan(f, tile, mode, *p, y, lo, hi, waiting, cut);
     }
   };
-  const int x0 = static_cast<int>(bx0), x1 = static_cast<int>(bx1);
-  const int y0 = static_cast<int>(by0), y1 = static_cast<int>(by1);
-  double X[3] = { v[0]->X, v[1]->X, v[2]->X }, Y[3] = { v[0]->Y, v[1]->Y, v[2]->Y };
   Edges edges;
-  if (std::max(std::max(-minX, maxX), std::max(-minY, maxY)) < FixedPointLimit)
+  if (WithinFixedPoint(X, Y))
   {
     if (!SetUpEdges(X, Y, edges))
     {
