@@ -7,9 +7,14 @@
 #include <omp.h>
 
 #include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
 
 #include <chrono>
+#include <filesystem>
+#include <string>
 #include <thread>
+#include <vector>
 
 namespace
 {
@@ -77,19 +82,54 @@ double ProcessCPUSeconds()
     1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
 }
 
+/// This thread's kernel id.
+long KernelThreadId()
+{
+  return syscall(SYS_gettid);
+}
+
+/// Whether thread `id` of this process still exists (Linux: /proc/self/task/<id>).
+bool ThreadExists(long id)
+{
+  return std::filesystem::exists("/proc/self/task/" + std::to_string(id));
+}
+
+/// Whether every thread of `ids` has exited within 30 seconds: a guard against a hang, not a
+/// bound on how fast threads exit.
+bool Exited(const std::vector<long>& ids)
+{
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  for (const long id : ids)
+  {
+    while (ThreadExists(id))
+    {
+      if (std::chrono::steady_clock::now() > deadline)
+      {
+        return false;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+  }
+  return true;
+}
+
 TEST(Threads, ReleasedWorkersStopBusyWaiting)
 {
   // After a parallel region, idle workers may spin (GCC's default) and take a core from
-  // whatever runs next, such as the OpenGL rasterizer. Once released they use no CPU while
-  // the calling thread sleeps; the next region still runs on every thread asked for.
-  auto region = []
+  // whatever runs next, such as the OpenGL rasterizer. Released, they exit and use no CPU
+  // while the calling thread sleeps; the next region still runs on every thread asked for.
+  std::vector<long> workers; // the kernel ids of the last region's workers
+  auto region = [&workers]
   {
     int team = 0;
+    long ids[2] = { 0, 0 };
 #pragma omp parallel num_threads(2)
     {
+      ids[omp_get_thread_num()] = KernelThreadId(); // a team of at most 2
 #pragma omp single
       team = omp_get_num_threads();
     }
+    workers.assign(ids + 1, ids + team);
     return team;
   };
   EXPECT_EQ(region(), 2);
@@ -100,12 +140,16 @@ TEST(Threads, ReleasedWorkersStopBusyWaiting)
   }
   for (int attempt = 0; attempt < 3; ++attempt)
   {
-    EXPECT_EQ(region(), 2);
+    ASSERT_EQ(region(), 2);
+    EXPECT_TRUE(ThreadExists(workers[0])) << "the region's worker waits for the next region";
     ASSERT_TRUE(mtpt::ReleaseIdleThreads());
+    ASSERT_TRUE(Exited(workers)) << "released workers exit";
+    // The clock is read once they have: another thread's CPU time is brought up to date
+    // only at the scheduler's ticks and switches, so a reading taken while a worker exits
+    // can leave out up to a tick of its spinning before the release, counted in the sleep.
     const double before = ProcessCPUSeconds();
     std::this_thread::sleep_for(std::chrono::milliseconds(40));
     const double spent = ProcessCPUSeconds() - before;
-    // Spinning workers take about 8 ms here (GCC's libgomp); released ones about 0.05 ms.
     EXPECT_LT(spent, 0.003) << "CPU seconds while asleep after the release";
   }
   EXPECT_EQ(region(), 2);
