@@ -21,8 +21,9 @@
  * with the same instruction set. --instruction-set runs everything with one instruction set.
  *
  * --coverage adds a table of the fans by the pixel centres each covers (FanCoverage.h), from
- * the frame with nothing opaque; their sum must be the compositor's count of the fragments
- * covered in that frame, or the program says so and exits with 1.
+ * the frame with nothing opaque, and of them the quadrilateral projections; the centres'
+ * sum must be the compositor's count of the fragments covered in that frame, or the
+ * program says so and exits with 1.
  */
 #include "Camera.h"
 #include "FanCoverage.h"
@@ -151,10 +152,8 @@ struct SizeFigures
   FrameFigures median;
   double covered = 0;        ///< every fragment covered, with nothing opaque
   double coveredVectors = 0; ///< the fan path's vectors then
-  /// --coverage: the fans of that frame by the pixel centres each covers (FanCoverage.h),
-  /// and the centres they cover in all.
-  std::size_t fansByCentres[mtpt::bench::CoverageBins] = {};
-  std::size_t centres = 0;
+  /// --coverage: the fans of that frame by the pixel centres each covers (FanCoverage.h).
+  mtpt::bench::CoverageHistogram coverage;
 
   /// The rasterization's time per covered fragment and core.
   double NanosecondsPerFragment(int threads) const
@@ -169,12 +168,7 @@ void CountCentres(const mtpt::FramePipeline& pipeline, int size, int threads, Si
 {
   const mtpt::Fan* fans = pipeline.Fans().data();
   const std::size_t count = pipeline.FanCount();
-  struct Part
-  {
-    std::size_t fans[mtpt::bench::CoverageBins] = {};
-    std::size_t centres = 0;
-  };
-  std::vector<Part> parts(static_cast<std::size_t>(threads));
+  std::vector<mtpt::bench::CoverageHistogram> parts(static_cast<std::size_t>(threads));
   std::vector<std::thread> team;
   for (int t = 0; t < threads; ++t)
   {
@@ -182,22 +176,17 @@ void CountCentres(const mtpt::FramePipeline& pipeline, int size, int threads, Si
       [&, t]
       {
         const std::size_t first = count * t / threads, end = count * (t + 1) / threads;
-        Part& part = parts[static_cast<std::size_t>(t)];
         mtpt::bench::CountCoveredCentres(
-          fans + first, end - first, size, size, part.fans, part.centres);
+          fans + first, end - first, size, size, parts[static_cast<std::size_t>(t)]);
       });
   }
   for (std::thread& member : team)
   {
     member.join();
   }
-  for (const Part& part : parts)
+  for (const mtpt::bench::CoverageHistogram& part : parts)
   {
-    for (int c = 0; c < mtpt::bench::CoverageBins; ++c)
-    {
-      result.fansByCentres[c] += part.fans[c];
-    }
-    result.centres += part.centres;
+    result.coverage.Add(part);
   }
 }
 
@@ -363,18 +352,36 @@ int Floor(const mtpt::bench::TetMesh& mesh, const Options& o)
   return 0;
 }
 
-/// --coverage: the table of the fans by the pixel centres each covers, per image size;
-/// 1 (with a message) where the count disagrees with the compositor's covered fragments.
+/// One row of the --coverage table: `fans[c]` as shares of `total`.
+void PrintCoverageRow(int size, const char* which, const std::size_t* fans, std::size_t total)
+{
+  std::size_t these = 0;
+  for (int c = 0; c < mtpt::bench::CoverageBins; ++c)
+  {
+    these += fans[c];
+  }
+  std::printf("| %dx%d | %s | %zu |", size, size, which, these);
+  for (int c = 0; c < mtpt::bench::CoverageBins; ++c)
+  {
+    std::printf(" %.1f%% |", total > 0 ? 100.0 * fans[c] / total : 0.0);
+  }
+  std::printf("\n");
+}
+
+/// --coverage: the table of the fans by the pixel centres each covers, per image size, and
+/// of them the quadrilateral projections (shares of all fans with triangles); 1 (with a
+/// message) where the count disagrees with the compositor's covered fragments.
 int PrintCoverage(const std::vector<int>& sizes, const std::vector<SizeFigures>& figures)
 {
   constexpr int bins = mtpt::bench::CoverageBins;
-  std::printf("\nThe fans by the pixel centres each covers, at the first timed frame's view:\n\n"
-              "| image | fans with triangles |");
+  std::printf("\nThe fans by the pixel centres each covers, at the first timed frame's view, as "
+              "shares of the fans with triangles:\n\n"
+              "| image | fans | how many |");
   for (int c = 0; c < bins; ++c)
   {
     std::printf(c + 1 < bins ? " %d |" : " %d or more |", c);
   }
-  std::printf("\n|---|---:|");
+  std::printf("\n|---|---|---:|");
   for (int c = 0; c < bins; ++c)
   {
     std::printf("---:|");
@@ -383,24 +390,20 @@ int PrintCoverage(const std::vector<int>& sizes, const std::vector<SizeFigures>&
   int status = 0;
   for (std::size_t i = 0; i < figures.size(); ++i)
   {
-    const SizeFigures& f = figures[i];
+    const mtpt::bench::CoverageHistogram& h = figures[i].coverage;
     std::size_t fans = 0;
     for (int c = 0; c < bins; ++c)
     {
-      fans += f.fansByCentres[c];
+      fans += h.fans[c];
     }
-    std::printf("| %dx%d | %zu |", sizes[i], sizes[i], fans);
-    for (int c = 0; c < bins; ++c)
-    {
-      std::printf(" %.1f%% |", fans > 0 ? 100.0 * f.fansByCentres[c] / fans : 0.0);
-    }
-    std::printf("\n");
-    if (static_cast<double>(f.centres) != f.covered)
+    PrintCoverageRow(sizes[i], "with triangles", h.fans, fans);
+    PrintCoverageRow(sizes[i], "of them with 4 corners", h.quadrilaterals, fans);
+    if (static_cast<double>(h.centres) != figures[i].covered)
     {
       std::fprintf(stderr,
         "mtpt_bench_compositor: at %dx%d the fans cover %zu pixel centres by this count, but "
         "the compositor drew %.0f fragments of them\n",
-        sizes[i], sizes[i], f.centres, f.covered);
+        sizes[i], sizes[i], h.centres, figures[i].covered);
       status = 1;
     }
   }
@@ -430,8 +433,9 @@ int main(int argc, char* argv[])
       "the opacity ramp's top (1: opaque pixels behind most of the image; 0.01: nearly none)")
     ->check(CLI::PositiveNumber);
   app.add_flag("--coverage", o.coverage,
-    "also the fans by the pixel centres each covers, at the view of the first timed frame "
-    "(checked against the compositor's count of covered fragments)");
+    "also the fans by the pixel centres each covers, and the quadrilaterals among them, at the "
+    "view of the first timed frame (checked against the compositor's count of covered "
+    "fragments)");
   app.add_flag("--floor", o.floor,
     "the fragment loop's floor and its rungs, with every instruction set, on one thread");
   app

@@ -51,8 +51,8 @@ std::size_t TriangleCentres(const RasterFrame& f, const Corner* const v[3])
   return covered;
 }
 
-void CountCoveredCentresImpl(const Fan* fans, std::size_t count, int width, int height,
-  std::size_t* histogram, std::size_t& fragments)
+void CountCoveredCentresImpl(
+  const Fan* fans, std::size_t count, int width, int height, CoverageHistogram& histogram)
 {
   RasterFrame f;
   f.width = width;
@@ -74,8 +74,10 @@ void CountCoveredCentresImpl(const Fan* fans, std::size_t count, int width, int 
       const Corner* const v[3] = { &corners[k], &corners[(k + 1) % n], &corners[n] };
       covered += TriangleCentres(f, v);
     }
-    fragments += covered;
-    ++histogram[std::min<std::size_t>(covered, CoverageBins - 1)];
+    const std::size_t bin = std::min<std::size_t>(covered, CoverageBins - 1);
+    histogram.centres += covered;
+    ++histogram.fans[bin];
+    histogram.quadrilaterals[bin] += n == 4 ? 1 : 0;
   }
 }
 
@@ -92,10 +94,10 @@ namespace bench
 
 HWY_EXPORT(CountCoveredCentresImpl);
 
-void CountCoveredCentres(const Fan* fans, std::size_t count, int width, int height,
-  std::size_t histogram[CoverageBins], std::size_t& fragments)
+void CountCoveredCentres(
+  const Fan* fans, std::size_t count, int width, int height, CoverageHistogram& histogram)
 {
-  HWY_DYNAMIC_DISPATCH(CountCoveredCentresImpl)(fans, count, width, height, histogram, fragments);
+  HWY_DYNAMIC_DISPATCH(CountCoveredCentresImpl)(fans, count, width, height, histogram);
 }
 
 } // namespace bench
