@@ -12,6 +12,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -113,6 +114,44 @@ bool Exited(const std::vector<long>& ids)
   return true;
 }
 
+/// Whether a thread of this process other than the calling one is running or runnable
+/// (state R in /proc/self/task/<id>/stat): the only threads whose CPU time the process's
+/// clock may not yet count (see ReleasedWorkersStopBusyWaiting).
+bool OthersRun()
+{
+  const std::string self = std::to_string(KernelThreadId());
+  for (const auto& entry : std::filesystem::directory_iterator("/proc/self/task"))
+  {
+    std::ifstream stat(entry.path() / "stat");
+    std::string line;
+    if (entry.path().filename() == self || !std::getline(stat, line))
+    {
+      continue; // the caller, or a thread that has just exited
+    }
+    const std::size_t name = line.rfind(')'); // the state follows the parenthesised name
+    if (name != std::string::npos && name + 2 < line.size() && line[name + 2] == 'R')
+    {
+      return true;
+    }
+  }
+  return false;
+}
+
+/// Whether no other thread of this process runs within 30 seconds (OthersRun).
+bool OthersSettle()
+{
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (OthersRun())
+  {
+    if (std::chrono::steady_clock::now() > deadline)
+    {
+      return false;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  return true;
+}
+
 TEST(Threads, ReleasedWorkersStopBusyWaiting)
 {
   // After a parallel region, idle workers may spin (GCC's default) and take a core from
@@ -144,9 +183,12 @@ TEST(Threads, ReleasedWorkersStopBusyWaiting)
     EXPECT_TRUE(ThreadExists(workers[0])) << "the region's worker waits for the next region";
     ASSERT_TRUE(mtpt::ReleaseIdleThreads());
     ASSERT_TRUE(Exited(workers)) << "released workers exit";
-    // The clock is read once they have: another thread's CPU time is brought up to date
-    // only at the scheduler's ticks and switches, so a reading taken while a worker exits
-    // can leave out up to a tick of its spinning before the release, counted in the sleep.
+    // The clock is read once they have, and once no other thread runs (workers of a larger
+    // team of an earlier test in this process exit too): another thread's CPU time is
+    // brought up to date only at the scheduler's ticks and switches, so a reading taken
+    // while a worker exits can leave out up to a tick of its spinning before the release,
+    // counted in the sleep.
+    ASSERT_TRUE(OthersSettle()) << "no other thread keeps running";
     const double before = ProcessCPUSeconds();
     std::this_thread::sleep_for(std::chrono::milliseconds(40));
     const double spent = ProcessCPUSeconds() - before;
